@@ -1,0 +1,167 @@
+/* core.c — the engine's file-free, GL-free helpers that every module may link: error
+ * formatting, content digests (XXH3-128 from libxxhash), non-finite counting, whole-file
+ * reads with a size cap, and the default settings. Replay and the viewer link this (through
+ * the ispm_core target) without pulling in OSMesa or Embree. */
+#include "eng.h"
+
+#include <errno.h>
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <xxhash.h>
+
+eng_result eng_fail(eng_error *err, eng_result code, const char *fmt, ...)
+{
+    if (err) {
+        va_list ap;
+        va_start(ap, fmt);
+        vsnprintf(err->msg, sizeof err->msg, fmt, ap);
+        va_end(ap);
+        /* One line: a message is never allowed to spill over. */
+        for (char *p = err->msg; *p; p++)
+            if (*p == '\n' || *p == '\r')
+                *p = ' ';
+    }
+    return code;
+}
+
+const char *eng_result_name(eng_result r)
+{
+    switch (r) {
+    case ENG_OK: return "ok";
+    case ENG_ERR_IO: return "io";
+    case ENG_ERR_PARSE: return "parse";
+    case ENG_ERR_INVALID: return "invalid";
+    case ENG_ERR_UNSUPPORTED: return "unsupported";
+    case ENG_ERR_GL: return "gl";
+    case ENG_ERR_NOMEM: return "nomem";
+    case ENG_ERR_ABORTED: return "aborted";
+    }
+    return "unknown";
+}
+
+static void hex128(XXH128_hash_t h, char out[40])
+{
+    snprintf(out, 40, "%016llx%016llx", (unsigned long long)h.high64, (unsigned long long)h.low64);
+}
+
+void eng_digest_hex(const void *data, size_t len, char out[40])
+{
+    hex128(XXH3_128bits(data, len), out);
+}
+
+void eng_buffer_digest(const eng_buffer *b, char out[40])
+{
+    int order[ENG_MAX_CHANNELS];
+    int n = b->channel_count;
+    for (int i = 0; i < n; i++)
+        order[i] = i;
+    for (int i = 1; i < n; i++) { /* insertion sort by name: n is tiny */
+        int k = order[i], j = i - 1;
+        while (j >= 0 && strcmp(b->channels[order[j]], b->channels[k]) > 0) {
+            order[j + 1] = order[j];
+            j--;
+        }
+        order[j + 1] = k;
+    }
+    XXH3_state_t *st = XXH3_createState();
+    if (!st) {
+        fprintf(stderr, "ispm: out of memory\n");
+        abort();
+    }
+    XXH3_128bits_reset(st);
+    size_t npix = (size_t)b->width * (size_t)b->height;
+    float plane[1024];
+    for (int c = 0; c < n; c++) {
+        const float *src = b->data + order[c];
+        size_t done = 0;
+        while (done < npix) {
+            size_t m = npix - done < 1024 ? npix - done : 1024;
+            for (size_t i = 0; i < m; i++)
+                plane[i] = src[(done + i) * (size_t)n];
+            XXH3_128bits_update(st, plane, m * sizeof(float));
+            done += m;
+        }
+    }
+    hex128(XXH3_128bits_digest(st), out);
+    XXH3_freeState(st);
+}
+
+void eng_buffer_nonfinite(const eng_buffer *b, uint64_t *nan_count, uint64_t *inf_count,
+                          int *first_x, int *first_y)
+{
+    uint64_t nn = 0, ni = 0;
+    int fx = -1, fy = -1;
+    size_t npix = (size_t)b->width * (size_t)b->height;
+    for (size_t p = 0; p < npix; p++) {
+        int bad = 0;
+        for (int c = 0; c < b->channel_count; c++) {
+            float v = b->data[p * (size_t)b->channel_count + (size_t)c];
+            if (isnan(v)) {
+                nn++;
+                bad = 1;
+            } else if (isinf(v)) {
+                ni++;
+                bad = 1;
+            }
+        }
+        if (bad && fx < 0) {
+            fx = (int)(p % (size_t)b->width);
+            fy = (int)(p / (size_t)b->width);
+        }
+    }
+    if (nan_count) *nan_count = nn;
+    if (inf_count) *inf_count = ni;
+    if (first_x) *first_x = fx;
+    if (first_y) *first_y = fy;
+}
+
+eng_result eng_read_file(const char *path, size_t max_bytes, char **data, size_t *len, eng_error *err)
+{
+    *data = NULL;
+    if (len) *len = 0;
+    FILE *f = fopen(path, "rb");
+    if (!f)
+        return eng_fail(err, ENG_ERR_IO, "%s: cannot open: %s", path, strerror(errno));
+    if (fseek(f, 0, SEEK_END) != 0) {
+        fclose(f);
+        return eng_fail(err, ENG_ERR_IO, "%s: cannot seek: %s", path, strerror(errno));
+    }
+    long size = ftell(f);
+    if (size < 0) {
+        fclose(f);
+        return eng_fail(err, ENG_ERR_IO, "%s: cannot read: %s", path, strerror(errno));
+    }
+    if ((unsigned long)size > max_bytes) {
+        fclose(f);
+        return eng_fail(err, ENG_ERR_INVALID, "%s: file is %ld bytes, more than the %zu allowed",
+                        path, size, max_bytes);
+    }
+    rewind(f);
+    char *buf = malloc((size_t)size + 1);
+    if (!buf) {
+        fclose(f);
+        return eng_fail(err, ENG_ERR_NOMEM, "%s: out of memory reading %ld bytes", path, size);
+    }
+    size_t got = fread(buf, 1, (size_t)size, f);
+    int rerr = ferror(f);
+    fclose(f);
+    if (got != (size_t)size || rerr) {
+        free(buf);
+        return eng_fail(err, ENG_ERR_IO, "%s: short read (%zu of %ld bytes)", path, got, size);
+    }
+    buf[size] = 0;
+    *data = buf;
+    if (len) *len = (size_t)size;
+    return ENG_OK;
+}
+
+void eng_settings_defaults(eng_settings *s)
+{
+    if (s->shadow_map_size == 0) s->shadow_map_size = 1024;
+    if (s->pcf_radius == 0) s->pcf_radius = 1;
+    if (s->shadow_bias == 0.0f) s->shadow_bias = 0.002f;
+    if (s->threads == 0) s->threads = 2;
+}

@@ -1,0 +1,324 @@
+/* eng.h — the engine's one public header.
+ *
+ * Three groups of names live here:
+ *   scn_*  the scene: what a glTF 2.0 file holds once validated (meshes, node hierarchy,
+ *          cameras, KHR_lights_punctual lights, materials, animations), and its evaluation
+ *          at a frame time t (animation sampling, world matrices).
+ *   seq_*  the sequence file (JSON): which scene, how many frames at what rate, resolution,
+ *          camera, engine settings and what to capture.
+ *   eng_*  the renderer: an OSMesa GL context and the passes, which announce every buffer
+ *          they produce to registered listeners. The engine knows nothing about files.
+ *
+ * Conventions shared by every module (tests rely on them):
+ *   - Units: metres, right-handed, Y up (glTF). Matrices are column-major float[16] as in GL
+ *     and glTF: element (row r, column c) is m[c*4 + r].
+ *   - Quaternions are (x, y, z, w) as in glTF.
+ *   - Light intensity: point and spot lights carry radiant intensity in W/sr per colour
+ *     channel (glTF `intensity` × `color`); directional lights carry irradiance in W/m²
+ *     (glTF's photometric units are deliberately read as radiometric ones).
+ *   - Announced pixel data is float32, channels interleaved, row-major, row 0 is the TOP
+ *     row of the image (the EXR convention; the GL passes flip when they read back).
+ *   - Errors: functions that can fail on input or environment return an eng_result and fill
+ *     an eng_error whose message names the file and the problem in one line.
+ */
+#ifndef ISPM_ENG_H
+#define ISPM_ENG_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* ---------------------------------------------------------------- errors */
+
+typedef enum eng_result {
+    ENG_OK = 0,
+    ENG_ERR_IO,          /* file missing, unreadable, unwritable, disk full */
+    ENG_ERR_PARSE,       /* syntax: not JSON / not glTF */
+    ENG_ERR_INVALID,     /* well-formed but wrong: bad index, accessor overrun, cycle, NaN... */
+    ENG_ERR_UNSUPPORTED, /* valid glTF that this tool does not handle (e.g. orthographic) */
+    ENG_ERR_GL,          /* GL context or shader failure */
+    ENG_ERR_NOMEM,
+    ENG_ERR_ABORTED      /* a listener asked to stop */
+} eng_result;
+
+typedef struct eng_error {
+    char msg[1024]; /* one line: "<file>: <where>: <problem>" */
+} eng_error;
+
+/* Formats msg into err (if err is non-NULL) and returns code. */
+eng_result eng_fail(eng_error *err, eng_result code, const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 3, 4)))
+#endif
+    ;
+
+const char *eng_result_name(eng_result r);
+
+/* ---------------------------------------------------------------- scene */
+
+#define SCN_NAME_MAX 64
+
+typedef enum scn_light_type {
+    SCN_LIGHT_POINT = 0,
+    SCN_LIGHT_SPOT,
+    SCN_LIGHT_DIRECTIONAL
+} scn_light_type;
+
+typedef struct scn_material {
+    char name[SCN_NAME_MAX];
+    float base_color[4]; /* linear RGBA (baseColorFactor; textures are not supported) */
+    float metallic;      /* metallicFactor, default 1 per glTF */
+    float roughness;     /* roughnessFactor, default 1 */
+    float transmission;  /* KHR_materials_transmission transmissionFactor, default 0 */
+    float ior;           /* KHR_materials_ior, default 1.5 */
+    float emissive[3];   /* emissiveFactor */
+    int double_sided;
+} scn_material;
+
+/* One triangle list. Positions and normals in the mesh's object space, 3 floats per vertex.
+ * Normals are always present: where the glTF has none, the loader computes flat normals
+ * (and un-shares the vertices so each triangle has its own). */
+typedef struct scn_primitive {
+    uint32_t vertex_count;
+    float *positions;
+    float *normals;
+    uint32_t index_count; /* multiple of 3 */
+    uint32_t *indices;
+    int32_t material;     /* index into materials, or -1 for the glTF default material */
+} scn_primitive;
+
+typedef struct scn_mesh {
+    char name[SCN_NAME_MAX];
+    uint32_t first_primitive; /* into scn_scene.primitives */
+    uint32_t primitive_count;
+} scn_mesh;
+
+typedef struct scn_camera {
+    char name[SCN_NAME_MAX];
+    float yfov;        /* radians */
+    float aspect;      /* 0 = use the image's */
+    float znear, zfar; /* zfar 0 = infinite in glTF; the loader replaces it by 1000·znear */
+} scn_camera;
+
+typedef struct scn_light {
+    char name[SCN_NAME_MAX];
+    scn_light_type type;
+    float color[3];
+    float intensity;  /* W/sr (point, spot) or W/m² (directional); see header comment */
+    float range;      /* 0 = infinite */
+    float inner_cone; /* spot only, radians */
+    float outer_cone;
+} scn_light;
+
+typedef struct scn_node {
+    char name[SCN_NAME_MAX];
+    int32_t parent; /* -1 for roots */
+    int32_t mesh;   /* -1 none */
+    int32_t camera; /* -1 none */
+    int32_t light;  /* -1 none */
+    /* Rest pose. If has_matrix, matrix is used and TRS ignored (glTF forbids animating it). */
+    int has_matrix;
+    float matrix[16];
+    float translation[3];
+    float rotation[4]; /* x,y,z,w */
+    float scale[3];
+} scn_node;
+
+typedef enum scn_anim_path { SCN_PATH_TRANSLATION = 0, SCN_PATH_ROTATION, SCN_PATH_SCALE } scn_anim_path;
+typedef enum scn_interp { SCN_INTERP_LINEAR = 0, SCN_INTERP_STEP, SCN_INTERP_CUBICSPLINE } scn_interp;
+
+typedef struct scn_channel {
+    int32_t node;
+    scn_anim_path path;
+    scn_interp interp;
+    uint32_t key_count;
+    float *times;  /* key_count, strictly increasing */
+    /* key_count × comps floats (comps = 3, or 4 for rotation); for CUBICSPLINE
+     * key_count × 3 × comps laid out (in-tangent, value, out-tangent) per key as in glTF. */
+    float *values;
+} scn_channel;
+
+typedef struct scn_animation {
+    char name[SCN_NAME_MAX];
+    uint32_t channel_count;
+    scn_channel *channels;
+} scn_animation;
+
+/* A loaded scene: one owner, freed whole by scn_destroy. Nodes are listed so that every
+ * parent comes before its children (the loader sorts them), so world matrices can be
+ * computed in one forward pass. Only nodes reachable from the glTF's default scene are kept. */
+typedef struct scn_scene {
+    char path[4096];
+    uint32_t node_count;      scn_node *nodes;
+    uint32_t mesh_count;      scn_mesh *meshes;
+    uint32_t primitive_count; scn_primitive *primitives;
+    uint32_t material_count;  scn_material *materials;
+    uint32_t camera_count;    scn_camera *cameras;
+    uint32_t light_count;     scn_light *lights;
+    uint32_t animation_count; scn_animation *animations;
+    char digest[40];          /* hex XXH3-128 of the .gltf file and its buffers */
+} scn_scene;
+
+/* Loads and validates a .gltf/.glb (accessor bounds, index ranges, node cycles, NaN in
+ * transforms, light types, ...). On failure *out is NULL and err names file and problem. */
+eng_result scn_load_gltf(const char *path, scn_scene **out, eng_error *err);
+void scn_destroy(scn_scene *scene);
+
+/* World matrices of every node at time t (seconds), all animations applied; animations are
+ * clamped at their ends (no looping). world must hold node_count*16 floats. */
+void scn_evaluate(const scn_scene *scene, double t, float *world);
+
+/* Samples one channel at time t into out (3 or 4 floats). Rotation results are normalised;
+ * LINEAR rotation uses slerp (shortest arc). Exposed for tests. */
+void scn_sample_channel(const scn_channel *ch, double t, float *out);
+
+int32_t scn_find_node(const scn_scene *scene, const char *name); /* -1 if absent */
+
+/* ---------------------------------------------------------------- settings & sequence */
+
+/* Engine settings. A zero-initialised struct means defaults (eng_settings_defaults fills
+ * them in explicitly so the manifest can record the values used). */
+typedef struct eng_settings {
+    int shadow_map_size;  /* texels per side (per cube face for point lights); default 1024 */
+    int pcf_radius;       /* PCF kernel half-width in texels: (2r+1)^2 taps; default 1 */
+    float shadow_bias;    /* world-space offset along the normal before the lookup; default 0.002 */
+    float exposure;       /* display transform: stops applied before sRGB encoding; default 0 */
+    int threads;          /* CPU worker threads (OpenMP, Embree, llvmpipe); 0 = default 2 */
+} eng_settings;
+
+void eng_settings_defaults(eng_settings *s);
+
+#define SEQ_MAX_CAPTURE 32
+#define SEQ_MAX_CAMKEYS 64
+
+typedef struct seq_camera_key {
+    double time;
+    float position[3];
+    float target[3];
+} seq_camera_key;
+
+typedef struct seq_sequence {
+    char path[4096];        /* the sequence file */
+    char scene_path[4096];  /* resolved relative to the sequence file's folder */
+    char name[SCN_NAME_MAX];
+    int frame_count;        /* >= 1 */
+    double fps;             /* > 0; frame i is at t = i / fps */
+    int width, height;      /* pixels, 1..16384 */
+    /* Camera: either a glTF camera node (camera_node[0] != 0) or explicit look-at keys,
+     * linearly interpolated and clamped (camera_key_count >= 1). */
+    char camera_node[SCN_NAME_MAX];
+    int camera_key_count;
+    seq_camera_key camera_keys[SEQ_MAX_CAMKEYS];
+    float camera_up[3];     /* look-at keys only; default (0,1,0) */
+    float camera_yfov;      /* radians; look-at keys only; default 40° */
+    float camera_znear, camera_zfar; /* defaults 0.05, 100 */
+    eng_settings settings;
+    /* Glob patterns (fnmatch) of buffer names to capture; none means "*". */
+    int capture_count;
+    char capture[SEQ_MAX_CAPTURE][SCN_NAME_MAX];
+    char digest[40];        /* hex XXH3-128 of the sequence file bytes */
+} seq_sequence;
+
+/* Parses and validates a sequence file. Unknown keys are errors (a typo must not silently
+ * fall back to a default). */
+eng_result seq_load(const char *path, seq_sequence *out, eng_error *err);
+/* Same, from memory; path is only used in messages and to resolve the scene path. */
+eng_result seq_parse(const char *path, const char *json, size_t len, seq_sequence *out, eng_error *err);
+
+/* Does the sequence ask for this buffer to be captured? */
+int seq_wants(const seq_sequence *seq, const char *buffer_name);
+
+/* ---------------------------------------------------------------- buffers & listeners */
+
+#define ENG_MAX_CHANNELS 16
+
+typedef struct eng_buffer {
+    const char *name;              /* "<pass>.<buffer>[.light<i>][.face<f>]" */
+    int width, height;
+    int channel_count;
+    const char *const *channels;   /* EXR channel names, e.g. {"R","G","B"} */
+    const float *data;             /* width*height*channel_count, interleaved, top row first */
+} eng_buffer;
+
+typedef struct eng_pass_time {
+    char name[SCN_NAME_MAX]; /* "gbuffer", "shadow", "direct", "composite", ... */
+    double ms;
+} eng_pass_time;
+
+#define ENG_MAX_PASSES 32
+
+typedef struct eng_frame_stats {
+    int frame;
+    double time;
+    int pass_count;
+    eng_pass_time passes[ENG_MAX_PASSES];
+} eng_frame_stats;
+
+/* A listener sees every announced buffer. Any callback may be NULL. A non-zero return
+ * aborts the frame: eng_render_frame then returns ENG_ERR_ABORTED. */
+typedef struct eng_listener {
+    void *user;
+    int (*frame_begin)(void *user, int frame, double time);
+    int (*buffer)(void *user, int frame, const eng_buffer *buf);
+    int (*frame_end)(void *user, const eng_frame_stats *stats);
+} eng_listener;
+
+/* ---------------------------------------------------------------- engine */
+
+typedef struct eng_engine eng_engine;
+
+typedef struct eng_desc {
+    const scn_scene *scene;      /* borrowed; must outlive the engine */
+    const seq_sequence *sequence;/* borrowed */
+} eng_desc;
+
+/* Pins what follows the host's SIMD width before any GL or Embree object exists:
+ * LP_NATIVE_VECTOR_WIDTH=128, GALLIUM_OVERRIDE_CPU_CAPS=sse4.1, LP_NUM_THREADS=threads,
+ * Embree isa=sse2. Idempotent; eng_create calls it. */
+void eng_pin_determinism(int threads);
+
+/* Key/value pairs of the pinned settings, for the manifest. NULL-terminated array of
+ * {key, value} pairs, static storage. */
+const char *const *eng_determinism_info(void);
+
+eng_result eng_create(const eng_desc *desc, eng_engine **out, eng_error *err);
+void eng_destroy(eng_engine *e);
+
+eng_result eng_add_listener(eng_engine *e, const eng_listener *l);
+
+/* Renders frame i at t = i / fps, announcing every buffer to the listeners. Frames may be
+ * rendered in any order, but motion vectors refer to frame i-1's transforms (frame 0: zero). */
+eng_result eng_render_frame(eng_engine *e, int frame, eng_error *err);
+
+/* GL_VERSION and GL_RENDERER of the engine's context (for the manifest). */
+const char *eng_gl_version(const eng_engine *e);
+const char *eng_gl_renderer(const eng_engine *e);
+
+/* ---------------------------------------------------------------- small shared helpers */
+
+/* Hex XXH3-128 of bytes (32 hex chars + NUL). */
+void eng_digest_hex(const void *data, size_t len, char out[40]);
+
+/* Content digest of a buffer, the one capture writes to the manifest and replay recomputes
+ * from decoded files: XXH3-128 over each channel plane in strcmp order of channel names,
+ * each plane width*height float32 (little-endian, top row first). The order of channels in
+ * memory therefore does not matter; -0.0 and 0.0 differ, as do NaN payloads. */
+void eng_buffer_digest(const eng_buffer *b, char out[40]);
+
+/* Counts of NaN and ±Inf values in a buffer; first_x/first_y get the first non-finite pixel
+ * in row-major order (-1 if none). */
+void eng_buffer_nonfinite(const eng_buffer *b, uint64_t *nan_count, uint64_t *inf_count,
+                          int *first_x, int *first_y);
+
+/* Reads a whole file (NUL-terminated; *len excludes the NUL). Caller frees. Refuses files
+ * over max_bytes with ENG_ERR_INVALID. */
+eng_result eng_read_file(const char *path, size_t max_bytes, char **data, size_t *len, eng_error *err);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif
