@@ -293,6 +293,11 @@ eng_result eng_add_listener(eng_engine *e, const eng_listener *l);
  * rendered in any order, but motion vectors refer to frame i-1's transforms (frame 0: zero). */
 eng_result eng_render_frame(eng_engine *e, int frame, eng_error *err);
 
+/* Is the segment from a to b blocked by scene geometry, as posed at the last rendered frame
+ * (Embree occlusion query; the end points themselves are excluded by a small epsilon)?
+ * Returns 1 blocked, 0 clear. Before the first frame the scene is at t = 0. */
+int eng_occluded(eng_engine *e, const float a[3], const float b[3]);
+
 /* GL_VERSION and GL_RENDERER of the engine's context (for the manifest). */
 const char *eng_gl_version(const eng_engine *e);
 const char *eng_gl_renderer(const eng_engine *e);

@@ -1,1 +1,485 @@
-/* placeholder, replaced by its owner */
+/* engine.c — the frame loop (DESIGN.md "Data flow"; ISPM 003_… §3 pipeline). For frame i
+ * at t = i / fps: animate the scene (and the previous frame's pose, for motion vectors),
+ * update the Embree scene, then per light the shadow map, the eye G-buffer, direct light,
+ * and the composite. After each pass it reads the pass's targets back and announces them
+ * as named buffers to the listeners (capture is one); it never touches files. Per-pass wall
+ * time is measured with glFinish at pass boundaries and reported in eng_frame_stats; the
+ * read-back for announcing is timed separately as "readback" so pass times stay honest.
+ *
+ * Owns: the GL context, GPU copies of the scene's primitives, the passes, the Embree scene. */
+#define _POSIX_C_SOURCE 200809L /* clock_gettime */
+#include "eng_internal.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#define ENG_MAX_LISTENERS 8
+
+struct eng_engine {
+    const scn_scene *scene;
+    const seq_sequence *seq;
+    eng_settings settings;
+    int width, height;
+    int32_t camera_node;
+    eng_glctx *gl;
+    eng_rt *rt;
+    eng_gpu_prim *gpu;
+    pass_gbuffer *gbuffer;
+    pass_shadow *shadow;
+    pass_direct *direct;
+    pass_composite *composite;
+    int listener_count;
+    eng_listener listeners[ENG_MAX_LISTENERS];
+    float *world, *prev_world;
+    eng_frame_scene fs;
+    float *scratch;
+    eng_frame_stats stats;
+    double readback_ms;
+};
+
+/* glTF 2.0 §3.9.2: the default material when a primitive names none. */
+scn_material eng_material_of(const scn_scene *scene, int32_t index)
+{
+    if (index >= 0 && (uint32_t)index < scene->material_count)
+        return scene->materials[index];
+    scn_material m;
+    memset(&m, 0, sizeof m);
+    snprintf(m.name, sizeof m.name, "default");
+    m.base_color[0] = m.base_color[1] = m.base_color[2] = m.base_color[3] = 1.0f;
+    m.metallic = 1.0f;
+    m.roughness = 1.0f;
+    m.ior = 1.5f;
+    return m;
+}
+
+static double now_ms(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec * 1e3 + (double)ts.tv_nsec * 1e-6;
+}
+
+static void *xcalloc(size_t n, size_t size)
+{
+    void *p = calloc(n ? n : 1, size);
+    if (!p) {
+        fprintf(stderr, "ispm: out of memory\n");
+        abort();
+    }
+    return p;
+}
+
+static void upload_scene(eng_engine *e)
+{
+    const scn_scene *s = e->scene;
+    e->gpu = xcalloc(s->primitive_count, sizeof *e->gpu);
+    for (uint32_t i = 0; i < s->primitive_count; i++) {
+        const scn_primitive *p = &s->primitives[i];
+        eng_gpu_prim *g = &e->gpu[i];
+        glGenVertexArrays(1, &g->vao);
+        glBindVertexArray(g->vao);
+        glGenBuffers(1, &g->vbo_pos);
+        glBindBuffer(GL_ARRAY_BUFFER, g->vbo_pos);
+        glBufferData(GL_ARRAY_BUFFER, (GLsizeiptr)(p->vertex_count * 3 * sizeof(float)), p->positions, GL_STATIC_DRAW);
+        glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, 0, NULL);
+        glEnableVertexAttribArray(0);
+        glGenBuffers(1, &g->vbo_nrm);
+        glBindBuffer(GL_ARRAY_BUFFER, g->vbo_nrm);
+        glBufferData(GL_ARRAY_BUFFER, (GLsizeiptr)(p->vertex_count * 3 * sizeof(float)), p->normals, GL_STATIC_DRAW);
+        glVertexAttribPointer(1, 3, GL_FLOAT, GL_FALSE, 0, NULL);
+        glEnableVertexAttribArray(1);
+        glGenBuffers(1, &g->ibo);
+        glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, g->ibo);
+        glBufferData(GL_ELEMENT_ARRAY_BUFFER, (GLsizeiptr)(p->index_count * sizeof(uint32_t)), p->indices, GL_STATIC_DRAW);
+        g->index_count = (GLsizei)p->index_count;
+        glBindVertexArray(0);
+    }
+}
+
+eng_result eng_create(const eng_desc *desc, eng_engine **out, eng_error *err)
+{
+    *out = NULL;
+    const scn_scene *s = desc->scene;
+    const seq_sequence *q = desc->sequence;
+    eng_engine *e = xcalloc(1, sizeof *e);
+    e->scene = s;
+    e->seq = q;
+    e->settings = q->settings;
+    eng_settings_defaults(&e->settings);
+    e->width = q->width;
+    e->height = q->height;
+    e->camera_node = -1;
+    if (q->camera_node[0]) {
+        e->camera_node = scn_find_node(s, q->camera_node);
+        if (e->camera_node < 0 || s->nodes[e->camera_node].camera < 0) {
+            eng_destroy(e);
+            return eng_fail(err, ENG_ERR_INVALID, "%s: camera node \"%s\" is not a camera node of %s", q->path,
+                            q->camera_node, s->path);
+        }
+    }
+    uint32_t nlights = 0;
+    for (uint32_t i = 0; i < s->node_count; i++)
+        if (s->nodes[i].light >= 0)
+            nlights++;
+    if (nlights > 8) {
+        eng_destroy(e);
+        return eng_fail(err, ENG_ERR_UNSUPPORTED, "%s: %u light nodes; the engine handles at most 8", s->path, nlights);
+    }
+
+    eng_pin_determinism(e->settings.threads);
+    eng_result r = glctx_create(&e->gl, err);
+    if (r == ENG_OK)
+        r = rt_create(s, e->settings.threads, &e->rt, err);
+    if (r == ENG_OK)
+        r = pass_gbuffer_create(e->width, e->height, &e->gbuffer, err);
+    if (r == ENG_OK)
+        r = pass_shadow_create(e->settings.shadow_map_size, nlights, &e->shadow, err);
+    if (r == ENG_OK)
+        r = pass_direct_create(e->width, e->height, &e->direct, err);
+    if (r == ENG_OK)
+        r = pass_composite_create(e->width, e->height, &e->composite, err);
+    if (r != ENG_OK) {
+        eng_destroy(e);
+        return r;
+    }
+    upload_scene(e);
+
+    e->world = xcalloc((size_t)s->node_count * 16, sizeof(float));
+    e->prev_world = xcalloc((size_t)s->node_count * 16, sizeof(float));
+    uint32_t ndraws = 0;
+    for (uint32_t i = 0; i < s->node_count; i++)
+        if (s->nodes[i].mesh >= 0)
+            ndraws += s->meshes[s->nodes[i].mesh].primitive_count;
+    e->fs.scene = s;
+    e->fs.gpu = e->gpu;
+    e->fs.draws = xcalloc(ndraws, sizeof(eng_draw));
+    e->fs.draw_count = ndraws;
+    e->fs.lights = xcalloc(nlights, sizeof(eng_light_pose));
+    e->fs.light_count = nlights;
+    size_t biggest = (size_t)e->width * (size_t)e->height * 8;
+    size_t sm = (size_t)e->settings.shadow_map_size * (size_t)e->settings.shadow_map_size;
+    e->scratch = xcalloc(biggest > sm ? biggest : sm, sizeof(float));
+    *out = e;
+    return ENG_OK;
+}
+
+void eng_destroy(eng_engine *e)
+{
+    if (!e)
+        return;
+    if (e->gl) {
+        pass_composite_destroy(e->composite);
+        pass_direct_destroy(e->direct);
+        pass_shadow_destroy(e->shadow);
+        pass_gbuffer_destroy(e->gbuffer);
+        if (e->gpu)
+            for (uint32_t i = 0; i < e->scene->primitive_count; i++) {
+                glDeleteBuffers(1, &e->gpu[i].vbo_pos);
+                glDeleteBuffers(1, &e->gpu[i].vbo_nrm);
+                glDeleteBuffers(1, &e->gpu[i].ibo);
+                glDeleteVertexArrays(1, &e->gpu[i].vao);
+            }
+    }
+    rt_destroy(e->rt);
+    glctx_destroy(e->gl);
+    free(e->gpu);
+    free(e->world);
+    free(e->prev_world);
+    free(e->fs.draws);
+    free(e->fs.lights);
+    free(e->scratch);
+    free(e);
+}
+
+eng_result eng_add_listener(eng_engine *e, const eng_listener *l)
+{
+    if (e->listener_count >= ENG_MAX_LISTENERS)
+        return ENG_ERR_INVALID;
+    e->listeners[e->listener_count++] = *l;
+    return ENG_OK;
+}
+
+const char *eng_gl_version(const eng_engine *e) { return glctx_version(e->gl); }
+const char *eng_gl_renderer(const eng_engine *e) { return glctx_renderer(e->gl); }
+
+/* ---------------------------------------------------------------- scene at time t */
+
+static void camera_at(const eng_engine *e, const float *world, double t, eng_view *v)
+{
+    float aspect = (float)e->width / (float)e->height;
+    if (e->camera_node >= 0) {
+        const scn_camera *c = &e->scene->cameras[e->scene->nodes[e->camera_node].camera];
+        const float *w = world + 16 * (size_t)e->camera_node;
+        if (!m4_invert(v->view, w))
+            m4_identity(v->view);
+        v->eye[0] = w[12];
+        v->eye[1] = w[13];
+        v->eye[2] = w[14];
+        v->znear = c->znear;
+        v->zfar = c->zfar;
+        m4_perspective(v->proj, c->yfov, aspect, c->znear, c->zfar);
+    } else {
+        const seq_sequence *q = e->seq;
+        const seq_camera_key *k = q->camera_keys;
+        int n = q->camera_key_count;
+        float pos[3], tgt[3];
+        int i = 0;
+        while (i + 1 < n && k[i + 1].time <= t)
+            i++;
+        double a = 0.0;
+        if (i + 1 < n && t > k[i].time)
+            a = (t - k[i].time) / (k[i + 1].time - k[i].time);
+        const seq_camera_key *k1 = i + 1 < n ? &k[i + 1] : &k[i];
+        for (int c = 0; c < 3; c++) {
+            pos[c] = (float)((1.0 - a) * k[i].position[c] + a * k1->position[c]);
+            tgt[c] = (float)((1.0 - a) * k[i].target[c] + a * k1->target[c]);
+        }
+        m4_look_at(v->view, pos, tgt, q->camera_up);
+        memcpy(v->eye, pos, sizeof pos);
+        v->znear = q->camera_znear;
+        v->zfar = q->camera_zfar;
+        m4_perspective(v->proj, q->camera_yfov, aspect, q->camera_znear, q->camera_zfar);
+    }
+    m4_mul(v->view_proj, v->proj, v->view);
+}
+
+static void pose_frame(eng_engine *e, int frame)
+{
+    const scn_scene *s = e->scene;
+    double t = frame / e->seq->fps;
+    double tp = frame > 0 ? (frame - 1) / e->seq->fps : t;
+    scn_evaluate(s, t, e->world);
+    scn_evaluate(s, tp, e->prev_world);
+    eng_frame_scene *fs = &e->fs;
+    uint32_t d = 0, l = 0;
+    for (int c = 0; c < 3; c++) {
+        fs->bounds_min[c] = INFINITY;
+        fs->bounds_max[c] = -INFINITY;
+    }
+    for (uint32_t i = 0; i < s->node_count; i++) {
+        const scn_node *n = &s->nodes[i];
+        const float *w = e->world + 16 * (size_t)i;
+        if (n->mesh >= 0) {
+            const scn_mesh *m = &s->meshes[n->mesh];
+            for (uint32_t k = 0; k < m->primitive_count; k++) {
+                eng_draw *dr = &fs->draws[d++];
+                dr->primitive = m->first_primitive + k;
+                dr->material = s->primitives[dr->primitive].material;
+                memcpy(dr->world, w, sizeof dr->world);
+                memcpy(dr->prev_world, e->prev_world + 16 * (size_t)i, sizeof dr->prev_world);
+                const scn_primitive *p = &s->primitives[dr->primitive];
+                for (uint32_t v = 0; v < p->vertex_count; v++) {
+                    float q[3];
+                    m4_transform_point(w, p->positions + 3 * v, q);
+                    for (int c = 0; c < 3; c++) {
+                        fs->bounds_min[c] = fminf(fs->bounds_min[c], q[c]);
+                        fs->bounds_max[c] = fmaxf(fs->bounds_max[c], q[c]);
+                    }
+                }
+            }
+        }
+    }
+    if (d == 0)
+        for (int c = 0; c < 3; c++)
+            fs->bounds_min[c] = fs->bounds_max[c] = 0.0f;
+    for (uint32_t i = 0; i < s->node_count; i++) {
+        const scn_node *n = &s->nodes[i];
+        if (n->light < 0)
+            continue;
+        const scn_light *sl = &s->lights[n->light];
+        const float *w = e->world + 16 * (size_t)i;
+        eng_light_pose *lp = &fs->lights[l++];
+        lp->type = sl->type;
+        lp->position[0] = w[12];
+        lp->position[1] = w[13];
+        lp->position[2] = w[14];
+        /* KHR_lights_punctual: spot and directional lights point down the node's −Z. */
+        double dir[3] = {-w[8], -w[9], -w[10]};
+        double len = sqrt(dir[0] * dir[0] + dir[1] * dir[1] + dir[2] * dir[2]);
+        for (int c = 0; c < 3; c++) {
+            lp->direction[c] = (float)(len > 0 ? dir[c] / len : (c == 1 ? -1.0 : 0.0));
+            lp->radiance_scale[c] = sl->color[c] * sl->intensity;
+        }
+        lp->range = sl->range;
+        lp->inner_cone = sl->inner_cone;
+        lp->outer_cone = sl->outer_cone;
+        if (sl->type == SCN_LIGHT_DIRECTIONAL) {
+            /* The ortho shadow box's near plane: one scene radius behind the centre. */
+            float half = 0.0f, centre[3];
+            for (int c = 0; c < 3; c++) {
+                centre[c] = 0.5f * (fs->bounds_min[c] + fs->bounds_max[c]);
+                float ext = 0.5f * (fs->bounds_max[c] - fs->bounds_min[c]);
+                half += ext * ext;
+            }
+            half = sqrtf(half) * 1.01f + 0.01f;
+            for (int c = 0; c < 3; c++)
+                lp->position[c] = centre[c] - lp->direction[c] * half;
+        }
+    }
+    camera_at(e, e->world, t, &fs->camera);
+    camera_at(e, e->prev_world, tp, &fs->prev_camera);
+}
+
+/* ---------------------------------------------------------------- announcing */
+
+static int announce(eng_engine *e, int frame, const char *name, int w, int h, int nch,
+                    const char *const *channels, const float *data)
+{
+    eng_buffer b = {name, w, h, nch, channels, data};
+    for (int i = 0; i < e->listener_count; i++)
+        if (e->listeners[i].buffer && e->listeners[i].buffer(e->listeners[i].user, frame, &b) != 0)
+            return 1;
+    return 0;
+}
+
+/* Reads attachment `index` (layer `layer`) of t with the components in pick, and announces
+ * it unless the sequence does not capture it. Returns non-zero if a listener aborted. */
+static int read_and_announce(eng_engine *e, int frame, const char *name, const glu_target *t, int index,
+                             int layer, int nch, const int *pick, const char *const *channels)
+{
+    if (!seq_wants(e->seq, name))
+        return 0;
+    double t0 = now_ms();
+    glu_read(t, index, layer, nch, pick, e->scratch);
+    e->readback_ms += now_ms() - t0;
+    return announce(e, frame, name, t->width, t->height, nch, channels, e->scratch);
+}
+
+static void add_time(eng_engine *e, const char *pass, double ms)
+{
+    eng_frame_stats *st = &e->stats;
+    for (int i = 0; i < st->pass_count; i++)
+        if (strcmp(st->passes[i].name, pass) == 0) {
+            st->passes[i].ms += ms;
+            return;
+        }
+    if (st->pass_count < ENG_MAX_PASSES) {
+        snprintf(st->passes[st->pass_count].name, sizeof st->passes[0].name, "%s", pass);
+        st->passes[st->pass_count++].ms = ms;
+    }
+}
+
+static const char *const CH_XYZ[] = {"X", "Y", "Z"};
+static const char *const CH_RGB[] = {"R", "G", "B"};
+static const char *const CH_Z[] = {"Z"};
+static const char *const CH_XY[] = {"X", "Y"};
+static const char *const CH_MATERIAL[] = {"roughness", "metallic", "transmission", "ior", "id"};
+
+eng_result eng_render_frame(eng_engine *e, int frame, eng_error *err)
+{
+    if (frame < 0 || frame >= e->seq->frame_count)
+        return eng_fail(err, ENG_ERR_INVALID, "%s: frame %d outside 0..%d", e->seq->path, frame, e->seq->frame_count - 1);
+    double t = frame / e->seq->fps;
+    memset(&e->stats, 0, sizeof e->stats);
+    e->stats.frame = frame;
+    e->stats.time = t;
+    e->readback_ms = 0.0;
+    for (int i = 0; i < e->listener_count; i++)
+        if (e->listeners[i].frame_begin && e->listeners[i].frame_begin(e->listeners[i].user, frame, t) != 0)
+            return eng_fail(err, ENG_ERR_ABORTED, "frame %d: a listener refused the frame", frame);
+
+    const int p0[] = {0}, p01[] = {2, 3}, p012[] = {0, 1, 2};
+    double t0 = now_ms();
+    pose_frame(e, frame);
+    rt_update(e->rt, &e->fs);
+    add_time(e, "scene", now_ms() - t0);
+
+    /* Shadow maps, one per light. */
+    const shadow_map *maps[8] = {0};
+    for (uint32_t l = 0; l < e->fs.light_count; l++) {
+        t0 = now_ms();
+        maps[l] = pass_shadow_run(e->shadow, &e->fs, l);
+        glFinish();
+        add_time(e, "shadow", now_ms() - t0);
+        if (!maps[l])
+            return eng_fail(err, ENG_ERR_GL, "frame %d: cannot allocate the shadow map of light %u", frame, l);
+        for (int f = 0; f < maps[l]->faces; f++) {
+            char name[64];
+            if (maps[l]->faces > 1)
+                snprintf(name, sizeof name, "shadow.light%u.face%d", l, f);
+            else
+                snprintf(name, sizeof name, "shadow.light%u", l);
+            if (read_and_announce(e, frame, name, &maps[l]->target, 0, f, 1, p0, CH_Z))
+                return eng_fail(err, ENG_ERR_ABORTED, "frame %d: capture failed at %s", frame, name);
+        }
+    }
+
+    /* Eye G-buffer. */
+    t0 = now_ms();
+    const glu_target *gb = pass_gbuffer_run(e->gbuffer, &e->fs);
+    glFinish();
+    add_time(e, "gbuffer", now_ms() - t0);
+    {
+        const int mat_pick[] = {0, 1, 2, 3};
+        int abort_at = 0;
+        abort_at = abort_at || read_and_announce(e, frame, "gbuffer.position", gb, 0, 0, 3, p012, CH_XYZ);
+        abort_at = abort_at || read_and_announce(e, frame, "gbuffer.normal", gb, 1, 0, 3, p012, CH_XYZ);
+        abort_at = abort_at || read_and_announce(e, frame, "gbuffer.albedo", gb, 2, 0, 3, p012, CH_RGB);
+        if (!abort_at && seq_wants(e->seq, "gbuffer.material")) {
+            /* Five channels from two targets: material parameters and the id. */
+            size_t npix = (size_t)gb->width * (size_t)gb->height;
+            float *mat = e->scratch;
+            float *id = e->scratch + npix * 5;
+            double r0 = now_ms();
+            glu_read(gb, 4, 0, 1, (const int[]){1}, id);
+            float *params = malloc(npix * 4 * sizeof(float));
+            if (!params) {
+                fprintf(stderr, "ispm: out of memory\n");
+                abort();
+            }
+            glu_read(gb, 3, 0, 4, mat_pick, params);
+            for (size_t i = 0; i < npix; i++) {
+                memcpy(mat + i * 5, params + i * 4, 4 * sizeof(float));
+                mat[i * 5 + 4] = id[i];
+            }
+            free(params);
+            e->readback_ms += now_ms() - r0;
+            abort_at = announce(e, frame, "gbuffer.material", gb->width, gb->height, 5, CH_MATERIAL, mat);
+        }
+        abort_at = abort_at || read_and_announce(e, frame, "gbuffer.depth", gb, 4, 0, 1, p0, CH_Z);
+        abort_at = abort_at || read_and_announce(e, frame, "gbuffer.motion", gb, 4, 0, 2, p01, CH_XY);
+        if (abort_at)
+            return eng_fail(err, ENG_ERR_ABORTED, "frame %d: capture failed in the gbuffer pass", frame);
+    }
+
+    /* Direct light. */
+    t0 = now_ms();
+    const glu_target *direct = pass_direct_run(e->direct, &e->fs, gb, maps, &e->settings);
+    glFinish();
+    add_time(e, "direct", now_ms() - t0);
+    if (read_and_announce(e, frame, "direct.radiance", direct, 0, 0, 3, p012, CH_RGB))
+        return eng_fail(err, ENG_ERR_ABORTED, "frame %d: capture failed at direct.radiance", frame);
+
+    /* Composite and display transform. */
+    t0 = now_ms();
+    const glu_target *comp = pass_composite_run(e->composite, direct->color[0], 0, &e->settings);
+    glFinish();
+    add_time(e, "composite", now_ms() - t0);
+    if (read_and_announce(e, frame, "composite.radiance", comp, 0, 0, 3, p012, CH_RGB) ||
+        read_and_announce(e, frame, "final.display", comp, 1, 0, 3, p012, CH_RGB))
+        return eng_fail(err, ENG_ERR_ABORTED, "frame %d: capture failed in the composite pass", frame);
+
+    GLenum gle = glGetError();
+    if (gle != GL_NO_ERROR)
+        return eng_fail(err, ENG_ERR_GL, "%s: frame %d: GL error 0x%x after the composite pass", e->seq->path,
+                        frame, gle);
+    add_time(e, "readback", e->readback_ms);
+    for (int i = 0; i < e->listener_count; i++)
+        if (e->listeners[i].frame_end && e->listeners[i].frame_end(e->listeners[i].user, &e->stats) != 0)
+            return eng_fail(err, ENG_ERR_ABORTED, "frame %d: a listener failed to finish the frame", frame);
+    return ENG_OK;
+}
+
+int eng_occluded(eng_engine *e, const float a[3], const float b[3])
+{
+    if (!e->fs.draw_count)
+        return 0;
+    if (!e->stats.pass_count) { /* nothing rendered yet: pose at t = 0 */
+        pose_frame(e, 0);
+        rt_update(e->rt, &e->fs);
+    }
+    return rt_occluded(e->rt, a, b);
+}

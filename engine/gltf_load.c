@@ -1,1 +1,1084 @@
-/* placeholder, replaced by its owner */
+/* gltf_load.c — scn_load_gltf: from what tinygltf parsed (gltf_shim.h) to a validated
+ * scn_scene, and scn_destroy.
+ *
+ * tinygltf checks JSON syntax and the rough shape of the glTF objects; it does not check
+ * meaning. Everything that can make a renderer read out of bounds, loop forever or produce
+ * NaN is checked here, before anything is copied: buffer views and accessors against the
+ * bytes that exist (64-bit, overflow-checked), accessor types against their use, every
+ * index against the array it indexes, the node graph (one parent per node, no cycles), and
+ * finiteness of every number that reaches a transform, a vertex, a key, a light or a
+ * material. Each failure is one line naming the file, the place (as the glTF names it:
+ * "accessor 3", "node 5", "animations[0].channels[2]") and the problem.
+ *
+ * What the loader decides for the engine:
+ *   - meshes are TRIANGLES only; other modes, sparse accessors, orthographic cameras,
+ *     quantized positions and unknown required extensions are ENG_ERR_UNSUPPORTED;
+ *   - textures, skins and morph targets are ignored (the base mesh at rest is kept), and so
+ *     are animation channels on "weights";
+ *   - primitives without NORMAL get flat normals, their vertices un-shared; normals are
+ *     normalised;
+ *   - only nodes reachable from the default scene (else scene 0, else every root) are kept,
+ *     in depth-first pre-order so parents precede children; animation channels are remapped
+ *     to that order and dropped where their node is not kept;
+ *   - the digest covers the file and each external buffer, in buffer order.
+ * The scene owns every array it points to; scn_destroy frees it whole. */
+#include "eng.h"
+#include "gltf_shim.h"
+
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#if defined(__BYTE_ORDER__) && __BYTE_ORDER__ != __ORDER_LITTLE_ENDIAN__
+#error "glTF buffers are little-endian; this loader reads them in place"
+#endif
+
+#define GLTF_MAX_FILE ((size_t)1 << 30)
+#define MAX_PRIMITIVE_VERTICES ((uint64_t)1 << 26) /* also the cap on indices per primitive */
+#define MAX_SCENE_VERTICES ((uint64_t)1 << 28)
+#define MAX_KEYS ((uint64_t)1 << 24)
+#define PI 3.14159265358979323846
+
+typedef struct loader {
+    const char *path;
+    const gls_model *m;
+    scn_scene *s;
+    eng_error *err;
+    uint64_t total_vertices;
+} loader;
+
+static eng_result fail(loader *L, eng_result code, const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 3, 4)))
+#endif
+    ;
+
+static eng_result fail(loader *L, eng_result code, const char *fmt, ...)
+{
+    char what[900];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(what, sizeof what, fmt, ap);
+    va_end(ap);
+    return eng_fail(L->err, code, "%s: %s", L->path, what);
+}
+
+static eng_result nomem(loader *L, const char *what)
+{
+    return fail(L, ENG_ERR_NOMEM, "out of memory (%s)", what);
+}
+
+/* Copies a name, truncated to SCN_NAME_MAX-1 bytes without splitting a UTF-8 sequence. */
+static void copy_name(char dst[SCN_NAME_MAX], const char *src)
+{
+    size_t n = src ? strlen(src) : 0;
+    if (n > SCN_NAME_MAX - 1) {
+        n = SCN_NAME_MAX - 1;
+        while (n > 0 && ((unsigned char)src[n] & 0xC0) == 0x80)
+            n--;
+    }
+    if (n)
+        memcpy(dst, src, n);
+    dst[n] = 0;
+}
+
+/* *out = a*b + c; returns 0 on overflow. */
+static int mul_add_u64(uint64_t a, uint64_t b, uint64_t c, uint64_t *out)
+{
+    if (b != 0 && a > UINT64_MAX / b)
+        return 0;
+    uint64_t p = a * b;
+    if (p > UINT64_MAX - c)
+        return 0;
+    *out = p + c;
+    return 1;
+}
+
+static int all_finite(const double *v, uint32_t n)
+{
+    for (uint32_t i = 0; i < n; i++)
+        if (!isfinite(v[i]))
+            return 0;
+    return 1;
+}
+
+/* ---------------------------------------------------------------- accessors */
+
+static uint32_t type_components(int type)
+{
+    switch (type) {
+    case GLS_TYPE_SCALAR: return 1;
+    case GLS_TYPE_VEC2: return 2;
+    case GLS_TYPE_VEC3: return 3;
+    case GLS_TYPE_VEC4: return 4;
+    case GLS_TYPE_MAT2: return 4;
+    case GLS_TYPE_MAT3: return 9;
+    case GLS_TYPE_MAT4: return 16;
+    }
+    return 0;
+}
+
+static const char *type_name(int type)
+{
+    switch (type) {
+    case GLS_TYPE_SCALAR: return "SCALAR";
+    case GLS_TYPE_VEC2: return "VEC2";
+    case GLS_TYPE_VEC3: return "VEC3";
+    case GLS_TYPE_VEC4: return "VEC4";
+    case GLS_TYPE_MAT2: return "MAT2";
+    case GLS_TYPE_MAT3: return "MAT3";
+    case GLS_TYPE_MAT4: return "MAT4";
+    }
+    return "?";
+}
+
+static uint32_t component_size(int ct)
+{
+    switch (ct) {
+    case GLS_COMPONENT_BYTE:
+    case GLS_COMPONENT_UNSIGNED_BYTE: return 1;
+    case GLS_COMPONENT_SHORT:
+    case GLS_COMPONENT_UNSIGNED_SHORT: return 2;
+    case GLS_COMPONENT_UNSIGNED_INT:
+    case GLS_COMPONENT_FLOAT: return 4;
+    }
+    return 0;
+}
+
+static const char *component_name(int ct)
+{
+    switch (ct) {
+    case GLS_COMPONENT_BYTE: return "BYTE";
+    case GLS_COMPONENT_UNSIGNED_BYTE: return "UNSIGNED_BYTE";
+    case GLS_COMPONENT_SHORT: return "SHORT";
+    case GLS_COMPONENT_UNSIGNED_SHORT: return "UNSIGNED_SHORT";
+    case GLS_COMPONENT_UNSIGNED_INT: return "UNSIGNED_INT";
+    case GLS_COMPONENT_FLOAT: return "FLOAT";
+    }
+    return "?";
+}
+
+/* Bytes of one element; matrix columns start on 4-byte boundaries (glTF §3.6.2.4). */
+static uint64_t element_size(int ct, int type)
+{
+    uint64_t cs = component_size(ct);
+    int rows = type == GLS_TYPE_MAT2 ? 2 : type == GLS_TYPE_MAT3 ? 3 : type == GLS_TYPE_MAT4 ? 4 : 0;
+    if (rows == 0)
+        return cs * type_components(type);
+    uint64_t col = (cs * (uint64_t)rows + 3) & ~(uint64_t)3;
+    return col * (uint64_t)rows;
+}
+
+static eng_result check_buffer_views(loader *L)
+{
+    const gls_model *m = L->m;
+    for (uint32_t i = 0; i < m->buffer_view_count; i++) {
+        const gls_buffer_view *v = &m->buffer_views[i];
+        uint64_t end;
+        if (v->buffer < 0 || (uint32_t)v->buffer >= m->buffer_count)
+            return fail(L, ENG_ERR_INVALID, "buffer view %u: buffer %d out of range (%u buffers)", i,
+                        v->buffer, m->buffer_count);
+        if (v->byte_length == 0)
+            return fail(L, ENG_ERR_INVALID, "buffer view %u: byteLength is 0", i);
+        const gls_buffer *b = &m->buffers[v->buffer];
+        if (!mul_add_u64(1, v->byte_offset, v->byte_length, &end) || end > b->size)
+            return fail(L, ENG_ERR_INVALID,
+                        "buffer view %u: bytes [%llu, %llu+%llu) lie outside buffer %d (%llu bytes)", i,
+                        (unsigned long long)v->byte_offset, (unsigned long long)v->byte_offset,
+                        (unsigned long long)v->byte_length, v->buffer, (unsigned long long)b->size);
+        if (v->byte_stride != 0 && v->byte_stride < 4)
+            return fail(L, ENG_ERR_INVALID, "buffer view %u: byteStride %llu is below 4", i,
+                        (unsigned long long)v->byte_stride);
+    }
+    return ENG_OK;
+}
+
+static eng_result check_accessors(loader *L)
+{
+    const gls_model *m = L->m;
+    for (uint32_t i = 0; i < m->accessor_count; i++) {
+        const gls_accessor *a = &m->accessors[i];
+        if (component_size(a->component_type) == 0)
+            return fail(L, ENG_ERR_INVALID, "accessor %u: componentType %d is not a glTF 2.0 type", i,
+                        a->component_type);
+        if (type_components(a->type) == 0)
+            return fail(L, ENG_ERR_INVALID, "accessor %u: unknown type %d", i, a->type);
+        if (a->count == 0)
+            return fail(L, ENG_ERR_INVALID, "accessor %u: count is 0 (glTF requires at least 1)", i);
+        if (a->buffer_view == -1)
+            continue; /* all zeros, or sparse: nothing to bound */
+        if (a->buffer_view < 0 || (uint32_t)a->buffer_view >= m->buffer_view_count)
+            return fail(L, ENG_ERR_INVALID, "accessor %u: buffer view %d out of range (%u buffer views)",
+                        i, a->buffer_view, m->buffer_view_count);
+        const gls_buffer_view *v = &m->buffer_views[a->buffer_view];
+        uint64_t esize = element_size(a->component_type, a->type);
+        uint64_t stride = v->byte_stride ? v->byte_stride : esize;
+        if (stride < esize)
+            return fail(L, ENG_ERR_INVALID,
+                        "accessor %u: byteStride %llu of buffer view %d is smaller than its %llu-byte elements",
+                        i, (unsigned long long)stride, a->buffer_view, (unsigned long long)esize);
+        uint64_t end;
+        if (!mul_add_u64(stride, a->count - 1, esize, &end) || !mul_add_u64(1, end, a->byte_offset, &end) ||
+            end > v->byte_length)
+            return fail(L, ENG_ERR_INVALID,
+                        "accessor %u: %llu elements of %llu bytes (stride %llu) from offset %llu overrun "
+                        "buffer view %d (%llu bytes)",
+                        i, (unsigned long long)a->count, (unsigned long long)esize,
+                        (unsigned long long)stride, (unsigned long long)a->byte_offset, a->buffer_view,
+                        (unsigned long long)v->byte_length);
+    }
+    return ENG_OK;
+}
+
+/* The accessor `index` as used at `where`, which must be of the given type and
+ * componentType (ct 0: any of the index types) and not sparse. Returns its first byte, or
+ * NULL in *base for an accessor without a buffer view (all zeros). */
+static eng_result use_accessor(loader *L, int index, const char *where, int type, int ct,
+                               const gls_accessor **acc, const unsigned char **base, uint64_t *stride)
+{
+    const gls_model *m = L->m;
+    if (index < 0 || (uint32_t)index >= m->accessor_count)
+        return fail(L, ENG_ERR_INVALID, "%s: accessor %d out of range (%u accessors)", where, index,
+                    m->accessor_count);
+    const gls_accessor *a = &m->accessors[index];
+    if (a->sparse)
+        return fail(L, ENG_ERR_UNSUPPORTED, "%s: accessor %d is sparse (not supported)", where, index);
+    int ct_ok = ct ? a->component_type == ct
+                   : (a->component_type == GLS_COMPONENT_UNSIGNED_BYTE ||
+                      a->component_type == GLS_COMPONENT_UNSIGNED_SHORT ||
+                      a->component_type == GLS_COMPONENT_UNSIGNED_INT);
+    if (a->type != type || !ct_ok || (ct == GLS_COMPONENT_FLOAT && a->normalized))
+        return fail(L, ENG_ERR_INVALID, "%s: accessor %d is %s of %s%s, must be %s of %s", where, index,
+                    type_name(a->type), component_name(a->component_type),
+                    a->normalized ? " (normalized)" : "", type_name(type),
+                    ct ? component_name(ct) : "UNSIGNED_BYTE/SHORT/INT");
+    *acc = a;
+    *base = NULL;
+    *stride = 0;
+    if (a->buffer_view >= 0) {
+        const gls_buffer_view *v = &m->buffer_views[a->buffer_view];
+        *base = m->buffers[v->buffer].data + v->byte_offset + a->byte_offset;
+        *stride = v->byte_stride ? v->byte_stride : element_size(a->component_type, a->type);
+    }
+    return ENG_OK;
+}
+
+/* Reads a FLOAT accessor of `comps` components (3: VEC3, 4: VEC4, 1: SCALAR) into a new
+ * array, refusing more than max_count elements and any non-finite value. */
+static eng_result read_floats(loader *L, int index, const char *where, uint32_t comps, uint64_t max_count,
+                              float **out, uint64_t *count)
+{
+    int type = comps == 1 ? GLS_TYPE_SCALAR : comps == 3 ? GLS_TYPE_VEC3 : GLS_TYPE_VEC4;
+    const gls_accessor *a;
+    const unsigned char *base;
+    uint64_t stride;
+    eng_result r = use_accessor(L, index, where, type, GLS_COMPONENT_FLOAT, &a, &base, &stride);
+    if (r)
+        return r;
+    if (a->count > max_count)
+        return fail(L, ENG_ERR_UNSUPPORTED, "%s: accessor %d has %llu elements, more than the %llu supported",
+                    where, index, (unsigned long long)a->count, (unsigned long long)max_count);
+    float *v = calloc((size_t)a->count * comps, sizeof *v);
+    if (!v)
+        return nomem(L, where);
+    if (base)
+        for (uint64_t i = 0; i < a->count; i++) {
+            memcpy(v + i * comps, base + i * stride, comps * sizeof *v);
+            for (uint32_t c = 0; c < comps; c++)
+                if (!isfinite(v[i * comps + c])) {
+                    free(v);
+                    return fail(L, ENG_ERR_INVALID, "%s: accessor %d element %llu is not finite", where,
+                                index, (unsigned long long)i);
+                }
+        }
+    *out = v;
+    *count = a->count;
+    return ENG_OK;
+}
+
+static eng_result read_indices(loader *L, int index, const char *where, uint32_t vertex_count,
+                               uint32_t **out, uint64_t *count)
+{
+    const gls_accessor *a;
+    const unsigned char *base;
+    uint64_t stride;
+    eng_result r = use_accessor(L, index, where, GLS_TYPE_SCALAR, 0, &a, &base, &stride);
+    if (r)
+        return r;
+    if (a->count > MAX_PRIMITIVE_VERTICES)
+        return fail(L, ENG_ERR_UNSUPPORTED, "%s: accessor %d has %llu indices, more than the %llu supported",
+                    where, index, (unsigned long long)a->count, (unsigned long long)MAX_PRIMITIVE_VERTICES);
+    if (a->count % 3 != 0)
+        return fail(L, ENG_ERR_INVALID, "%s: accessor %d has %llu indices, not a multiple of 3", where, index,
+                    (unsigned long long)a->count);
+    uint32_t *v = calloc((size_t)a->count, sizeof *v);
+    if (!v)
+        return nomem(L, where);
+    for (uint64_t i = 0; base && i < a->count; i++) {
+        const unsigned char *p = base + i * stride;
+        if (a->component_type == GLS_COMPONENT_UNSIGNED_BYTE) {
+            v[i] = p[0];
+        } else if (a->component_type == GLS_COMPONENT_UNSIGNED_SHORT) {
+            uint16_t x;
+            memcpy(&x, p, 2);
+            v[i] = x;
+        } else {
+            memcpy(&v[i], p, 4);
+        }
+    }
+    for (uint64_t i = 0; i < a->count; i++)
+        if (v[i] >= vertex_count) {
+            uint32_t bad = v[i];
+            free(v);
+            return fail(L, ENG_ERR_INVALID, "%s: index %llu is %u, but there are only %u vertices", where,
+                        (unsigned long long)i, bad, vertex_count);
+        }
+    *out = v;
+    *count = a->count;
+    return ENG_OK;
+}
+
+/* ---------------------------------------------------------------- materials, cameras, lights */
+
+static eng_result check_unit_range(loader *L, const char *where, const char *what, double v)
+{
+    if (!isfinite(v) || v < 0.0 || v > 1.0)
+        return fail(L, ENG_ERR_INVALID, "%s: %s %g is outside [0, 1]", where, what, v);
+    return ENG_OK;
+}
+
+static eng_result load_materials(loader *L)
+{
+    const gls_model *m = L->m;
+    scn_scene *s = L->s;
+    s->materials = calloc(m->material_count ? m->material_count : 1, sizeof *s->materials);
+    if (!s->materials)
+        return nomem(L, "materials");
+    s->material_count = m->material_count;
+    for (uint32_t i = 0; i < m->material_count; i++) {
+        const gls_material *g = &m->materials[i];
+        scn_material *d = &s->materials[i];
+        char where[48];
+        eng_result r;
+        snprintf(where, sizeof where, "material %u", i);
+        copy_name(d->name, g->name);
+        if (g->base_color.len != 4)
+            return fail(L, ENG_ERR_INVALID, "%s: baseColorFactor has %u values, not 4", where, g->base_color.len);
+        for (int c = 0; c < 4; c++) {
+            if ((r = check_unit_range(L, where, "baseColorFactor component", g->base_color.v[c])))
+                return r;
+            d->base_color[c] = (float)g->base_color.v[c];
+        }
+        if ((r = check_unit_range(L, where, "metallicFactor", g->metallic)) ||
+            (r = check_unit_range(L, where, "roughnessFactor", g->roughness)))
+            return r;
+        d->metallic = (float)g->metallic;
+        d->roughness = (float)g->roughness;
+        if (g->emissive.len != 3)
+            return fail(L, ENG_ERR_INVALID, "%s: emissiveFactor has %u values, not 3", where, g->emissive.len);
+        for (int c = 0; c < 3; c++) {
+            double e = g->emissive.v[c];
+            if (!isfinite(e) || e < 0.0)
+                return fail(L, ENG_ERR_INVALID, "%s: emissiveFactor component %g is negative or not finite",
+                            where, e);
+            d->emissive[c] = (float)e;
+        }
+        d->double_sided = g->double_sided;
+        d->transmission = 0.0f;
+        if (g->transmission.state == GLS_NUM_NOT_A_NUMBER)
+            return fail(L, ENG_ERR_INVALID, "%s: KHR_materials_transmission.transmissionFactor is not a number",
+                        where);
+        if (g->transmission.state == GLS_NUM_PRESENT) {
+            if ((r = check_unit_range(L, where, "transmissionFactor", g->transmission.value)))
+                return r;
+            d->transmission = (float)g->transmission.value;
+        }
+        d->ior = 1.5f;
+        if (g->ior.state == GLS_NUM_NOT_A_NUMBER)
+            return fail(L, ENG_ERR_INVALID, "%s: KHR_materials_ior.ior is not a number", where);
+        if (g->ior.state == GLS_NUM_PRESENT) {
+            if (!isfinite(g->ior.value) || g->ior.value < 1.0)
+                return fail(L, ENG_ERR_INVALID, "%s: ior %g is below 1 or not finite", where, g->ior.value);
+            d->ior = (float)g->ior.value;
+        }
+    }
+    return ENG_OK;
+}
+
+static eng_result load_cameras(loader *L)
+{
+    const gls_model *m = L->m;
+    scn_scene *s = L->s;
+    s->cameras = calloc(m->camera_count ? m->camera_count : 1, sizeof *s->cameras);
+    if (!s->cameras)
+        return nomem(L, "cameras");
+    s->camera_count = m->camera_count;
+    for (uint32_t i = 0; i < m->camera_count; i++) {
+        const gls_camera *g = &m->cameras[i];
+        scn_camera *d = &s->cameras[i];
+        copy_name(d->name, g->name);
+        if (strcmp(g->type, "perspective") != 0)
+            return fail(L, ENG_ERR_UNSUPPORTED, "camera %u: type \"%s\" (only perspective cameras are supported)",
+                        i, g->type);
+        if (!isfinite(g->yfov) || g->yfov <= 0.0 || g->yfov >= PI)
+            return fail(L, ENG_ERR_INVALID, "camera %u: yfov %g is outside (0, pi)", i, g->yfov);
+        if (!isfinite(g->znear) || g->znear <= 0.0)
+            return fail(L, ENG_ERR_INVALID, "camera %u: znear %g is not positive", i, g->znear);
+        if (!isfinite(g->aspect_ratio) || g->aspect_ratio < 0.0)
+            return fail(L, ENG_ERR_INVALID, "camera %u: aspectRatio %g is negative or not finite", i,
+                        g->aspect_ratio);
+        double zfar = g->zfar == 0.0 ? 1000.0 * g->znear : g->zfar;
+        if (!isfinite(zfar) || zfar <= g->znear)
+            return fail(L, ENG_ERR_INVALID, "camera %u: zfar %g is not beyond znear %g", i, zfar, g->znear);
+        d->yfov = (float)g->yfov;
+        d->aspect = (float)g->aspect_ratio;
+        d->znear = (float)g->znear;
+        d->zfar = (float)zfar;
+    }
+    return ENG_OK;
+}
+
+static eng_result load_lights(loader *L)
+{
+    const gls_model *m = L->m;
+    scn_scene *s = L->s;
+    s->lights = calloc(m->light_count ? m->light_count : 1, sizeof *s->lights);
+    if (!s->lights)
+        return nomem(L, "lights");
+    s->light_count = m->light_count;
+    for (uint32_t i = 0; i < m->light_count; i++) {
+        const gls_light *g = &m->lights[i];
+        scn_light *d = &s->lights[i];
+        copy_name(d->name, g->name);
+        if (strcmp(g->type, "point") == 0)
+            d->type = SCN_LIGHT_POINT;
+        else if (strcmp(g->type, "spot") == 0)
+            d->type = SCN_LIGHT_SPOT;
+        else if (strcmp(g->type, "directional") == 0)
+            d->type = SCN_LIGHT_DIRECTIONAL;
+        else
+            return fail(L, ENG_ERR_INVALID, "light %u: type \"%s\" is not point, spot or directional", i, g->type);
+        if (g->color.len == 0) {
+            d->color[0] = d->color[1] = d->color[2] = 1.0f;
+        } else if (g->color.len != 3) {
+            return fail(L, ENG_ERR_INVALID, "light %u: color has %u values, not 3", i, g->color.len);
+        } else {
+            for (int c = 0; c < 3; c++) {
+                if (!isfinite(g->color.v[c]) || g->color.v[c] < 0.0)
+                    return fail(L, ENG_ERR_INVALID, "light %u: color component %g is negative or not finite", i,
+                                g->color.v[c]);
+                d->color[c] = (float)g->color.v[c];
+            }
+        }
+        if (!isfinite(g->intensity) || g->intensity < 0.0)
+            return fail(L, ENG_ERR_INVALID, "light %u: intensity %g is negative or not finite", i, g->intensity);
+        if (!isfinite(g->range) || g->range < 0.0)
+            return fail(L, ENG_ERR_INVALID, "light %u: range %g is negative or not finite", i, g->range);
+        d->intensity = (float)g->intensity;
+        d->range = (float)g->range;
+        d->inner_cone = 0.0f;
+        d->outer_cone = (float)(PI / 4.0);
+        if (d->type == SCN_LIGHT_SPOT) {
+            if (!isfinite(g->inner_cone) || !isfinite(g->outer_cone) || g->inner_cone < 0.0 ||
+                g->inner_cone >= g->outer_cone || g->outer_cone > PI / 2.0)
+                return fail(L, ENG_ERR_INVALID,
+                            "light %u: spot cone angles inner %g, outer %g violate 0 <= inner < outer <= pi/2", i,
+                            g->inner_cone, g->outer_cone);
+            d->inner_cone = (float)g->inner_cone;
+            d->outer_cone = (float)g->outer_cone;
+        }
+    }
+    return ENG_OK;
+}
+
+/* ---------------------------------------------------------------- meshes */
+
+/* Replaces an indexed triangle list without normals by one where each triangle has its own
+ * three vertices and its face normal (normalised cross product of its edges in winding
+ * order; (0, 1, 0) for a triangle of zero area, which covers no pixel anyway). */
+static eng_result flat_normals(loader *L, scn_primitive *p, const char *where)
+{
+    uint32_t n = p->index_count;
+    float *pos = malloc((size_t)n * 3 * sizeof *pos);
+    float *nrm = malloc((size_t)n * 3 * sizeof *nrm);
+    if (!pos || !nrm) {
+        free(pos);
+        free(nrm);
+        return nomem(L, where);
+    }
+    for (uint32_t t = 0; t < n / 3; t++) {
+        const float *v[3];
+        for (int k = 0; k < 3; k++) {
+            v[k] = p->positions + (size_t)p->indices[3 * t + k] * 3;
+            memcpy(pos + ((size_t)3 * t + k) * 3, v[k], 3 * sizeof *pos);
+        }
+        double e1[3], e2[3], c[3];
+        for (int k = 0; k < 3; k++) {
+            e1[k] = (double)v[1][k] - v[0][k];
+            e2[k] = (double)v[2][k] - v[0][k];
+        }
+        c[0] = e1[1] * e2[2] - e1[2] * e2[1];
+        c[1] = e1[2] * e2[0] - e1[0] * e2[2];
+        c[2] = e1[0] * e2[1] - e1[1] * e2[0];
+        double len = sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
+        float f[3] = {0.0f, 1.0f, 0.0f};
+        if (len > 0.0 && isfinite(len))
+            for (int k = 0; k < 3; k++)
+                f[k] = (float)(c[k] / len) + 0.0f; /* -0.0 would change buffer digests */
+        for (int k = 0; k < 3; k++)
+            memcpy(nrm + ((size_t)3 * t + k) * 3, f, sizeof f);
+    }
+    for (uint32_t i = 0; i < n; i++)
+        p->indices[i] = i;
+    free(p->positions);
+    free(p->normals);
+    p->positions = pos;
+    p->normals = nrm;
+    p->vertex_count = n;
+    return ENG_OK;
+}
+
+static int find_attribute(const gls_primitive *g, const char *semantic)
+{
+    for (uint32_t a = 0; a < g->attribute_count; a++)
+        if (strcmp(g->attributes[a].semantic, semantic) == 0)
+            return g->attributes[a].accessor;
+    return -2;
+}
+
+static eng_result load_primitive(loader *L, const gls_primitive *g, scn_primitive *d, const char *where)
+{
+    const gls_model *m = L->m;
+    eng_result r;
+    if (g->mode < 0 || g->mode > 6)
+        return fail(L, ENG_ERR_INVALID, "%s: mode %d is not a glTF primitive mode", where, g->mode);
+    if (g->mode != 4)
+        return fail(L, ENG_ERR_UNSUPPORTED, "%s: mode %d (only TRIANGLES, mode 4, is supported)", where, g->mode);
+    if (g->material < -1 || g->material >= (int)m->material_count)
+        return fail(L, ENG_ERR_INVALID, "%s: material %d out of range (%u materials)", where, g->material,
+                    m->material_count);
+    d->material = g->material;
+    for (uint32_t a = 0; a < g->attribute_count; a++)
+        if (g->attributes[a].accessor < 0 || (uint32_t)g->attributes[a].accessor >= m->accessor_count)
+            return fail(L, ENG_ERR_INVALID, "%s: attribute %s: accessor %d out of range (%u accessors)", where,
+                        g->attributes[a].semantic, g->attributes[a].accessor, m->accessor_count);
+
+    char what[160];
+    uint64_t count;
+    int pos_acc = find_attribute(g, "POSITION");
+    if (pos_acc == -2)
+        return fail(L, ENG_ERR_UNSUPPORTED, "%s: no POSITION attribute", where);
+    snprintf(what, sizeof what, "%s POSITION", where);
+    if ((r = read_floats(L, pos_acc, what, 3, MAX_PRIMITIVE_VERTICES, &d->positions, &count)))
+        return r;
+    d->vertex_count = (uint32_t)count;
+
+    int nrm_acc = find_attribute(g, "NORMAL");
+    if (nrm_acc != -2) {
+        snprintf(what, sizeof what, "%s NORMAL", where);
+        if ((r = read_floats(L, nrm_acc, what, 3, MAX_PRIMITIVE_VERTICES, &d->normals, &count)))
+            return r;
+        if (count != d->vertex_count)
+            return fail(L, ENG_ERR_INVALID, "%s: %llu normals for %u positions", what, (unsigned long long)count,
+                        d->vertex_count);
+        for (uint32_t v = 0; v < d->vertex_count; v++) {
+            float *n = d->normals + (size_t)v * 3;
+            double len = sqrt((double)n[0] * n[0] + (double)n[1] * n[1] + (double)n[2] * n[2]);
+            if (!(len > 0.0) || !isfinite(len))
+                return fail(L, ENG_ERR_INVALID, "%s: normal %u has zero length", what, v);
+            for (int k = 0; k < 3; k++)
+                n[k] = (float)(n[k] / len);
+        }
+    }
+
+    if (g->indices >= 0) {
+        snprintf(what, sizeof what, "%s indices", where);
+        if ((r = read_indices(L, g->indices, what, d->vertex_count, &d->indices, &count)))
+            return r;
+        d->index_count = (uint32_t)count;
+    } else {
+        if (g->indices != -1)
+            return fail(L, ENG_ERR_INVALID, "%s: indices accessor %d out of range", where, g->indices);
+        if (d->vertex_count % 3 != 0)
+            return fail(L, ENG_ERR_INVALID, "%s: %u vertices without indices, not a multiple of 3", where,
+                        d->vertex_count);
+        d->indices = malloc((size_t)d->vertex_count * sizeof *d->indices);
+        if (!d->indices)
+            return nomem(L, where);
+        for (uint32_t i = 0; i < d->vertex_count; i++)
+            d->indices[i] = i;
+        d->index_count = d->vertex_count;
+    }
+
+    if (!d->normals && (r = flat_normals(L, d, where)))
+        return r;
+    L->total_vertices += d->vertex_count;
+    if (L->total_vertices > MAX_SCENE_VERTICES)
+        return fail(L, ENG_ERR_UNSUPPORTED, "%s: the scene exceeds %llu vertices", where,
+                    (unsigned long long)MAX_SCENE_VERTICES);
+    return ENG_OK;
+}
+
+static eng_result load_meshes(loader *L)
+{
+    const gls_model *m = L->m;
+    scn_scene *s = L->s;
+    uint64_t total = 0;
+    for (uint32_t i = 0; i < m->mesh_count; i++)
+        total += m->meshes[i].primitive_count;
+    if (total > UINT32_MAX / 2)
+        return fail(L, ENG_ERR_UNSUPPORTED, "%llu primitives", (unsigned long long)total);
+    s->meshes = calloc(m->mesh_count ? m->mesh_count : 1, sizeof *s->meshes);
+    s->primitives = calloc(total ? (size_t)total : 1, sizeof *s->primitives);
+    if (!s->meshes || !s->primitives)
+        return nomem(L, "meshes");
+    s->mesh_count = m->mesh_count;
+    for (uint32_t i = 0; i < m->mesh_count; i++) {
+        const gls_mesh *g = &m->meshes[i];
+        scn_mesh *d = &s->meshes[i];
+        copy_name(d->name, g->name);
+        d->first_primitive = s->primitive_count;
+        d->primitive_count = g->primitive_count;
+        for (uint32_t p = 0; p < g->primitive_count; p++) {
+            char where[64];
+            snprintf(where, sizeof where, "meshes[%u].primitives[%u]", i, p);
+            /* Counted before loading so scn_destroy frees a half-built primitive. */
+            scn_primitive *dp = &s->primitives[s->primitive_count++];
+            eng_result r = load_primitive(L, &g->primitives[p], dp, where);
+            if (r)
+                return r;
+        }
+    }
+    return ENG_OK;
+}
+
+/* ---------------------------------------------------------------- nodes */
+
+static eng_result check_node(loader *L, uint32_t i)
+{
+    const gls_model *m = L->m;
+    const gls_node *g = &m->nodes[i];
+    if (g->mesh < -1 || g->mesh >= (int)m->mesh_count)
+        return fail(L, ENG_ERR_INVALID, "node %u: mesh %d out of range (%u meshes)", i, g->mesh, m->mesh_count);
+    if (g->camera < -1 || g->camera >= (int)m->camera_count)
+        return fail(L, ENG_ERR_INVALID, "node %u: camera %d out of range (%u cameras)", i, g->camera,
+                    m->camera_count);
+    if (g->has_light) {
+        double l = g->light.value;
+        if (g->light.state != GLS_NUM_PRESENT)
+            return fail(L, ENG_ERR_INVALID, "node %u: KHR_lights_punctual has no numeric \"light\"", i);
+        if (l != floor(l) || l < 0.0 || l >= (double)m->light_count)
+            return fail(L, ENG_ERR_INVALID, "node %u: light %g out of range (%u lights)", i, l, m->light_count);
+    }
+    struct {
+        const char *name;
+        gls_doubles d;
+        uint32_t len;
+    } vec[4] = {{"translation", g->translation, 3}, {"rotation", g->rotation, 4}, {"scale", g->scale, 3},
+                {"matrix", g->matrix, 16}};
+    for (int k = 0; k < 4; k++) {
+        if (vec[k].d.len != 0 && vec[k].d.len != vec[k].len)
+            return fail(L, ENG_ERR_INVALID, "node %u: %s has %u values, not %u", i, vec[k].name, vec[k].d.len,
+                        vec[k].len);
+        if (!all_finite(vec[k].d.v, vec[k].d.len))
+            return fail(L, ENG_ERR_INVALID, "node %u: %s is not finite", i, vec[k].name);
+    }
+    if (g->rotation.len == 4) {
+        const double *q = g->rotation.v;
+        if (!(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3] > 0.0))
+            return fail(L, ENG_ERR_INVALID, "node %u: rotation is the zero quaternion", i);
+    }
+    return ENG_OK;
+}
+
+static void fill_node(const gls_node *g, scn_node *d)
+{
+    copy_name(d->name, g->name);
+    d->mesh = g->mesh;
+    d->camera = g->camera;
+    d->light = g->has_light ? (int32_t)g->light.value : -1;
+    for (int k = 0; k < 16; k++)
+        d->matrix[k] = (k % 5 == 0) ? 1.0f : 0.0f;
+    d->translation[0] = d->translation[1] = d->translation[2] = 0.0f;
+    d->rotation[0] = d->rotation[1] = d->rotation[2] = 0.0f;
+    d->rotation[3] = 1.0f;
+    d->scale[0] = d->scale[1] = d->scale[2] = 1.0f;
+    d->has_matrix = g->matrix.len == 16;
+    if (d->has_matrix) {
+        for (int k = 0; k < 16; k++)
+            d->matrix[k] = (float)g->matrix.v[k];
+        return;
+    }
+    for (int k = 0; k < 3 && g->translation.len; k++)
+        d->translation[k] = (float)g->translation.v[k];
+    for (int k = 0; k < 3 && g->scale.len; k++)
+        d->scale[k] = (float)g->scale.v[k];
+    if (g->rotation.len) {
+        const double *q = g->rotation.v;
+        double len = sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
+        for (int k = 0; k < 4; k++)
+            d->rotation[k] = (float)(q[k] / len);
+    }
+}
+
+/* Validates every node and the hierarchy, then keeps the nodes reachable from the chosen
+ * scene in pre-order. remap[old] is the kept index or -1. */
+static eng_result load_nodes(loader *L, int32_t *remap)
+{
+    const gls_model *m = L->m;
+    scn_scene *s = L->s;
+    uint32_t n = m->node_count;
+    eng_result r = ENG_OK;
+    int32_t *parent = malloc((n ? n : 1) * sizeof *parent);
+    unsigned char *state = calloc(n ? n : 1, 1);
+    uint32_t *stack = malloc((n ? n : 1) * sizeof *stack);
+    uint32_t *order = malloc((n ? n : 1) * sizeof *order);
+    if (!parent || !state || !stack || !order) {
+        r = nomem(L, "nodes");
+        goto done;
+    }
+    for (uint32_t i = 0; i < n; i++) {
+        parent[i] = -1;
+        remap[i] = -1;
+    }
+    for (uint32_t i = 0; i < n; i++) {
+        const gls_node *g = &m->nodes[i];
+        if ((r = check_node(L, i)))
+            goto done;
+        for (uint32_t c = 0; c < g->child_count; c++) {
+            int ch = g->children[c];
+            if (ch < 0 || (uint32_t)ch >= n) {
+                r = fail(L, ENG_ERR_INVALID, "node %u: child %d out of range (%u nodes)", i, ch, n);
+                goto done;
+            }
+            if ((uint32_t)ch == i) {
+                r = fail(L, ENG_ERR_INVALID, "node %u: is its own child (cycle)", i);
+                goto done;
+            }
+            if (parent[ch] != -1) {
+                r = fail(L, ENG_ERR_INVALID, "node %d: has two parents (nodes %d and %u)", ch, parent[ch], i);
+                goto done;
+            }
+            parent[ch] = (int32_t)i;
+        }
+    }
+    /* With one parent each, a cycle is a walk up that meets itself: 0 new, 1 on the
+     * current walk, 2 known to end at a root. */
+    for (uint32_t i = 0; i < n; i++) {
+        int32_t j = (int32_t)i;
+        while (j != -1 && state[j] == 0) {
+            state[j] = 1;
+            j = parent[j];
+        }
+        if (j != -1 && state[j] == 1) {
+            r = fail(L, ENG_ERR_INVALID, "node %d: is part of a cycle of children", j);
+            goto done;
+        }
+        for (j = (int32_t)i; j != -1 && state[j] == 1; j = parent[j])
+            state[j] = 2;
+    }
+
+    const int *roots = NULL;
+    uint32_t root_count = 0;
+    int sc = m->default_scene;
+    if (sc < -1 || sc >= (int)m->scene_count) {
+        r = fail(L, ENG_ERR_INVALID, "scene %d out of range (%u scenes)", sc, m->scene_count);
+        goto done;
+    }
+    for (uint32_t k = 0; k < m->scene_count; k++)
+        for (uint32_t j = 0; j < m->scenes[k].node_count; j++)
+            if (m->scenes[k].nodes[j] < 0 || (uint32_t)m->scenes[k].nodes[j] >= n) {
+                r = fail(L, ENG_ERR_INVALID, "scenes[%u]: node %d out of range (%u nodes)", k,
+                         m->scenes[k].nodes[j], n);
+                goto done;
+            }
+    if (sc == -1 && m->scene_count > 0)
+        sc = 0;
+    if (sc >= 0) {
+        roots = m->scenes[sc].nodes;
+        root_count = m->scenes[sc].node_count;
+    }
+
+    uint32_t kept = 0;
+    for (uint32_t k = 0; k < (sc >= 0 ? root_count : n); k++) {
+        uint32_t root = sc >= 0 ? (uint32_t)roots[k] : k;
+        if (sc < 0 && parent[root] != -1)
+            continue;
+        if (parent[root] != -1) {
+            r = fail(L, ENG_ERR_INVALID, "scenes[%d]: node %u is not a root (its parent is node %d)", sc, root,
+                     parent[root]);
+            goto done;
+        }
+        if (remap[root] != -1) {
+            r = fail(L, ENG_ERR_INVALID, "scenes[%d]: node %u is listed twice", sc, root);
+            goto done;
+        }
+        uint32_t top = 0;
+        stack[top++] = root;
+        while (top) {
+            uint32_t i = stack[--top];
+            remap[i] = (int32_t)kept;
+            order[kept++] = i;
+            const gls_node *g = &m->nodes[i];
+            for (uint32_t c = g->child_count; c-- > 0;)
+                stack[top++] = (uint32_t)g->children[c];
+        }
+    }
+
+    s->nodes = calloc(kept ? kept : 1, sizeof *s->nodes);
+    if (!s->nodes) {
+        r = nomem(L, "nodes");
+        goto done;
+    }
+    s->node_count = kept;
+    for (uint32_t k = 0; k < kept; k++) {
+        fill_node(&m->nodes[order[k]], &s->nodes[k]);
+        s->nodes[k].parent = parent[order[k]] == -1 ? -1 : remap[parent[order[k]]];
+    }
+done:
+    free(parent);
+    free(state);
+    free(stack);
+    free(order);
+    return r;
+}
+
+/* ---------------------------------------------------------------- animations */
+
+static eng_result load_channel(loader *L, const gls_animation *ga, uint32_t a, uint32_t c, const int32_t *remap,
+                               scn_channel *d, int *keep)
+{
+    const gls_model *m = L->m;
+    const gls_channel *g = &ga->channels[c];
+    char where[96];
+    eng_result r;
+    *keep = 0;
+    snprintf(where, sizeof where, "animations[%u].channels[%u]", a, c);
+    if (g->sampler < 0 || (uint32_t)g->sampler >= ga->sampler_count)
+        return fail(L, ENG_ERR_INVALID, "%s: sampler %d out of range (%u samplers)", where, g->sampler,
+                    ga->sampler_count);
+    if (g->target_node < 0 || (uint32_t)g->target_node >= m->node_count)
+        return fail(L, ENG_ERR_INVALID, "%s: target node %d out of range (%u nodes)", where, g->target_node,
+                    m->node_count);
+    if (strcmp(g->path, "translation") == 0)
+        d->path = SCN_PATH_TRANSLATION;
+    else if (strcmp(g->path, "rotation") == 0)
+        d->path = SCN_PATH_ROTATION;
+    else if (strcmp(g->path, "scale") == 0)
+        d->path = SCN_PATH_SCALE;
+    else if (strcmp(g->path, "weights") == 0)
+        return ENG_OK; /* morph targets are not supported; the base mesh stays */
+    else
+        return fail(L, ENG_ERR_INVALID, "%s: target path \"%s\" is not translation, rotation, scale or weights",
+                    where, g->path);
+    if (m->nodes[g->target_node].matrix.len == 16)
+        return fail(L, ENG_ERR_INVALID, "%s: node %d has a matrix, which glTF forbids animating", where,
+                    g->target_node);
+
+    const gls_sampler *gs = &ga->samplers[g->sampler];
+    char swhere[96];
+    snprintf(swhere, sizeof swhere, "animations[%u].samplers[%d]", a, g->sampler);
+    if (strcmp(gs->interpolation, "LINEAR") == 0)
+        d->interp = SCN_INTERP_LINEAR;
+    else if (strcmp(gs->interpolation, "STEP") == 0)
+        d->interp = SCN_INTERP_STEP;
+    else if (strcmp(gs->interpolation, "CUBICSPLINE") == 0)
+        d->interp = SCN_INTERP_CUBICSPLINE;
+    else
+        return fail(L, ENG_ERR_INVALID, "%s: interpolation \"%s\" is not LINEAR, STEP or CUBICSPLINE", swhere,
+                    gs->interpolation);
+
+    char what[128];
+    uint64_t n, nout;
+    snprintf(what, sizeof what, "%s input", swhere);
+    if ((r = read_floats(L, gs->input, what, 1, MAX_KEYS, &d->times, &n)))
+        return r;
+    d->key_count = (uint32_t)n;
+    if (d->times[0] < 0.0f)
+        return fail(L, ENG_ERR_INVALID, "%s: first key time %g is negative", what, d->times[0]);
+    for (uint32_t k = 1; k < d->key_count; k++)
+        if (!(d->times[k] > d->times[k - 1]))
+            return fail(L, ENG_ERR_INVALID, "%s: key times not strictly increasing at key %u (%g after %g)", what, k,
+                        d->times[k], d->times[k - 1]);
+    if (d->interp == SCN_INTERP_CUBICSPLINE && d->key_count < 2)
+        return fail(L, ENG_ERR_INVALID, "%s: CUBICSPLINE needs at least 2 keys", swhere);
+
+    uint32_t comps = d->path == SCN_PATH_ROTATION ? 4 : 3;
+    uint64_t per_key = d->interp == SCN_INTERP_CUBICSPLINE ? 3 : 1;
+    snprintf(what, sizeof what, "%s output", swhere);
+    if ((r = read_floats(L, gs->output, what, comps, MAX_KEYS * 3, &d->values, &nout)))
+        return r;
+    if (nout != n * per_key)
+        return fail(L, ENG_ERR_INVALID, "%s: %llu values for %llu keys (needs %llu)", what,
+                    (unsigned long long)nout, (unsigned long long)n, (unsigned long long)(n * per_key));
+
+    d->node = remap[g->target_node];
+    *keep = d->node >= 0;
+    return ENG_OK;
+}
+
+static void free_channel(scn_channel *c)
+{
+    free(c->times);
+    free(c->values);
+    c->times = NULL;
+    c->values = NULL;
+}
+
+static eng_result load_animations(loader *L, const int32_t *remap)
+{
+    const gls_model *m = L->m;
+    scn_scene *s = L->s;
+    s->animations = calloc(m->animation_count ? m->animation_count : 1, sizeof *s->animations);
+    if (!s->animations)
+        return nomem(L, "animations");
+    s->animation_count = m->animation_count;
+    for (uint32_t a = 0; a < m->animation_count; a++) {
+        const gls_animation *g = &m->animations[a];
+        scn_animation *d = &s->animations[a];
+        copy_name(d->name, g->name);
+        d->channels = calloc(g->channel_count ? g->channel_count : 1, sizeof *d->channels);
+        if (!d->channels)
+            return nomem(L, "animation channels");
+        for (uint32_t c = 0; c < g->channel_count; c++) {
+            scn_channel *dc = &d->channels[d->channel_count];
+            int keep;
+            eng_result r = load_channel(L, g, a, c, remap, dc, &keep);
+            if (r || !keep) {
+                free_channel(dc);
+                if (r)
+                    return r;
+                continue;
+            }
+            d->channel_count++;
+        }
+    }
+    return ENG_OK;
+}
+
+/* ---------------------------------------------------------------- top level */
+
+static eng_result check_extensions(loader *L)
+{
+    static const char *const known[] = {"KHR_lights_punctual", "KHR_materials_transmission", "KHR_materials_ior"};
+    for (uint32_t i = 0; i < L->m->extensions_required_count; i++) {
+        const char *e = L->m->extensions_required[i];
+        int ok = 0;
+        for (size_t k = 0; k < sizeof known / sizeof known[0]; k++)
+            ok |= strcmp(e, known[k]) == 0;
+        if (!ok)
+            return fail(L, ENG_ERR_UNSUPPORTED, "extensionsRequired: %s is not supported", e);
+    }
+    return ENG_OK;
+}
+
+static eng_result compute_digest(loader *L, const char *bytes, size_t len)
+{
+    const gls_model *m = L->m;
+    size_t total = len;
+    for (uint32_t i = 0; i < m->buffer_count; i++)
+        if (m->buffers[i].external)
+            total += (size_t)m->buffers[i].size;
+    if (total == len) {
+        eng_digest_hex(bytes, len, L->s->digest);
+        return ENG_OK;
+    }
+    char *all = malloc(total);
+    if (!all)
+        return nomem(L, "digest");
+    memcpy(all, bytes, len);
+    size_t at = len;
+    for (uint32_t i = 0; i < m->buffer_count; i++)
+        if (m->buffers[i].external) {
+            memcpy(all + at, m->buffers[i].data, (size_t)m->buffers[i].size);
+            at += (size_t)m->buffers[i].size;
+        }
+    eng_digest_hex(all, total, L->s->digest);
+    free(all);
+    return ENG_OK;
+}
+
+static eng_result build(loader *L, const char *bytes, size_t len)
+{
+    eng_result r;
+    if ((r = check_extensions(L)) || (r = check_buffer_views(L)) || (r = check_accessors(L)) ||
+        (r = load_materials(L)) || (r = load_cameras(L)) || (r = load_lights(L)) || (r = load_meshes(L)))
+        return r;
+    uint32_t n = L->m->node_count;
+    int32_t *remap = malloc((n ? n : 1) * sizeof *remap);
+    if (!remap)
+        return nomem(L, "nodes");
+    if (!(r = load_nodes(L, remap)))
+        r = load_animations(L, remap);
+    free(remap);
+    if (r)
+        return r;
+    return compute_digest(L, bytes, len);
+}
+
+eng_result scn_load_gltf(const char *path, scn_scene **out, eng_error *err)
+{
+    *out = NULL;
+    char *bytes;
+    size_t len;
+    eng_result r = eng_read_file(path, GLTF_MAX_FILE, &bytes, &len, err);
+    if (r)
+        return r;
+
+    gls_model *m;
+    char msg[800];
+    gls_status st = gls_load(path, bytes, len, &m, msg, sizeof msg);
+    if (st != GLS_OK) {
+        free(bytes);
+        switch (st) {
+        case GLS_ERR_IO: return eng_fail(err, ENG_ERR_IO, "%s: %s", path, msg);
+        case GLS_ERR_SYNTAX: return eng_fail(err, ENG_ERR_PARSE, "%s: %s", path, msg);
+        case GLS_ERR_NOMEM: return eng_fail(err, ENG_ERR_NOMEM, "%s: %s", path, msg);
+        default: return eng_fail(err, ENG_ERR_INVALID, "%s: %s", path, msg);
+        }
+    }
+
+    scn_scene *s = calloc(1, sizeof *s);
+    if (!s) {
+        gls_free(m);
+        free(bytes);
+        return eng_fail(err, ENG_ERR_NOMEM, "%s: out of memory", path);
+    }
+    snprintf(s->path, sizeof s->path, "%s", path);
+    loader L = {path, m, s, err, 0};
+    r = build(&L, bytes, len);
+    gls_free(m);
+    free(bytes);
+    if (r) {
+        scn_destroy(s);
+        return r;
+    }
+    *out = s;
+    return ENG_OK;
+}
+
+void scn_destroy(scn_scene *s)
+{
+    if (!s)
+        return;
+    for (uint32_t i = 0; i < s->primitive_count; i++) {
+        free(s->primitives[i].positions);
+        free(s->primitives[i].normals);
+        free(s->primitives[i].indices);
+    }
+    for (uint32_t a = 0; a < s->animation_count; a++) {
+        for (uint32_t c = 0; c < s->animations[a].channel_count; c++)
+            free_channel(&s->animations[a].channels[c]);
+        free(s->animations[a].channels);
+    }
+    free(s->nodes);
+    free(s->meshes);
+    free(s->primitives);
+    free(s->materials);
+    free(s->cameras);
+    free(s->lights);
+    free(s->animations);
+    free(s);
+}

@@ -1,1 +1,115 @@
-/* placeholder, replaced by its owner */
+/* pass_direct.c — direct illumination by deferred shading (ISPM 003_… §3: direct light and
+ * shadows are rasterised as usual; only indirect light comes from photons). A fullscreen
+ * pass over the eye G-buffer with every light's shadow map; the BSDF and light models are
+ * documented in shaders/direct.frag.glsl. Owns its program and its radiance target. */
+#include "eng_internal.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+
+#define DIRECT_MAX_LIGHTS 8
+#define SHADOW_UNIT0 4
+
+struct pass_direct {
+    glu_target target;
+    GLuint program, vao;
+};
+
+eng_result pass_direct_create(int width, int height, pass_direct **out, eng_error *err)
+{
+    *out = NULL;
+    pass_direct *p = calloc(1, sizeof *p);
+    if (!p)
+        return eng_fail(err, ENG_ERR_NOMEM, "direct: out of memory");
+    eng_result r = glu_program("fullscreen.vert.glsl", "direct.frag.glsl", &p->program, err);
+    if (r == ENG_OK)
+        r = glu_target_create(&p->target, 1, width, height, 0, err);
+    if (r != ENG_OK) {
+        pass_direct_destroy(p);
+        return r;
+    }
+    p->vao = glu_fullscreen_vao();
+    glUseProgram(p->program);
+    glUniform1i(glGetUniformLocation(p->program, "u_position"), 0);
+    glUniform1i(glGetUniformLocation(p->program, "u_normal"), 1);
+    glUniform1i(glGetUniformLocation(p->program, "u_albedo"), 2);
+    glUniform1i(glGetUniformLocation(p->program, "u_material"), 3);
+    for (int i = 0; i < DIRECT_MAX_LIGHTS; i++) {
+        char name[32];
+        snprintf(name, sizeof name, "u_shadow[%d]", i);
+        glUniform1i(glGetUniformLocation(p->program, name), SHADOW_UNIT0 + i);
+    }
+    *out = p;
+    return ENG_OK;
+}
+
+static GLint loc(GLuint prog, const char *fmt, int i)
+{
+    char name[64];
+    snprintf(name, sizeof name, fmt, i);
+    return glGetUniformLocation(prog, name);
+}
+
+const glu_target *pass_direct_run(pass_direct *p, const eng_frame_scene *fs, const glu_target *gbuf,
+                                  const shadow_map *const *shadows, const eng_settings *s)
+{
+    GLuint g = p->program;
+    glUseProgram(g);
+    for (int i = 0; i < 4; i++) {
+        glActiveTexture(GL_TEXTURE0 + i);
+        glBindTexture(GL_TEXTURE_2D, gbuf->color[i]);
+    }
+    int n = (int)(fs->light_count < DIRECT_MAX_LIGHTS ? fs->light_count : DIRECT_MAX_LIGHTS);
+    glUniform1i(glGetUniformLocation(g, "u_light_count"), n);
+    for (int i = 0; i < n; i++) {
+        const eng_light_pose *l = &fs->lights[i];
+        const shadow_map *sm = shadows[i];
+        int type = l->type == SCN_LIGHT_POINT ? 0 : l->type == SCN_LIGHT_SPOT ? 1 : 2;
+        glUniform1i(loc(g, "u_light_type[%d]", i), type);
+        glUniform3fv(loc(g, "u_light_position[%d]", i), 1, l->position);
+        glUniform3fv(loc(g, "u_light_direction[%d]", i), 1, l->direction);
+        glUniform3fv(loc(g, "u_light_scale[%d]", i), 1, l->radiance_scale);
+        glUniform3f(loc(g, "u_light_params[%d]", i), l->range, cosf(l->inner_cone), cosf(l->outer_cone));
+        /* World size of one shadow texel: per unit distance for perspective views, absolute
+         * for the directional ortho box (whose far value is its depth = 2·half-width). */
+        float texel;
+        if (type == 0)
+            texel = 2.0f / (float)s->shadow_map_size;
+        else if (type == 1)
+            texel = 2.0f * tanf(fminf(l->outer_cone, 1.5f)) / (float)s->shadow_map_size;
+        else
+            texel = sm->far_value / (float)s->shadow_map_size;
+        glUniform1f(loc(g, "u_shadow_texel[%d]", i), texel);
+        for (int f = 0; f < sm->faces; f++)
+            glUniformMatrix4fv(loc(g, "u_shadow_view_proj[%d]", i * 6 + f), 1, GL_FALSE, sm->view_proj[f]);
+        glActiveTexture(GL_TEXTURE0 + SHADOW_UNIT0 + i);
+        glBindTexture(GL_TEXTURE_2D_ARRAY, sm->target.color[0]);
+    }
+    glUniform1i(glGetUniformLocation(g, "u_shadow_size"), s->shadow_map_size);
+    glUniform1i(glGetUniformLocation(g, "u_pcf_radius"), s->pcf_radius);
+    glUniform1f(glGetUniformLocation(g, "u_shadow_bias"), s->shadow_bias);
+    glUniform3fv(glGetUniformLocation(g, "u_eye"), 1, fs->camera.eye);
+
+    glBindFramebuffer(GL_FRAMEBUFFER, p->target.fbo);
+    glViewport(0, 0, p->target.width, p->target.height);
+    glDisable(GL_DEPTH_TEST);
+    glBindVertexArray(p->vao);
+    glDrawArrays(GL_TRIANGLES, 0, 3);
+    glBindVertexArray(0);
+    glBindFramebuffer(GL_FRAMEBUFFER, 0);
+    glActiveTexture(GL_TEXTURE0);
+    return &p->target;
+}
+
+void pass_direct_destroy(pass_direct *p)
+{
+    if (!p)
+        return;
+    glu_target_destroy(&p->target);
+    if (p->vao)
+        glDeleteVertexArrays(1, &p->vao);
+    if (p->program)
+        glDeleteProgram(p->program);
+    free(p);
+}

@@ -1,1 +1,145 @@
-/* placeholder, replaced by its owner */
+/* rt.c — the scene as Embree 3 sees it (ISPM §3: bounces after the first are traced on the
+ * CPU). One triangle geometry per drawn primitive instance, in world space. Geometry whose
+ * world matrix did not change since the last frame is left alone; geometry that moved is
+ * re-transformed in place and refit (RTC_BUILD_QUALITY_REFIT), so a static scene costs one
+ * build for the whole run.
+ *
+ * Determinism: the device is made with a pinned ISA (isa=sse2) and thread count, recorded in
+ * the manifest, so ray results do not follow the host's SIMD width. */
+#include "eng_internal.h"
+
+#include <embree3/rtcore.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+typedef struct rt_geom {
+    RTCGeometry geom;
+    uint32_t primitive;
+    float world[16];
+    int posed;
+} rt_geom;
+
+struct eng_rt {
+    const scn_scene *scene;
+    RTCDevice device;
+    RTCScene rtscene;
+    uint32_t geom_count;
+    rt_geom *geoms;
+};
+
+eng_result rt_create(const scn_scene *scene, int threads, eng_rt **out, eng_error *err)
+{
+    *out = NULL;
+    char cfg[64];
+    snprintf(cfg, sizeof cfg, "isa=sse2,threads=%d", threads < 1 ? 1 : threads);
+    eng_rt *rt = calloc(1, sizeof *rt);
+    if (!rt)
+        return eng_fail(err, ENG_ERR_NOMEM, "embree: out of memory");
+    rt->scene = scene;
+    rt->device = rtcNewDevice(cfg);
+    if (!rt->device) {
+        free(rt);
+        return eng_fail(err, ENG_ERR_UNSUPPORTED, "embree: cannot create a device with \"%s\" (error %d)", cfg,
+                        (int)rtcGetDeviceError(NULL));
+    }
+    rt->rtscene = rtcNewScene(rt->device);
+    rtcSetSceneBuildQuality(rt->rtscene, RTC_BUILD_QUALITY_MEDIUM);
+    *out = rt;
+    return ENG_OK;
+}
+
+static int same_matrix(const float a[16], const float b[16])
+{
+    return memcmp(a, b, 16 * sizeof(float)) == 0;
+}
+
+static void pose(rt_geom *g, const scn_primitive *p, const float world[16])
+{
+    float *v = rtcGetGeometryBufferData(g->geom, RTC_BUFFER_TYPE_VERTEX, 0);
+    for (uint32_t i = 0; i < p->vertex_count; i++)
+        m4_transform_point(world, p->positions + 3 * i, v + 4 * i);
+    rtcUpdateGeometryBuffer(g->geom, RTC_BUFFER_TYPE_VERTEX, 0);
+    memcpy(g->world, world, sizeof g->world);
+    g->posed = 1;
+    rtcCommitGeometry(g->geom);
+}
+
+void rt_update(eng_rt *rt, const eng_frame_scene *fs)
+{
+    if (!rt->geoms) {
+        rt->geom_count = fs->draw_count;
+        rt->geoms = calloc(fs->draw_count ? fs->draw_count : 1, sizeof *rt->geoms);
+        if (!rt->geoms) {
+            fprintf(stderr, "ispm: out of memory\n");
+            abort();
+        }
+        for (uint32_t i = 0; i < fs->draw_count; i++) {
+            const scn_primitive *p = &rt->scene->primitives[fs->draws[i].primitive];
+            rt_geom *g = &rt->geoms[i];
+            g->primitive = fs->draws[i].primitive;
+            g->geom = rtcNewGeometry(rt->device, RTC_GEOMETRY_TYPE_TRIANGLE);
+            /* 4 floats per vertex: Embree reads 16 bytes at the last vertex. */
+            rtcSetNewGeometryBuffer(g->geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 4 * sizeof(float),
+                                    p->vertex_count);
+            unsigned *idx = rtcSetNewGeometryBuffer(g->geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
+                                                    3 * sizeof(unsigned), p->index_count / 3);
+            memcpy(idx, p->indices, p->index_count * sizeof(unsigned));
+            rtcSetGeometryBuildQuality(g->geom, RTC_BUILD_QUALITY_REFIT);
+            pose(g, p, fs->draws[i].world);
+            rtcAttachGeometryByID(rt->rtscene, g->geom, i);
+        }
+        rtcCommitScene(rt->rtscene);
+        return;
+    }
+    int changed = 0;
+    for (uint32_t i = 0; i < rt->geom_count && i < fs->draw_count; i++) {
+        rt_geom *g = &rt->geoms[i];
+        if (!same_matrix(g->world, fs->draws[i].world)) {
+            pose(g, &rt->scene->primitives[g->primitive], fs->draws[i].world);
+            changed = 1;
+        }
+    }
+    if (changed)
+        rtcCommitScene(rt->rtscene);
+}
+
+int rt_occluded(const eng_rt *rt, const float a[3], const float b[3])
+{
+    float d[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
+    float len = sqrtf(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+    if (len <= 0.0f)
+        return 0;
+    const float eps = 1e-4f;
+    struct RTCIntersectContext ctx;
+    rtcInitIntersectContext(&ctx);
+    struct RTCRay ray;
+    memset(&ray, 0, sizeof ray);
+    ray.org_x = a[0];
+    ray.org_y = a[1];
+    ray.org_z = a[2];
+    ray.dir_x = d[0] / len;
+    ray.dir_y = d[1] / len;
+    ray.dir_z = d[2] / len;
+    ray.tnear = eps;
+    ray.tfar = len - eps;
+    ray.mask = 0xFFFFFFFFu;
+    rtcOccluded1(rt->rtscene, &ctx, &ray);
+    return ray.tfar < 0.0f; /* Embree sets tfar to -inf on a hit */
+}
+
+void rt_destroy(eng_rt *rt)
+{
+    if (!rt)
+        return;
+    for (uint32_t i = 0; i < rt->geom_count; i++)
+        if (rt->geoms[i].geom)
+            rtcReleaseGeometry(rt->geoms[i].geom);
+    free(rt->geoms);
+    if (rt->rtscene)
+        rtcReleaseScene(rt->rtscene);
+    if (rt->device)
+        rtcReleaseDevice(rt->device);
+    free(rt);
+}

@@ -1,0 +1,80 @@
+/* cap.h — capture: the listener that turns announced buffers into a run folder.
+ *
+ * A run (see shared/DESIGN.md, "Run layout") is
+ *     RUN/manifest.json       written last, atomically; a run without it is incomplete
+ *     RUN/frames/NNNNNN.exr   one multi-part EXR per frame, one part per captured buffer
+ * Every file is written to "<name>.tmp", fsynced and renamed, so a reader never sees a
+ * half-written frame or manifest, and a crash never leaves a manifest beside frames it does
+ * not describe.
+ *
+ * Use: cap_create; eng_listener l = cap_listener(c); eng_add_listener(engine, &l); render
+ * every frame; cap_finish; cap_destroy. Not thread-safe: the engine calls listeners from the
+ * thread that renders.
+ */
+#ifndef ISPM_CAP_H
+#define ISPM_CAP_H
+
+#include "eng.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef struct cap_desc {
+    const char *run_dir;          /* RUN folder to create/fill */
+    const seq_sequence *sequence; /* borrowed */
+    const scn_scene *scene;       /* borrowed */
+    const char *gl_version;       /* may be NULL */
+    const char *gl_renderer;      /* may be NULL */
+    const char *tool_version;     /* e.g. "0.1.0" */
+    const char *git_revision;     /* e.g. "abc123" or "unknown" */
+    const char *command_line;     /* recorded verbatim, may be NULL */
+    int overwrite;                /* allow an existing non-empty run_dir (its manifest is removed first) */
+    /* NULL-terminated key, value, key, value, ... list recorded as "determinism" in the
+     * manifest (pass eng_determinism_info()); may be NULL. Copied by cap_create. */
+    const char *const *determinism;
+} cap_desc;
+
+typedef struct cap_capture cap_capture;
+
+/* Creates run_dir and run_dir/frames (mkdir -p). A folder that already holds a run
+ * (manifest.json or frames/ *.exr) is refused with ENG_ERR_IO unless desc->overwrite; then
+ * its manifest.json is unlinked first (and the unlink made durable), then its frames/ *.exr.
+ * Stale temporary files of an earlier crash (manifest.json.tmp, frames/ *.exr.tmp) are
+ * removed either way. desc->sequence and desc->scene must outlive the capture; the strings
+ * are copied. On failure *out is NULL. */
+eng_result cap_create(const cap_desc *desc, cap_capture **out, eng_error *err);
+
+/* The listener to register with eng_add_listener; its callbacks return non-zero on failure.
+ * Buffers that seq_wants-style matching of sequence->capture rejects are ignored; the others
+ * are copied at announce time, so the engine may reuse its memory as soon as the callback
+ * returns. frame_end writes frames/NNNNNN.exr. Errors are sticky: after one callback failed,
+ * every later callback and cap_finish fail with the same error. */
+eng_listener cap_listener(cap_capture *c);
+
+/* The error that made a callback fail (ENG_OK if none); copies its message into err. */
+eng_result cap_status(const cap_capture *c, eng_error *err);
+
+/* After the last frame: writes manifest.json atomically (temp + fsync + rename + fsync of
+ * the folder), after making the frames' directory entries durable. Fails if any frame in
+ * 0..frame_count-1 was not completed (ENG_ERR_INVALID) or a callback had failed. */
+eng_result cap_finish(cap_capture *c, eng_error *err);
+
+void cap_destroy(cap_capture *c); /* accepts NULL */
+
+/* Writes one multi-part scanline EXR: part i is bufs[i], named bufs[i]->name, with its
+ * channels as FLOAT, ZIP-compressed (lossless), data window (0,0)-(w-1,h-1), row 0 = top
+ * (INCREASING_Y). The display window, which the format requires to be the same in every
+ * part, is (0,0)-(W-1,H-1) with W, H the largest width and height among the buffers. count >= 1, names unique, 1..ENG_MAX_CHANNELS distinct non-empty channel
+ * names per buffer, width and height > 0; otherwise ENG_ERR_INVALID and nothing is written.
+ * Atomic: writes "<path>.tmp", fsyncs it and renames it over path; on any failure the temp
+ * file is removed and path is left as it was. The rename itself is not made durable: fsync
+ * the folder for that. A one-part file is a plain single-part EXR that still carries the
+ * part name. */
+eng_result cap_write_exr(const char *path, const eng_buffer *const *bufs, int count, eng_error *err);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif

@@ -1,0 +1,33 @@
+/* cap_internal.h — what capture's files share and nobody else sees: the EXR writer with
+ * per-file metadata, buffer validation, and small file-system helpers. */
+#ifndef ISPM_CAP_INTERNAL_H
+#define ISPM_CAP_INTERNAL_H
+
+#include "cap.h"
+
+/* Extra attributes stamped on every part of a frame file; frame < 0 means none. */
+typedef struct cap_exr_meta {
+    int frame;
+    double time;
+} cap_exr_meta;
+
+/* cap_write_exr with metadata (meta may be NULL). */
+eng_result cap__write_exr(const char *path, const eng_buffer *const *bufs, int count,
+                          const cap_exr_meta *meta, eng_error *err);
+
+/* Checks one buffer against what an EXR part can hold (see cap_write_exr); where names
+ * the file the buffer is meant for, in the message. */
+eng_result cap__check_buffer(const char *where, const eng_buffer *b, eng_error *err);
+
+/* Out of memory ends the process (STYLE.md: one hook), as in the engine's core. */
+void *cap__xmalloc(size_t n);
+void *cap__xcalloc(size_t n, size_t size);
+char *cap__xstrdup(const char *s);
+/* "a/b" in fresh memory. */
+char *cap__join(const char *a, const char *b);
+
+/* fsync of a folder, so that renames and unlinks in it survive a crash. Filesystems that
+ * cannot fsync a folder (EINVAL) count as success. */
+eng_result cap__fsync_dir(const char *dir, eng_error *err);
+
+#endif

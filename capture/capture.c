@@ -1,0 +1,721 @@
+/* capture.c — the listener that records a run (DESIGN.md, "Run layout"): announced buffers
+ * become parts of frames/NNNNNN.exr, and manifest.json, written last, says what the run is
+ * (tool, sequence, scene, settings, pinned determinism settings) and, per frame, the time,
+ * per-pass milliseconds and per-buffer digest and non-finite counts.
+ *
+ * Ordering is the whole point. Each file appears by rename of a fsynced temp file, so no
+ * reader sees half a frame; the manifest is the last thing written, after the frames'
+ * directory entries are fsynced, so a manifest always describes frames that exist; and when
+ * an old run is overwritten its manifest is unlinked (durably) before anything else, so a
+ * crash cannot leave an old manifest beside new frames.
+ *
+ * Buffers are deep-copied when announced, because the engine may reuse its memory as soon as
+ * the callback returns, and held until frame_end writes them as one file; digests
+ * (eng_buffer_digest, the one replay recomputes) and non-finite counts are taken from the
+ * copies. After a frame is written only its small record stays in memory.
+ *
+ * The capture owns every string it was given (copied); the sequence and scene are borrowed. */
+#define _POSIX_C_SOURCE 200809L
+
+#include "cap_internal.h"
+
+#include <cjson/cJSON.h>
+
+#include <dirent.h>
+#include <errno.h>
+#include <fcntl.h>
+#include <fnmatch.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#define MANIFEST_NAME "manifest.json"
+#define MANIFEST_TMP_NAME "manifest.json.tmp"
+
+/* What the manifest says about one captured buffer. */
+typedef struct cap_bufrec {
+    char *name;
+    int width, height, channel_count;
+    char *channels[ENG_MAX_CHANNELS];
+    char digest[40];
+    uint64_t nan_count, inf_count;
+    int first_x, first_y; /* first non-finite pixel, -1 if none */
+} cap_bufrec;
+
+typedef struct cap_frame {
+    int done;
+    double time;
+    int pass_count;
+    eng_pass_time passes[ENG_MAX_PASSES];
+    int buffer_count;
+    cap_bufrec *buffers;
+} cap_frame;
+
+/* A buffer of the frame in progress: its record and its pixel copy. */
+typedef struct cap_pending {
+    cap_bufrec rec;
+    float *data;
+} cap_pending;
+
+struct cap_capture {
+    char *run_dir, *frames_dir;
+    const seq_sequence *seq;
+    const scn_scene *scene;
+    char *gl_version, *gl_renderer, *tool_version, *git_revision, *command_line;
+    int det_count;  /* pairs */
+    char **det;     /* 2*det_count strings; a value may be NULL */
+    int frame_count;
+    cap_frame *frames;
+    int cur_frame;  /* -1 outside frame_begin .. frame_end */
+    double cur_time;
+    int pending_count, pending_cap;
+    cap_pending *pending;
+    eng_result status; /* sticky: the first callback failure */
+    eng_error error;
+};
+
+static char *dup_or_null(const char *s)
+{
+    return s ? cap__xstrdup(s) : NULL;
+}
+
+/* A fixed-size char array from the engine's structs, which may lack its NUL. */
+static char *dup_field(const char *s, size_t size)
+{
+    size_t n = strnlen(s, size);
+    char *p = cap__xmalloc(n + 1);
+    memcpy(p, s, n);
+    p[n] = 0;
+    return p;
+}
+
+static void free_rec(cap_bufrec *r)
+{
+    free(r->name);
+    for (int i = 0; i < r->channel_count; i++)
+        free(r->channels[i]);
+    memset(r, 0, sizeof *r);
+}
+
+static void free_frame(cap_frame *f)
+{
+    for (int i = 0; i < f->buffer_count; i++)
+        free_rec(&f->buffers[i]);
+    free(f->buffers);
+    memset(f, 0, sizeof *f);
+}
+
+static void drop_pending(cap_capture *c)
+{
+    for (int i = 0; i < c->pending_count; i++) {
+        free_rec(&c->pending[i].rec);
+        free(c->pending[i].data);
+    }
+    c->pending_count = 0;
+}
+
+/* The path of frame i's file, relative to the run folder (as the manifest records it). */
+static void frame_rel(int i, char out[32])
+{
+    snprintf(out, 32, "frames/%06d.exr", i);
+}
+
+static char *frame_path(const cap_capture *c, int i)
+{
+    char rel[32];
+    frame_rel(i, rel);
+    return cap__join(c->run_dir, rel);
+}
+
+/* seq_wants' contract (eng.h: fnmatch globs, none means "*"), evaluated here because
+ * seq_wants lives in the scene loader's library, which capture does not link: capture
+ * depends only on the engine's core types. */
+static int capture_wanted(const seq_sequence *seq, const char *name)
+{
+    int n = seq->capture_count < SEQ_MAX_CAPTURE ? seq->capture_count : SEQ_MAX_CAPTURE;
+    if (n <= 0)
+        return 1;
+    for (int i = 0; i < n; i++) {
+        char pattern[SCN_NAME_MAX + 1];
+        size_t len = strnlen(seq->capture[i], SCN_NAME_MAX);
+        memcpy(pattern, seq->capture[i], len);
+        pattern[len] = 0;
+        if (fnmatch(pattern, name, 0) == 0)
+            return 1;
+    }
+    return 0;
+}
+
+/* ---------------------------------------------------------------- run folder */
+
+static int ends_with(const char *s, const char *suffix)
+{
+    size_t n = strlen(s), m = strlen(suffix);
+    return n >= m && strcmp(s + n - m, suffix) == 0;
+}
+
+static int path_exists(const char *path)
+{
+    struct stat st;
+    return lstat(path, &st) == 0;
+}
+
+/* mkdir -p; the last component must end up a folder. */
+static eng_result make_dirs(const char *dir, eng_error *err)
+{
+    char *p = cap__xstrdup(dir);
+    eng_result r = ENG_OK;
+    for (char *s = p + 1; ; s++) {
+        if (*s != '/' && *s != 0)
+            continue;
+        char saved = *s;
+        *s = 0;
+        if (mkdir(p, 0777) != 0 && errno != EEXIST) {
+            r = eng_fail(err, ENG_ERR_IO, "%s: cannot create folder: %s", p, strerror(errno));
+            break;
+        }
+        *s = saved;
+        if (!saved)
+            break;
+    }
+    free(p);
+    if (r != ENG_OK)
+        return r;
+    struct stat st;
+    if (stat(dir, &st) != 0)
+        return eng_fail(err, ENG_ERR_IO, "%s: %s", dir, strerror(errno));
+    if (!S_ISDIR(st.st_mode))
+        return eng_fail(err, ENG_ERR_IO, "%s: exists and is not a folder", dir);
+    return ENG_OK;
+}
+
+/* Does frames/ hold any *.exr? */
+static eng_result frames_present(const char *frames_dir, int *present, eng_error *err)
+{
+    *present = 0;
+    DIR *d = opendir(frames_dir);
+    if (!d) {
+        if (errno == ENOENT)
+            return ENG_OK;
+        return eng_fail(err, ENG_ERR_IO, "%s: cannot list: %s", frames_dir, strerror(errno));
+    }
+    struct dirent *e;
+    while ((e = readdir(d)) != NULL)
+        if (ends_with(e->d_name, ".exr")) {
+            *present = 1;
+            break;
+        }
+    closedir(d);
+    return ENG_OK;
+}
+
+/* Removes frames/ *.exr (when remove_frames) and frames/ *.exr.tmp. */
+static eng_result clean_frames(const char *frames_dir, int remove_frames, eng_error *err)
+{
+    DIR *d = opendir(frames_dir);
+    if (!d)
+        return eng_fail(err, ENG_ERR_IO, "%s: cannot list: %s", frames_dir, strerror(errno));
+    eng_result r = ENG_OK;
+    struct dirent *e;
+    while (r == ENG_OK && (errno = 0, e = readdir(d)) != NULL) {
+        if (!ends_with(e->d_name, ".exr.tmp") && !(remove_frames && ends_with(e->d_name, ".exr")))
+            continue;
+        char *p = cap__join(frames_dir, e->d_name);
+        if (unlink(p) != 0 && errno != ENOENT)
+            r = eng_fail(err, ENG_ERR_IO, "%s: cannot remove: %s", p, strerror(errno));
+        free(p);
+    }
+    closedir(d);
+    return r;
+}
+
+/* Prepares run_dir as cap_create documents. */
+static eng_result prepare_run_dir(const char *run_dir, const char *frames_dir, int overwrite, eng_error *err)
+{
+    eng_result r = make_dirs(run_dir, err);
+    if (r != ENG_OK)
+        return r;
+    char *manifest = cap__join(run_dir, MANIFEST_NAME);
+    char *manifest_tmp = cap__join(run_dir, MANIFEST_TMP_NAME);
+    int has_manifest = path_exists(manifest), has_frames = 0;
+    r = frames_present(frames_dir, &has_frames, err);
+    if (r == ENG_OK && (has_manifest || has_frames) && !overwrite)
+        r = eng_fail(err, ENG_ERR_IO, "%s: already holds a run (use --force)", run_dir);
+    if (r == ENG_OK && has_manifest) {
+        if (unlink(manifest) != 0 && errno != ENOENT)
+            r = eng_fail(err, ENG_ERR_IO, "%s: cannot remove: %s", manifest, strerror(errno));
+        else
+            r = cap__fsync_dir(run_dir, err);
+    }
+    if (r == ENG_OK && unlink(manifest_tmp) != 0 && errno != ENOENT)
+        r = eng_fail(err, ENG_ERR_IO, "%s: cannot remove: %s", manifest_tmp, strerror(errno));
+    if (r == ENG_OK)
+        r = make_dirs(frames_dir, err);
+    if (r == ENG_OK)
+        r = clean_frames(frames_dir, overwrite, err);
+    free(manifest);
+    free(manifest_tmp);
+    return r;
+}
+
+/* ---------------------------------------------------------------- create / destroy */
+
+eng_result cap_create(const cap_desc *desc, cap_capture **out, eng_error *err)
+{
+    if (!out)
+        return eng_fail(err, ENG_ERR_INVALID, "cap_create: no output pointer");
+    *out = NULL;
+    if (!desc || !desc->run_dir || !desc->run_dir[0])
+        return eng_fail(err, ENG_ERR_INVALID, "cap_create: no run folder given");
+    if (!desc->sequence || !desc->scene)
+        return eng_fail(err, ENG_ERR_INVALID, "%s: cap_create needs the sequence and the scene",
+                        desc->run_dir);
+    if (desc->sequence->frame_count < 1)
+        return eng_fail(err, ENG_ERR_INVALID, "%s: the sequence has %d frames", desc->run_dir,
+                        desc->sequence->frame_count);
+
+    cap_capture *c = cap__xcalloc(1, sizeof *c);
+    c->run_dir = cap__xstrdup(desc->run_dir);
+    c->frames_dir = cap__join(desc->run_dir, "frames");
+    eng_result r = prepare_run_dir(c->run_dir, c->frames_dir, desc->overwrite, err);
+    if (r != ENG_OK) {
+        cap_destroy(c);
+        return r;
+    }
+    c->seq = desc->sequence;
+    c->scene = desc->scene;
+    c->gl_version = dup_or_null(desc->gl_version);
+    c->gl_renderer = dup_or_null(desc->gl_renderer);
+    c->tool_version = dup_or_null(desc->tool_version);
+    c->git_revision = dup_or_null(desc->git_revision);
+    c->command_line = dup_or_null(desc->command_line);
+    if (desc->determinism) {
+        int n = 0;
+        while (desc->determinism[2 * n])
+            n++;
+        c->det_count = n;
+        c->det = cap__xcalloc((size_t)(2 * n), sizeof *c->det);
+        for (int i = 0; i < 2 * n; i++)
+            c->det[i] = dup_or_null(desc->determinism[i]);
+    }
+    c->frame_count = desc->sequence->frame_count;
+    c->frames = cap__xcalloc((size_t)c->frame_count, sizeof *c->frames);
+    c->cur_frame = -1;
+    c->status = ENG_OK;
+    *out = c;
+    return ENG_OK;
+}
+
+void cap_destroy(cap_capture *c)
+{
+    if (!c)
+        return;
+    drop_pending(c);
+    free(c->pending);
+    if (c->frames)
+        for (int i = 0; i < c->frame_count; i++)
+            free_frame(&c->frames[i]);
+    free(c->frames);
+    for (int i = 0; i < 2 * c->det_count; i++)
+        free(c->det[i]);
+    free(c->det);
+    free(c->gl_version);
+    free(c->gl_renderer);
+    free(c->tool_version);
+    free(c->git_revision);
+    free(c->command_line);
+    free(c->run_dir);
+    free(c->frames_dir);
+    free(c);
+}
+
+eng_result cap_status(const cap_capture *c, eng_error *err)
+{
+    if (!c)
+        return eng_fail(err, ENG_ERR_INVALID, "cap_status: no capture");
+    if (c->status != ENG_OK && err)
+        *err = c->error;
+    return c->status;
+}
+
+/* ---------------------------------------------------------------- listener */
+
+/* Makes the failure already formatted into c->error sticky; returns the callback's non-zero. */
+static int fail_cb(cap_capture *c, eng_result r)
+{
+    c->status = r;
+    drop_pending(c);
+    c->cur_frame = -1;
+    return 1;
+}
+
+static int on_frame_begin(void *user, int frame, double time)
+{
+    cap_capture *c = user;
+    if (c->status != ENG_OK)
+        return 1;
+    if (frame < 0 || frame >= c->frame_count)
+        return fail_cb(c, eng_fail(&c->error, ENG_ERR_INVALID, "%s: frame %d is outside the sequence's 0..%d",
+                                   c->run_dir, frame, c->frame_count - 1));
+    /* A frame begun and never ended was aborted (by another listener or the engine): its
+     * buffers are not a frame, drop them. */
+    drop_pending(c);
+    c->cur_frame = frame;
+    c->cur_time = time;
+    return 0;
+}
+
+static int on_buffer(void *user, int frame, const eng_buffer *buf)
+{
+    cap_capture *c = user;
+    if (c->status != ENG_OK)
+        return 1;
+    if (c->cur_frame < 0 || frame != c->cur_frame)
+        return fail_cb(c, eng_fail(&c->error, ENG_ERR_INVALID,
+                                   "%s: buffer announced for frame %d outside that frame's begin/end",
+                                   c->run_dir, frame));
+    char *where = frame_path(c, frame);
+    eng_result r = ENG_OK;
+    if (!buf || !buf->name)
+        r = cap__check_buffer(where, buf, &c->error);
+    else if (!capture_wanted(c->seq, buf->name)) {
+        free(where);
+        return 0;
+    } else
+        r = cap__check_buffer(where, buf, &c->error);
+    for (int i = 0; r == ENG_OK && i < c->pending_count; i++)
+        if (strcmp(c->pending[i].rec.name, buf->name) == 0)
+            r = eng_fail(&c->error, ENG_ERR_INVALID, "%s: buffer \"%s\" announced twice", where, buf->name);
+    free(where);
+    if (r != ENG_OK)
+        return fail_cb(c, r);
+
+    if (c->pending_count == c->pending_cap) {
+        int cap = c->pending_cap ? 2 * c->pending_cap : 16;
+        cap_pending *p = cap__xcalloc((size_t)cap, sizeof *p);
+        if (c->pending_count)
+            memcpy(p, c->pending, (size_t)c->pending_count * sizeof *p);
+        free(c->pending);
+        c->pending = p;
+        c->pending_cap = cap;
+    }
+    cap_pending *p = &c->pending[c->pending_count++];
+    memset(p, 0, sizeof *p);
+    size_t n = (size_t)buf->width * (size_t)buf->height * (size_t)buf->channel_count;
+    p->data = cap__xmalloc(n * sizeof(float));
+    memcpy(p->data, buf->data, n * sizeof(float));
+    p->rec.name = cap__xstrdup(buf->name);
+    p->rec.width = buf->width;
+    p->rec.height = buf->height;
+    p->rec.channel_count = buf->channel_count;
+    for (int i = 0; i < buf->channel_count; i++)
+        p->rec.channels[i] = cap__xstrdup(buf->channels[i]);
+
+    const char *chans[ENG_MAX_CHANNELS];
+    for (int i = 0; i < buf->channel_count; i++)
+        chans[i] = p->rec.channels[i];
+    eng_buffer copy = {p->rec.name, buf->width, buf->height, buf->channel_count, chans, p->data};
+    eng_buffer_digest(&copy, p->rec.digest);
+    eng_buffer_nonfinite(&copy, &p->rec.nan_count, &p->rec.inf_count, &p->rec.first_x, &p->rec.first_y);
+    return 0;
+}
+
+static int on_frame_end(void *user, const eng_frame_stats *stats)
+{
+    cap_capture *c = user;
+    if (c->status != ENG_OK)
+        return 1;
+    if (!stats || c->cur_frame < 0 || stats->frame != c->cur_frame)
+        return fail_cb(c, eng_fail(&c->error, ENG_ERR_INVALID, "%s: frame %d ended without being begun",
+                                   c->run_dir, stats ? stats->frame : -1));
+    int frame = c->cur_frame;
+    char *path = frame_path(c, frame);
+    if (c->pending_count == 0) {
+        eng_fail(&c->error, ENG_ERR_INVALID,
+                 "%s: no announced buffer matches the sequence's capture patterns", path);
+        free(path);
+        return fail_cb(c, ENG_ERR_INVALID);
+    }
+
+    const eng_buffer **bufs = cap__xcalloc((size_t)c->pending_count, sizeof *bufs);
+    eng_buffer *views = cap__xcalloc((size_t)c->pending_count, sizeof *views);
+    const char *(*chans)[ENG_MAX_CHANNELS] = cap__xcalloc((size_t)c->pending_count, sizeof *chans);
+    for (int i = 0; i < c->pending_count; i++) {
+        cap_bufrec *rec = &c->pending[i].rec;
+        for (int k = 0; k < rec->channel_count; k++)
+            chans[i][k] = rec->channels[k];
+        views[i] = (eng_buffer){rec->name, rec->width, rec->height, rec->channel_count, chans[i],
+                                c->pending[i].data};
+        bufs[i] = &views[i];
+    }
+    cap_exr_meta meta = {frame, c->cur_time};
+    eng_result r = cap__write_exr(path, bufs, c->pending_count, &meta, &c->error);
+    free(bufs);
+    free(views);
+    free(chans);
+    free(path);
+    if (r != ENG_OK)
+        return fail_cb(c, r);
+
+    /* A frame rendered again replaces its earlier record (the file was replaced too). */
+    cap_frame *f = &c->frames[frame];
+    free_frame(f);
+    f->done = 1;
+    f->time = c->cur_time;
+    f->pass_count = stats->pass_count < 0 ? 0
+                  : stats->pass_count > ENG_MAX_PASSES ? ENG_MAX_PASSES : stats->pass_count;
+    for (int i = 0; i < f->pass_count; i++) {
+        f->passes[i] = stats->passes[i];
+        f->passes[i].name[SCN_NAME_MAX - 1] = 0;
+    }
+    f->buffer_count = c->pending_count;
+    f->buffers = cap__xcalloc((size_t)c->pending_count, sizeof *f->buffers);
+    for (int i = 0; i < c->pending_count; i++) {
+        f->buffers[i] = c->pending[i].rec;
+        memset(&c->pending[i].rec, 0, sizeof c->pending[i].rec); /* moved */
+        free(c->pending[i].data);
+        c->pending[i].data = NULL;
+    }
+    c->pending_count = 0;
+    c->cur_frame = -1;
+    return 0;
+}
+
+eng_listener cap_listener(cap_capture *c)
+{
+    eng_listener l = {c, on_frame_begin, on_buffer, on_frame_end};
+    return l;
+}
+
+/* ---------------------------------------------------------------- manifest */
+
+/* cJSON reports allocation failure as NULL; like every other allocation here, it ends the
+ * process. */
+static cJSON *jok(cJSON *j)
+{
+    if (!j) {
+        fprintf(stderr, "ispm: out of memory\n");
+        abort();
+    }
+    return j;
+}
+
+static void jadd(cJSON *obj, const char *key, cJSON *item)
+{
+    jok(item);
+    if (!cJSON_AddItemToObject(obj, key, item))
+        jok(NULL);
+}
+
+static void jpush(cJSON *arr, cJSON *item)
+{
+    jok(item);
+    if (!cJSON_AddItemToArray(arr, item))
+        jok(NULL);
+}
+
+static cJSON *jstr(const char *s)
+{
+    return s ? cJSON_CreateString(s) : cJSON_CreateNull();
+}
+
+static cJSON *jfield(const char *s, size_t size)
+{
+    char *t = dup_field(s, size);
+    cJSON *j = cJSON_CreateString(t);
+    free(t);
+    return j;
+}
+
+/* The shortest decimal that reads back as the same float, as a double: 0.002f is recorded
+ * as 0.002, not 0.0020000000949949026. */
+static cJSON *jfloat(float f)
+{
+    char buf[32];
+    for (int p = 1; p <= 9; p++) {
+        snprintf(buf, sizeof buf, "%.*g", p, (double)f);
+        if (strtof(buf, NULL) == f)
+            return cJSON_CreateNumber(strtod(buf, NULL));
+    }
+    return cJSON_CreateNumber((double)f);
+}
+
+static cJSON *jpair(double a, double b)
+{
+    cJSON *arr = jok(cJSON_CreateArray());
+    jpush(arr, cJSON_CreateNumber(a));
+    jpush(arr, cJSON_CreateNumber(b));
+    return arr;
+}
+
+static cJSON *frame_json(const cap_frame *f, int index)
+{
+    char rel[32];
+    frame_rel(index, rel);
+    cJSON *o = jok(cJSON_CreateObject());
+    jadd(o, "index", cJSON_CreateNumber(index));
+    jadd(o, "time", cJSON_CreateNumber(f->time));
+    jadd(o, "file", cJSON_CreateString(rel));
+    cJSON *passes = jok(cJSON_CreateArray());
+    for (int i = 0; i < f->pass_count; i++) {
+        cJSON *p = jok(cJSON_CreateObject());
+        jadd(p, "name", jfield(f->passes[i].name, sizeof f->passes[i].name));
+        jadd(p, "ms", cJSON_CreateNumber(f->passes[i].ms));
+        jpush(passes, p);
+    }
+    jadd(o, "passes", passes);
+    cJSON *bufs = jok(cJSON_CreateArray());
+    for (int i = 0; i < f->buffer_count; i++) {
+        const cap_bufrec *r = &f->buffers[i];
+        cJSON *b = jok(cJSON_CreateObject());
+        jadd(b, "name", cJSON_CreateString(r->name));
+        jadd(b, "width", cJSON_CreateNumber(r->width));
+        jadd(b, "height", cJSON_CreateNumber(r->height));
+        cJSON *ch = jok(cJSON_CreateArray());
+        for (int k = 0; k < r->channel_count; k++)
+            jpush(ch, cJSON_CreateString(r->channels[k]));
+        jadd(b, "channels", ch);
+        jadd(b, "digest", cJSON_CreateString(r->digest));
+        jadd(b, "nan", cJSON_CreateNumber((double)r->nan_count));
+        jadd(b, "inf", cJSON_CreateNumber((double)r->inf_count));
+        jadd(b, "first_nonfinite", r->first_x < 0 ? cJSON_CreateNull() : jpair(r->first_x, r->first_y));
+        jpush(bufs, b);
+    }
+    jadd(o, "buffers", bufs);
+    return o;
+}
+
+static cJSON *manifest_json(const cap_capture *c)
+{
+    const seq_sequence *seq = c->seq;
+    cJSON *root = jok(cJSON_CreateObject());
+    jadd(root, "format", cJSON_CreateString("ispm-run"));
+    jadd(root, "format_version", cJSON_CreateNumber(1));
+
+    cJSON *tool = jok(cJSON_CreateObject());
+    jadd(tool, "name", cJSON_CreateString("ispm"));
+    jadd(tool, "version", jstr(c->tool_version));
+    jadd(tool, "git", jstr(c->git_revision));
+    jadd(root, "tool", tool);
+    jadd(root, "command", jstr(c->command_line));
+
+    cJSON *sq = jok(cJSON_CreateObject());
+    jadd(sq, "path", jfield(seq->path, sizeof seq->path));
+    jadd(sq, "name", jfield(seq->name, sizeof seq->name));
+    jadd(sq, "digest", jfield(seq->digest, sizeof seq->digest));
+    jadd(root, "sequence", sq);
+
+    cJSON *sc = jok(cJSON_CreateObject());
+    jadd(sc, "path", jfield(c->scene->path, sizeof c->scene->path));
+    jadd(sc, "digest", jfield(c->scene->digest, sizeof c->scene->digest));
+    jadd(root, "scene", sc);
+
+    jadd(root, "resolution", jpair(seq->width, seq->height));
+    jadd(root, "fps", cJSON_CreateNumber(seq->fps));
+    jadd(root, "frame_count", cJSON_CreateNumber(seq->frame_count));
+    /* A look-at camera (keys in the sequence) has no node name: null; the keys are covered
+     * by the sequence digest. */
+    jadd(root, "camera", seq->camera_node[0] ? jfield(seq->camera_node, sizeof seq->camera_node)
+                                              : cJSON_CreateNull());
+
+    eng_settings s = seq->settings;
+    eng_settings_defaults(&s);
+    cJSON *st = jok(cJSON_CreateObject());
+    jadd(st, "shadow_map_size", cJSON_CreateNumber(s.shadow_map_size));
+    jadd(st, "pcf_radius", cJSON_CreateNumber(s.pcf_radius));
+    jadd(st, "shadow_bias", jfloat(s.shadow_bias));
+    jadd(st, "exposure", jfloat(s.exposure));
+    jadd(st, "threads", cJSON_CreateNumber(s.threads));
+    jadd(root, "settings", st);
+
+    cJSON *det = jok(cJSON_CreateObject());
+    for (int i = 0; i < c->det_count; i++)
+        jadd(det, c->det[2 * i], jstr(c->det[2 * i + 1]));
+    jadd(root, "determinism", det);
+
+    cJSON *gl = jok(cJSON_CreateObject());
+    jadd(gl, "version", jstr(c->gl_version));
+    jadd(gl, "renderer", jstr(c->gl_renderer));
+    jadd(root, "gl", gl);
+
+    cJSON *frames = jok(cJSON_CreateArray());
+    for (int i = 0; i < c->frame_count; i++)
+        jpush(frames, frame_json(&c->frames[i], i));
+    jadd(root, "frames", frames);
+    jadd(root, "complete", cJSON_CreateTrue());
+    return root;
+}
+
+/* Writes text to dir/name atomically: name.tmp, fsync, rename, fsync dir. */
+static eng_result write_atomic(const char *dir, const char *name, const char *text, eng_error *err)
+{
+    char *path = cap__join(dir, name);
+    char *tmp = cap__xmalloc(strlen(path) + 5);
+    sprintf(tmp, "%s.tmp", path);
+    eng_result r = ENG_OK;
+    int fd = open(tmp, O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0666);
+    if (fd < 0) {
+        r = eng_fail(err, ENG_ERR_IO, "%s: cannot create: %s", tmp, strerror(errno));
+        goto out;
+    }
+    size_t len = strlen(text), done = 0;
+    while (r == ENG_OK && done < len) {
+        ssize_t w = write(fd, text + done, len - done);
+        if (w < 0 && errno == EINTR)
+            continue;
+        if (w <= 0)
+            r = eng_fail(err, ENG_ERR_IO, "%s: %s", path, w < 0 ? strerror(errno) : strerror(ENOSPC));
+        else
+            done += (size_t)w;
+    }
+    if (r == ENG_OK && fsync(fd) != 0)
+        r = eng_fail(err, ENG_ERR_IO, "%s: cannot sync: %s", path, strerror(errno));
+    if (close(fd) != 0 && r == ENG_OK)
+        r = eng_fail(err, ENG_ERR_IO, "%s: %s", path, strerror(errno));
+    if (r == ENG_OK && rename(tmp, path) != 0)
+        r = eng_fail(err, ENG_ERR_IO, "%s: cannot rename %s into place: %s", path, tmp, strerror(errno));
+    if (r != ENG_OK)
+        unlink(tmp);
+    else
+        r = cap__fsync_dir(dir, err);
+out:
+    free(tmp);
+    free(path);
+    return r;
+}
+
+eng_result cap_finish(cap_capture *c, eng_error *err)
+{
+    if (!c)
+        return eng_fail(err, ENG_ERR_INVALID, "cap_finish: no capture");
+    if (c->status != ENG_OK) {
+        if (err)
+            *err = c->error;
+        return c->status;
+    }
+    if (c->cur_frame >= 0)
+        return eng_fail(err, ENG_ERR_INVALID, "%s: frame %d was begun but never ended", c->run_dir,
+                        c->cur_frame);
+    for (int i = 0; i < c->frame_count; i++)
+        if (!c->frames[i].done)
+            return eng_fail(err, ENG_ERR_INVALID, "%s: frame %d of 0..%d was not captured", c->run_dir,
+                            i, c->frame_count - 1);
+    eng_result r = cap__fsync_dir(c->frames_dir, err);
+    if (r != ENG_OK)
+        return r;
+    cJSON *root = manifest_json(c);
+    char *text = cJSON_Print(root);
+    cJSON_Delete(root);
+    if (!text)
+        jok(NULL);
+    size_t n = strlen(text);
+    char *doc = cap__xmalloc(n + 2);
+    memcpy(doc, text, n);
+    memcpy(doc + n, "\n", 2);
+    cJSON_free(text);
+    r = write_atomic(c->run_dir, MANIFEST_NAME, doc, err);
+    free(doc);
+    return r;
+}

@@ -1,0 +1,190 @@
+/* gltf_shim.h — internal: a C view of what tinygltf parsed, for gltf_load.c only.
+ *
+ * tinygltf is C++; this header is the one place its model crosses into C. The shim parses
+ * (JSON syntax, glTF schema shapes as far as tinygltf checks them, data URIs, external
+ * buffers, the GLB container) and exposes the result as plain arrays of plain structs. It
+ * judges nothing: indices are passed through unchecked, vectors keep whatever length the
+ * file gave, numbers keep whatever value. All semantic validation is gltf_load.c's.
+ *
+ * Everything reachable from a gls_model (strings, arrays, buffer bytes) is owned by it and
+ * lives until gls_free. Integer fields that tinygltf defaults to -1 mean "absent".
+ */
+#ifndef ISPM_GLTF_SHIM_H
+#define ISPM_GLTF_SHIM_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* glTF accessor componentType and (tinygltf's encoding of) type; the .cpp checks that these
+ * equal TINYGLTF_COMPONENT_TYPE_* / TINYGLTF_TYPE_*. */
+#define GLS_COMPONENT_BYTE 5120
+#define GLS_COMPONENT_UNSIGNED_BYTE 5121
+#define GLS_COMPONENT_SHORT 5122
+#define GLS_COMPONENT_UNSIGNED_SHORT 5123
+#define GLS_COMPONENT_UNSIGNED_INT 5125
+#define GLS_COMPONENT_FLOAT 5126
+#define GLS_TYPE_VEC2 2
+#define GLS_TYPE_VEC3 3
+#define GLS_TYPE_VEC4 4
+#define GLS_TYPE_MAT2 34
+#define GLS_TYPE_MAT3 35
+#define GLS_TYPE_MAT4 36
+#define GLS_TYPE_SCALAR 65
+
+typedef enum gls_status {
+    GLS_OK = 0,
+    GLS_ERR_IO,     /* an external buffer is missing or unreadable */
+    GLS_ERR_SYNTAX, /* not JSON, not a GLB container, or no glTF asset object */
+    GLS_ERR_GLTF,   /* JSON, but tinygltf rejected the glTF structure */
+    GLS_ERR_NOMEM
+} gls_status;
+
+/* A number from an extension object, where tinygltf keeps untyped JSON values. */
+typedef enum gls_num_state { GLS_NUM_ABSENT = 0, GLS_NUM_PRESENT, GLS_NUM_NOT_A_NUMBER } gls_num_state;
+typedef struct gls_number {
+    gls_num_state state;
+    double value;
+} gls_number;
+
+/* A number array exactly as long as the file wrote it (len 0: absent). */
+typedef struct gls_doubles {
+    uint32_t len;
+    const double *v;
+} gls_doubles;
+
+typedef struct gls_buffer {
+    const unsigned char *data;
+    uint64_t size;
+    int external; /* loaded from a file beside the glTF (not a data URI, not the GLB chunk) */
+} gls_buffer;
+
+typedef struct gls_buffer_view {
+    int buffer;
+    uint64_t byte_offset, byte_length, byte_stride; /* stride 0: tightly packed */
+} gls_buffer_view;
+
+typedef struct gls_accessor {
+    int buffer_view; /* -1: none (all zeros, or sparse only) */
+    uint64_t byte_offset;
+    int component_type;
+    int type;
+    uint64_t count;
+    int normalized;
+    int sparse;
+} gls_accessor;
+
+typedef struct gls_attribute {
+    const char *semantic; /* "POSITION", "NORMAL", "TEXCOORD_0", ... */
+    int accessor;
+} gls_attribute;
+
+typedef struct gls_primitive {
+    int mode; /* 4 (TRIANGLES) when absent */
+    int indices;
+    int material;
+    uint32_t attribute_count;
+    const gls_attribute *attributes;
+    uint32_t target_count; /* morph targets */
+} gls_primitive;
+
+typedef struct gls_mesh {
+    const char *name;
+    uint32_t primitive_count;
+    const gls_primitive *primitives;
+} gls_mesh;
+
+typedef struct gls_node {
+    const char *name;
+    int mesh, camera, skin;
+    int has_light;     /* carries a KHR_lights_punctual extension object */
+    gls_number light;  /* its "light" member */
+    uint32_t child_count;
+    const int *children;
+    gls_doubles translation, rotation, scale, matrix;
+} gls_node;
+
+typedef struct gls_camera {
+    const char *name;
+    const char *type; /* "perspective" or "orthographic" (tinygltf refuses others) */
+    double yfov, aspect_ratio, znear, zfar; /* perspective; 0 where absent */
+} gls_camera;
+
+typedef struct gls_light {
+    const char *name;
+    const char *type;
+    gls_doubles color;
+    double intensity, range;           /* tinygltf defaults: 1, 0 */
+    double inner_cone, outer_cone;     /* tinygltf defaults: 0, pi/4 */
+} gls_light;
+
+typedef struct gls_material {
+    const char *name;
+    gls_doubles base_color; /* tinygltf default [1,1,1,1] */
+    double metallic, roughness;
+    gls_doubles emissive;   /* tinygltf default [0,0,0] */
+    int double_sided;
+    gls_number transmission; /* KHR_materials_transmission.transmissionFactor */
+    gls_number ior;          /* KHR_materials_ior.ior */
+} gls_material;
+
+typedef struct gls_channel {
+    int sampler;
+    int target_node;
+    const char *path;
+} gls_channel;
+
+typedef struct gls_sampler {
+    int input, output;
+    const char *interpolation; /* "LINEAR" when absent */
+} gls_sampler;
+
+typedef struct gls_animation {
+    const char *name;
+    uint32_t channel_count;
+    const gls_channel *channels;
+    uint32_t sampler_count;
+    const gls_sampler *samplers;
+} gls_animation;
+
+typedef struct gls_scene {
+    const char *name;
+    uint32_t node_count;
+    const int *nodes;
+} gls_scene;
+
+typedef struct gls_model {
+    uint32_t buffer_count;      const gls_buffer *buffers;
+    uint32_t buffer_view_count; const gls_buffer_view *buffer_views;
+    uint32_t accessor_count;    const gls_accessor *accessors;
+    uint32_t mesh_count;        const gls_mesh *meshes;
+    uint32_t node_count;        const gls_node *nodes;
+    uint32_t camera_count;      const gls_camera *cameras;
+    uint32_t light_count;       const gls_light *lights;
+    uint32_t material_count;    const gls_material *materials;
+    uint32_t animation_count;   const gls_animation *animations;
+    uint32_t scene_count;       const gls_scene *scenes;
+    int default_scene; /* -1: the file names none */
+    uint32_t extensions_required_count;
+    const char *const *extensions_required;
+    struct gls_impl *impl;
+} gls_model;
+
+/* Parses a glTF from memory: .glb when bytes start with the GLB magic, JSON otherwise.
+ * path is the file the bytes came from; external buffers are looked up in its folder only.
+ * Images are never decoded. On failure *out is NULL and msg holds tinygltf's one-line
+ * complaint. Never throws. */
+gls_status gls_load(const char *path, const void *bytes, size_t len, gls_model **out,
+                    char *msg, size_t msg_size);
+
+/* Frees everything the model owns; accepts NULL. */
+void gls_free(gls_model *model);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif

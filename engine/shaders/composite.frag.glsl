@@ -1,0 +1,27 @@
+#version 450 core
+// Composite: final linear radiance = direct + indirect (ISPM §3 last step), and the display
+// transform: exposure in stops, clamp to [0,1], sRGB encoding (IEC 61966-2-1).
+uniform sampler2D u_direct;
+uniform sampler2D u_indirect;
+uniform int u_has_indirect;
+uniform float u_exposure;
+
+layout(location = 0) out vec4 o_radiance;
+layout(location = 1) out vec4 o_display;
+
+vec3 srgb_encode(vec3 c)
+{
+    vec3 lo = c * 12.92;
+    vec3 hi = 1.055 * pow(c, vec3(1.0 / 2.4)) - 0.055;
+    return mix(lo, hi, step(vec3(0.0031308), c));
+}
+
+void main()
+{
+    ivec2 px = ivec2(gl_FragCoord.xy);
+    vec3 l = texelFetch(u_direct, px, 0).rgb;
+    if (u_has_indirect == 1)
+        l += texelFetch(u_indirect, px, 0).rgb;
+    o_radiance = vec4(l, 1.0);
+    o_display = vec4(srgb_encode(clamp(l * exp2(u_exposure), 0.0, 1.0)), 1.0);
+}

@@ -1,0 +1,42 @@
+#version 450 core
+// Eye G-buffer, fragment stage. Outputs (all RGBA32F):
+//   0 world position, w = 1 where a surface was drawn
+//   1 world normal, unit; flipped toward the viewer for double-sided materials
+//   2 albedo (baseColorFactor, linear)
+//   3 roughness, metallic, transmission, ior
+//   4 eye depth (metres along the view axis), material id, motion x, motion y
+// Motion is in pixels from this pixel to where the same surface point was in the previous
+// frame, x to the right and y downward (image rows, top row first).
+in vec3 v_position;
+in vec3 v_normal;
+in vec4 v_clip;
+in vec4 v_prev_clip;
+in float v_eye_depth;
+
+uniform vec3 u_eye;
+uniform vec4 u_base_color;
+uniform vec4 u_material;
+uniform float u_material_id;
+uniform int u_double_sided;
+uniform vec2 u_viewport;
+
+layout(location = 0) out vec4 o_position;
+layout(location = 1) out vec4 o_normal;
+layout(location = 2) out vec4 o_albedo;
+layout(location = 3) out vec4 o_material;
+layout(location = 4) out vec4 o_misc;
+
+void main()
+{
+    vec3 n = normalize(v_normal);
+    if (u_double_sided == 1 && dot(n, u_eye - v_position) < 0.0)
+        n = -n;
+    vec2 ndc = v_clip.xy / v_clip.w;
+    vec2 prev_ndc = v_prev_clip.xy / v_prev_clip.w;
+    vec2 motion = (prev_ndc - ndc) * 0.5 * u_viewport * vec2(1.0, -1.0);
+    o_position = vec4(v_position, 1.0);
+    o_normal = vec4(n, 0.0);
+    o_albedo = vec4(u_base_color.rgb, u_base_color.a);
+    o_material = u_material;
+    o_misc = vec4(v_eye_depth, u_material_id, motion);
+}

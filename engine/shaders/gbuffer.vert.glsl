@@ -1,0 +1,30 @@
+#version 450 core
+// Eye G-buffer, vertex stage (ISPM §3 step 1: "render the eye G-buffer"). World-space
+// position and normal go to the fragment stage; the clip positions of this frame and of the
+// previous one give the per-pixel motion vector.
+layout(location = 0) in vec3 a_position;
+layout(location = 1) in vec3 a_normal;
+
+uniform mat4 u_world;
+uniform mat4 u_prev_world;
+uniform mat3 u_normal_matrix;
+uniform mat4 u_view;
+uniform mat4 u_view_proj;
+uniform mat4 u_prev_view_proj;
+
+out vec3 v_position;
+out vec3 v_normal;
+out vec4 v_clip;
+out vec4 v_prev_clip;
+out float v_eye_depth;
+
+void main()
+{
+    vec4 wp = u_world * vec4(a_position, 1.0);
+    v_position = wp.xyz;
+    v_normal = u_normal_matrix * a_normal;
+    v_clip = u_view_proj * wp;
+    v_prev_clip = u_prev_view_proj * (u_prev_world * vec4(a_position, 1.0));
+    v_eye_depth = -(u_view * wp).z;
+    gl_Position = v_clip;
+}

@@ -1,0 +1,153 @@
+/* compare.c — one buffer of a run against the same buffer of its golden: metrics and verdict.
+ *
+ * The rules are idiff's (a pixel fails when some channel's absolute difference exceeds
+ * `fail` and its relative difference exceeds `failrelative`; the buffer fails when more than
+ * `failpercent` % of pixels fail or any difference exceeds `hardfail`), plus RMSE limits, an
+ * exact (bit-identical) mode, and one deliberate departure: idiff 2.4 lets NaN and Inf slip
+ * through its comparisons, so here any value whose class (finite, NaN, +Inf, -Inf) differs
+ * between run and golden fails the buffer whatever the tolerances, and the first such value
+ * is named. Arithmetic is in double over float inputs, in a fixed pixel order, so the metrics
+ * themselves are reproducible. Nothing here allocates or owns memory.
+ */
+#include "rep_internal.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+enum { CLS_FINITE = 0, CLS_NAN, CLS_PINF, CLS_NINF };
+
+static int classify(float v)
+{
+    if (isnan(v))
+        return CLS_NAN;
+    if (isinf(v))
+        return v > 0 ? CLS_PINF : CLS_NINF;
+    return CLS_FINITE;
+}
+
+static void copy_name(char dst[REP_CHANNEL_NAME_MAX], const char *src)
+{
+    snprintf(dst, REP_CHANNEL_NAME_MAX, "%s", src);
+}
+
+const char *rep_verdict_name(rep_verdict v)
+{
+    switch (v) {
+    case REP_V_CHECKED: return "checked";
+    case REP_V_BITEXACT: return "bit-exact";
+    case REP_V_WITHIN: return "within tolerance";
+    case REP_V_WARN: return "warn";
+    case REP_V_FAIL: return "fail";
+    case REP_V_SIZE: return "size mismatch";
+    case REP_V_COUNT: break;
+    }
+    return "unknown";
+}
+
+rep_verdict rep_compare(const eng_buffer *run, const eng_buffer *golden, const rep_tol *tol, rep_metrics *m)
+{
+    memset(m, 0, sizeof *m);
+    m->max_x = m->max_y = m->first_fail_x = m->first_fail_y = m->nf_x = m->nf_y = -1;
+    if (run->width != golden->width || run->height != golden->height ||
+        run->channel_count != golden->channel_count || run->channel_count < 1 ||
+        run->channel_count > ENG_MAX_CHANNELS)
+        return REP_V_SIZE;
+    int nch = run->channel_count;
+    int map[ENG_MAX_CHANNELS]; /* run channel c is golden channel map[c] */
+    for (int c = 0; c < nch; c++) {
+        map[c] = -1;
+        for (int k = 0; k < nch; k++)
+            if (strcmp(run->channels[c], golden->channels[k]) == 0)
+                map[c] = k;
+        if (map[c] < 0)
+            return REP_V_SIZE;
+    }
+
+    size_t npix = (size_t)run->width * (size_t)run->height;
+    double sum = 0, sum2 = 0, peak = 0;
+    int hard_fail = 0, hard_warn = 0;
+    for (size_t p = 0; p < npix; p++) {
+        int pfail = 0, pwarn = 0;
+        const float *ra = run->data + p * (size_t)nch;
+        const float *gb = golden->data + p * (size_t)nch;
+        for (int c = 0; c < nch; c++) {
+            float a = ra[c], b = gb[map[c]];
+            uint32_t ua, ub;
+            memcpy(&ua, &a, 4);
+            memcpy(&ub, &b, 4);
+            if (ua != ub)
+                m->values_differing++;
+            int ca = classify(a), cb = classify(b);
+            m->run_nan += ca == CLS_NAN;
+            m->run_inf += ca == CLS_PINF || ca == CLS_NINF;
+            m->golden_nan += cb == CLS_NAN;
+            m->golden_inf += cb == CLS_PINF || cb == CLS_NINF;
+            if (ca != CLS_FINITE || cb != CLS_FINITE) {
+                if (ca != cb && m->nonfinite_mismatch++ == 0) {
+                    m->nf_x = (int)(p % (size_t)run->width);
+                    m->nf_y = (int)(p / (size_t)run->width);
+                    copy_name(m->nf_channel, run->channels[c]);
+                    m->nf_run = a;
+                    m->nf_golden = b;
+                }
+                continue;
+            }
+            double d = fabs((double)a - (double)b);
+            double mag = fmax(fabs((double)a), fabs((double)b));
+            double rel = mag > 0 ? d / mag : 0;
+            if (fabs((double)b) > peak)
+                peak = fabs((double)b);
+            sum += d;
+            sum2 += d * d;
+            if (d > m->max_abs) {
+                m->max_abs = d;
+                m->max_x = (int)(p % (size_t)run->width);
+                m->max_y = (int)(p / (size_t)run->width);
+                copy_name(m->max_channel, run->channels[c]);
+            }
+            if (d > tol->fail && rel > tol->failrelative)
+                pfail = 1;
+            if (d > tol->warn && rel > tol->warnrelative)
+                pwarn = 1;
+            if (d > tol->hardfail)
+                hard_fail = 1;
+            if (d > tol->hardwarn)
+                hard_warn = 1;
+        }
+        if (pfail && m->fail_pixels++ == 0) {
+            m->first_fail_x = (int)(p % (size_t)run->width);
+            m->first_fail_y = (int)(p / (size_t)run->width);
+        }
+        m->warn_pixels += pwarn;
+    }
+    m->pixels = npix;
+    m->values = npix * (size_t)nch;
+    m->mean_abs = sum / (double)m->values;
+    m->rmse = sqrt(sum2 / (double)m->values);
+    m->psnr = m->rmse > 0 ? 20.0 * log10((peak > 0 ? peak : 1.0) / m->rmse) : INFINITY;
+    m->fail_percent = 100.0 * (double)m->fail_pixels / (double)npix;
+    m->warn_percent = 100.0 * (double)m->warn_pixels / (double)npix;
+
+    if (m->values_differing == 0)
+        return REP_V_BITEXACT;
+    if (tol->exact)
+        m->fail_why |= REP_WHY_EXACT;
+    if (m->nonfinite_mismatch)
+        m->fail_why |= REP_WHY_NONFINITE;
+    if (m->fail_percent > tol->failpercent)
+        m->fail_why |= REP_WHY_PERCENT;
+    if (hard_fail)
+        m->fail_why |= REP_WHY_HARD;
+    if (m->rmse > tol->rmse_fail)
+        m->fail_why |= REP_WHY_RMSE;
+    if (m->fail_why)
+        return REP_V_FAIL;
+    if (m->warn_percent > tol->warnpercent)
+        m->warn_why |= REP_WHY_PERCENT;
+    if (hard_warn)
+        m->warn_why |= REP_WHY_HARD;
+    if (m->rmse > tol->rmse_warn)
+        m->warn_why |= REP_WHY_RMSE;
+    return m->warn_why ? REP_V_WARN : REP_V_WITHIN;
+}

@@ -1,0 +1,65 @@
+/* oiio_shim.h — the C face of replay's one C++ file (oiio_shim.cpp), which hides OpenImageIO.
+ *
+ * A frame file is a multi-part EXR, one part per buffer, the part name being the buffer name.
+ * The reader decodes every part into float32 (interleaved, top row first, the eng_buffer
+ * layout) and owns nothing after returning: the caller owns the parts array and frees it with
+ * rep_parts_free. The writer exists so that tests (and tools) can make fixture runs without
+ * the capture module. No C++ exception crosses this header; every failure is an eng_result
+ * with a one-line message naming the file.
+ */
+#ifndef ISPM_REP_OIIO_SHIM_H
+#define ISPM_REP_OIIO_SHIM_H
+
+#include <stddef.h>
+
+#include "eng.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* At most this many parts in one frame file; more is taken for a corrupt or hostile file. */
+#define REP_MAX_PARTS 4096
+
+/* One decoded EXR part. Channel names are in the order OpenImageIO presents them, which need
+ * not be the order they were written in: compare channels by name, never by position. */
+typedef struct rep_part {
+    char *name;
+    int width, height;
+    int channel_count; /* 1..ENG_MAX_CHANNELS */
+    char *channels[ENG_MAX_CHANNELS];
+    float *data;       /* width*height*channel_count floats, interleaved, top row first */
+} rep_part;
+
+/* Reads every part of the EXR at path. Refuses (ENG_ERR_INVALID) a file that is not
+ * OpenEXR, a deep or volume part, a part without a name, more than ENG_MAX_CHANNELS channels
+ * or more than max_floats floats in one part (checked before allocating, so a lying header
+ * cannot exhaust memory). A missing, truncated or undecodable file is ENG_ERR_IO. On failure
+ * *parts is NULL and *count 0. */
+eng_result rep_oiio_read_parts(const char *path, size_t max_floats, rep_part **parts, int *count,
+                               eng_error *err);
+
+void rep_parts_free(rep_part *parts, int count);
+
+/* Writes count buffers as a multi-part float32 ZIP-compressed EXR, part i named parts[i].name
+ * with parts[i]'s channel names. Overwrites path. */
+eng_result rep_oiio_write_parts(const char *path, const eng_buffer *parts, int count, eng_error *err);
+
+/* A borrowed eng_buffer view of a part (valid while the part lives). */
+static inline eng_buffer rep_part_buffer(const rep_part *p)
+{
+    eng_buffer b;
+    b.name = p->name;
+    b.width = p->width;
+    b.height = p->height;
+    b.channel_count = p->channel_count;
+    b.channels = (const char *const *)p->channels;
+    b.data = p->data;
+    return b;
+}
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif

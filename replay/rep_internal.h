@@ -1,0 +1,268 @@
+/* rep_internal.h — what the replay module's files share and its tests reach into; not part of
+ * the public API (rep.h).
+ *
+ * The pieces, one file each:
+ *   util.c       allocation (out of memory ends the process), paths, files, atomic writes
+ *   run.c        run reader: manifest.json parsed and validated, frame files decoded through
+ *                the OIIO shim and verified against the manifest's digests
+ *   tolerance.c  tolerances.json: parsing, validation, first-match lookup
+ *   compare.c    one buffer against its golden: metrics and verdict
+ *   report.c     report.json, report.txt and the summary
+ *   replay.c     rep_replay: walks frames and buffers, builds the report
+ *   bless.c      rep_bless: a verified run becomes a golden, atomically
+ */
+#ifndef ISPM_REP_INTERNAL_H
+#define ISPM_REP_INTERNAL_H
+
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#include "eng.h"
+#include "oiio_shim.h"
+#include "rep.h"
+
+/* A buffer larger than this many floats (1 GiB) is taken for a lying manifest or header. */
+#define REP_MAX_FLOATS ((size_t)1 << 28)
+/* Largest manifest or tolerances file read. */
+#define REP_MAX_JSON_BYTES ((size_t)64 << 20)
+
+/* ---------------------------------------------------------------- util.c */
+
+/* Allocation that cannot fail: out of memory prints one line and aborts, as in ispm_core. */
+void *rep_xmalloc(size_t n);
+void *rep_xcalloc(size_t n, size_t size);
+void *rep_xrealloc(void *p, size_t n);
+char *rep_xstrdup(const char *s);
+char *rep_xprintf(const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 1, 2)))
+#endif
+    ;
+/* dir + "/" + name, without doubling a trailing slash. Caller frees. */
+char *rep_path_join(const char *dir, const char *name);
+
+/* A growing NUL-terminated string. Zero-initialise; free s when done. */
+typedef struct rep_sb {
+    char *s;
+    size_t len, cap;
+} rep_sb;
+void rep_sb_printf(rep_sb *sb, const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 2, 3)))
+#endif
+    ;
+
+int rep_is_file(const char *path); /* regular file (following links) */
+int rep_is_dir(const char *path);
+/* mkdir -p. */
+eng_result rep_mkdirs(const char *path, eng_error *err);
+/* Writes path.tmp, flushes it to disk, renames it over path: readers see the old file or the
+ * new one, never a part. */
+eng_result rep_write_atomic(const char *path, const char *data, size_t len, eng_error *err);
+/* Copies a regular file's bytes to dst (created or truncated) and flushes them to disk. */
+eng_result rep_copy_file(const char *src, const char *dst, eng_error *err);
+/* rm -rf without following symbolic links; a missing path is not an error. */
+eng_result rep_remove_tree(const char *path, eng_error *err);
+
+/* ---------------------------------------------------------------- run.c */
+
+typedef struct rep_buffer_info {
+    char *name;
+    int width, height;
+    int channel_count;
+    char *channels[ENG_MAX_CHANNELS]; /* as the manifest lists them */
+    char digest[40];                  /* 32 lowercase hex */
+    uint64_t nan, inf;
+    int has_nonfinite_counts;         /* the manifest gave "nan" and "inf" */
+} rep_buffer_info;
+
+typedef struct rep_frame_info {
+    int index;
+    double time;
+    char *file; /* as in the manifest, relative to the run folder */
+    char *path; /* run folder + file */
+    int buffer_count;
+    rep_buffer_info *buffers;
+} rep_frame_info;
+
+/* A run's manifest, validated: one owner, freed whole by rep_run_close. */
+typedef struct rep_run {
+    char *dir;
+    char *manifest_path;
+    int width, height; /* "resolution" */
+    char *sequence_name; /* may be NULL */
+    int frame_count;
+    rep_frame_info *frames;
+} rep_run;
+
+/* Opens a run: parses and validates manifest.json (format, version, "complete": true, frame
+ * count equal to the frames listed, indices in order, safe relative file names, buffer sizes
+ * within REP_MAX_FLOATS, unique names, well-formed digests) and checks that every frame file
+ * exists. Any failure means the run cannot be read: *out is NULL, err names the file and the
+ * problem (ENG_ERR_IO missing, ENG_ERR_PARSE not JSON, ENG_ERR_INVALID otherwise). */
+eng_result rep_run_open(const char *dir, rep_run **out, eng_error *err);
+void rep_run_close(rep_run *run);
+
+/* Index of the buffer called name in frame f, or -1. */
+int rep_frame_find(const rep_frame_info *f, const char *name);
+
+/* Decodes frame `frame` of the run and verifies it against the manifest: the file holds
+ * exactly the listed parts, each of the listed size and channel set, each decoding to the
+ * listed digest (and non-finite counts). On success (*parts)[j] is the buffer
+ * run->frames[frame].buffers[j]; free with rep_parts_free(*parts, buffer_count). Failure
+ * (missing, truncated, tampered, disagreeing file) names the file and part. */
+eng_result rep_run_read_frame(const rep_run *run, int frame, rep_part **parts, eng_error *err);
+
+/* ---------------------------------------------------------------- tolerance.c */
+
+/* One buffer's tolerances. Thresholds are compared with ">": a difference equal to the
+ * threshold passes. Disabled thresholds (hardwarn, rmse_* unless set) are +INFINITY. */
+typedef struct rep_tol {
+    int exact; /* any bit difference fails */
+    double warn, warnrelative, warnpercent, hardwarn;
+    double fail, failrelative, failpercent, hardfail;
+    double rmse_warn, rmse_fail;
+} rep_tol;
+
+typedef struct rep_tol_rule {
+    char *match; /* fnmatch pattern against the buffer name */
+    rep_tol tol; /* fully resolved: unspecified keys already taken from "default" */
+} rep_tol_rule;
+
+typedef struct rep_tolerances {
+    char *path; /* NULL when built-in defaults */
+    rep_tol def;
+    int rule_count;
+    rep_tol_rule *rules;
+} rep_tolerances;
+
+/* The built-in defaults: warn 0, fail 1e-4, failrelative 1e-4, failpercent 0, hardfail 1e-2,
+ * everything else 0 or disabled. */
+void rep_tol_builtin(rep_tol *t);
+
+/* Parses tolerances JSON; path is only used in messages. Unknown keys, wrong types, negative
+ * or non-finite numbers and rules without "match" are ENG_ERR_INVALID naming the key. */
+eng_result rep_tol_parse(const char *path, const char *json, size_t len, rep_tolerances **out,
+                         eng_error *err);
+/* Loads a tolerances file. If missing_ok and the file does not exist, *out holds the built-in
+ * defaults (path NULL). */
+eng_result rep_tol_load(const char *path, int missing_ok, rep_tolerances **out, eng_error *err);
+void rep_tol_free(rep_tolerances *t);
+
+/* Tolerances for a buffer: the first rule whose pattern matches wins, else "default". Returns
+ * the pattern that matched, or "default". */
+const char *rep_tol_lookup(const rep_tolerances *t, const char *buffer, rep_tol *out);
+
+/* The tolerances.json that bless writes for a new golden (the built-in defaults, spelled out). */
+char *rep_tol_default_json(void);
+
+/* ---------------------------------------------------------------- compare.c */
+
+typedef enum rep_verdict {
+    REP_V_CHECKED = 0, /* no golden: integrity verified, every value finite */
+    REP_V_BITEXACT,
+    REP_V_WITHIN,      /* differs, within tolerance */
+    REP_V_WARN,
+    REP_V_FAIL,
+    REP_V_SIZE,
+    REP_V_COUNT
+} rep_verdict;
+
+const char *rep_verdict_name(rep_verdict v); /* "bit-exact", "within tolerance", ... */
+
+/* Why a buffer failed or warned (bits). */
+enum {
+    REP_WHY_PERCENT = 1,   /* more failing (warning) pixels than failpercent (warnpercent) */
+    REP_WHY_HARD = 2,      /* some |Δ| over hardfail (hardwarn) */
+    REP_WHY_RMSE = 4,      /* RMSE over rmse_fail (rmse_warn) */
+    REP_WHY_NONFINITE = 8, /* a non-finite value changed class, or appeared in a run without golden */
+    REP_WHY_EXACT = 16     /* exact mode and some bit differs */
+};
+
+#define REP_CHANNEL_NAME_MAX 64
+
+typedef struct rep_metrics {
+    uint64_t pixels, values;
+    uint64_t values_differing;       /* bitwise */
+    double max_abs;                  /* over values finite in both */
+    int max_x, max_y;                /* -1 if no finite difference */
+    char max_channel[REP_CHANNEL_NAME_MAX];
+    double mean_abs, rmse, psnr;     /* psnr: peak = max |golden|, or 1; +INF when rmse is 0 */
+    uint64_t fail_pixels, warn_pixels;
+    double fail_percent, warn_percent;
+    int first_fail_x, first_fail_y;  /* -1 if none */
+    uint64_t run_nan, run_inf, golden_nan, golden_inf;
+    uint64_t nonfinite_mismatch;     /* values whose class (finite/NaN/+Inf/-Inf) differs */
+    int nf_x, nf_y;                  /* first such value, row-major; -1 if none */
+    char nf_channel[REP_CHANNEL_NAME_MAX];
+    float nf_run, nf_golden;         /* the values there */
+    unsigned fail_why, warn_why;
+} rep_metrics;
+
+/* Compares a run buffer with its golden under tol. Channels are matched by name; a different
+ * size or channel set gives REP_V_SIZE (metrics zero). Per value d = |a-b|, rel = d/max(|a|,|b|)
+ * (0 when both are 0). A pixel fails (warns) if some channel has d > fail AND rel >
+ * failrelative (warn/warnrelative). The buffer fails if failing pixels exceed failpercent % of
+ * all pixels, or some d > hardfail, or RMSE > rmse_fail, or (exact) any bit differs, or any
+ * value's class NaN/+Inf/-Inf/finite differs between run and golden; it warns likewise. Values
+ * non-finite in both with the same class count as d = 0. */
+rep_verdict rep_compare(const eng_buffer *run, const eng_buffer *golden, const rep_tol *tol,
+                        rep_metrics *m);
+
+/* ---------------------------------------------------------------- report.c */
+
+typedef enum rep_problem {
+    REP_PROB_NONE = 0,
+    REP_PROB_MISSING,       /* buffer in golden, not in run */
+    REP_PROB_EXTRA,         /* buffer in run, not in golden */
+    REP_PROB_FRAME_MISSING, /* the whole frame is missing from the run */
+    REP_PROB_FRAME_EXTRA    /* the run has a frame the golden lacks */
+} rep_problem;
+
+/* One buffer of one frame. */
+typedef struct rep_entry {
+    int frame;
+    char *buffer;
+    rep_verdict verdict;
+    rep_problem problem;
+    int compared;         /* metrics (and tol) are meaningful */
+    rep_metrics m;
+    rep_tol tol;
+    char *tol_match;      /* pattern that chose tol, or "default" */
+    char *run_shape;      /* "WxH C1,C2,.." for size mismatches */
+    char *golden_shape;
+} rep_entry;
+
+typedef struct rep_report {
+    const char *run_dir;
+    const char *golden_dir;  /* NULL: integrity-only */
+    char *tol_path;          /* owned; NULL: built-in tolerances */
+    int frames;              /* frames looked at (union of run and golden) */
+    int buffers_per_frame;   /* from the run's frame 0 (or the golden's) */
+    size_t count, cap;
+    rep_entry *entries;      /* frame order, buffers in manifest order */
+    /* First difference by manifest digests alone (redis DEBUG DIGEST): frame -1 if none. */
+    int digest_frame;
+    char *digest_buffer;
+    const char *digest_why;
+    rep_exit exit;
+    eng_error error;         /* the unreadable input, when exit is UNREADABLE */
+} rep_report;
+
+/* Appends a zeroed entry for (frame, buffer) and returns it. */
+rep_entry *rep_report_add(rep_report *r, int frame, const char *buffer);
+void rep_report_free(rep_report *r);
+/* The exit code the entries imply (UNREADABLE is set by the caller). */
+rep_exit rep_report_exit(const rep_report *r);
+
+/* The human summary: header, one line per buffer that is not bit-exact (or, without golden,
+ * not clean), worst first, and the verdict line. quiet: only failures and the verdict line.
+ * Caller frees. */
+char *rep_report_text(const rep_report *r, int quiet);
+/* report.json as a string. Caller frees. */
+char *rep_report_json(const rep_report *r);
+/* Writes report.json and report.txt into dir (created if needed), each atomically. */
+eng_result rep_report_write(const rep_report *r, const char *dir, eng_error *err);
+
+#endif

@@ -1,0 +1,438 @@
+/* report.c — what replay tells people and machines: report.json, report.txt and the summary.
+ *
+ * The text is for a person scanning a CI log: a header saying what was compared, then one line
+ * per buffer that is not bit-exact, worst first (size mismatches, then failures, warnings,
+ * differences within tolerance; inside each, the largest error first, non-finite and missing
+ * buffers counting as infinite), then one verdict line. report.json carries the same results
+ * per frame and per buffer with every metric and the tolerance applied, for tools. Both files
+ * are written atomically so a reader never sees half a report. The report's entries are owned
+ * by rep_report and freed by rep_report_free.
+ */
+#include "rep_internal.h"
+
+#include <cjson/cJSON.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+rep_entry *rep_report_add(rep_report *r, int frame, const char *buffer)
+{
+    if (r->count == r->cap) {
+        r->cap = r->cap ? r->cap * 2 : 64;
+        r->entries = rep_xrealloc(r->entries, r->cap * sizeof *r->entries);
+    }
+    rep_entry *e = &r->entries[r->count++];
+    memset(e, 0, sizeof *e);
+    e->frame = frame;
+    e->buffer = rep_xstrdup(buffer);
+    return e;
+}
+
+void rep_report_free(rep_report *r)
+{
+    for (size_t i = 0; i < r->count; i++) {
+        free(r->entries[i].buffer);
+        free(r->entries[i].tol_match);
+        free(r->entries[i].run_shape);
+        free(r->entries[i].golden_shape);
+    }
+    free(r->entries);
+    free(r->digest_buffer);
+    free(r->tol_path);
+    r->entries = NULL;
+    r->digest_buffer = NULL;
+    r->tol_path = NULL;
+    r->count = r->cap = 0;
+}
+
+rep_exit rep_report_exit(const rep_report *r)
+{
+    rep_exit x = REP_OK;
+    for (size_t i = 0; i < r->count; i++) {
+        rep_exit e = REP_OK;
+        switch (r->entries[i].verdict) {
+        case REP_V_SIZE: e = REP_SIZE; break;
+        case REP_V_FAIL: e = REP_FAIL; break;
+        case REP_V_WARN: e = REP_WARN; break;
+        default: break;
+        }
+        if (e > x)
+            x = e;
+    }
+    return x;
+}
+
+static const char *exit_word(rep_exit x)
+{
+    switch (x) {
+    case REP_OK: return "OK";
+    case REP_WARN: return "WARN";
+    case REP_FAIL: return "FAIL";
+    case REP_SIZE: return "SIZE MISMATCH";
+    case REP_UNREADABLE: return "UNREADABLE";
+    }
+    return "UNREADABLE";
+}
+
+static int rank(const rep_entry *e)
+{
+    switch (e->verdict) {
+    case REP_V_SIZE: return 5;
+    case REP_V_FAIL: return 4;
+    case REP_V_WARN: return 3;
+    case REP_V_WITHIN: return 2;
+    case REP_V_CHECKED: return 1;
+    default: return 0;
+    }
+}
+
+static double severity(const rep_entry *e)
+{
+    if (e->problem != REP_PROB_NONE || (e->m.fail_why & REP_WHY_NONFINITE))
+        return INFINITY;
+    return e->m.max_abs;
+}
+
+static int worst_first(const void *pa, const void *pb)
+{
+    const rep_entry *a = *(const rep_entry *const *)pa, *b = *(const rep_entry *const *)pb;
+    if (rank(a) != rank(b))
+        return rank(b) - rank(a);
+    double sa = severity(a), sb = severity(b);
+    if (sa != sb)
+        return sa < sb ? 1 : -1;
+    if (a->frame != b->frame)
+        return a->frame - b->frame;
+    return a < b ? -1 : a > b; /* entries sit in manifest order: keep it */
+}
+
+static int listed(const rep_entry *e)
+{
+    return e->verdict != REP_V_BITEXACT && e->verdict != REP_V_CHECKED;
+}
+
+static int is_failure(const rep_entry *e)
+{
+    return e->verdict == REP_V_FAIL || e->verdict == REP_V_SIZE;
+}
+
+static void why_text(rep_sb *sb, unsigned why, const rep_metrics *m, int fail, const rep_tol *t)
+{
+    if (why & REP_WHY_HARD)
+        rep_sb_printf(sb, "  over %s %g", fail ? "hardfail" : "hardwarn", fail ? t->hardfail : t->hardwarn);
+    if (why & REP_WHY_RMSE)
+        rep_sb_printf(sb, "  rmse over %g", fail ? t->rmse_fail : t->rmse_warn);
+    if (why & REP_WHY_EXACT)
+        rep_sb_printf(sb, "  exact: %llu values differ", (unsigned long long)m->values_differing);
+}
+
+static void line(rep_sb *sb, const rep_report *r, const rep_entry *e)
+{
+    const rep_metrics *m = &e->m;
+    const char *tag = "PASS";
+    if (e->verdict == REP_V_SIZE)
+        tag = "SIZE";
+    else if (e->problem == REP_PROB_MISSING || e->problem == REP_PROB_FRAME_MISSING)
+        tag = "MISS";
+    else if (e->problem == REP_PROB_EXTRA || e->problem == REP_PROB_FRAME_EXTRA)
+        tag = "EXTRA";
+    else if (m->fail_why & REP_WHY_NONFINITE)
+        tag = (m->run_nan || m->golden_nan) ? "NAN" : "INF";
+    else if (e->verdict == REP_V_FAIL)
+        tag = "FAIL";
+    else if (e->verdict == REP_V_WARN)
+        tag = "WARN";
+    rep_sb_printf(sb, "%-5s frame %d  %-22s ", tag, e->frame, e->buffer);
+    switch (e->problem) {
+    case REP_PROB_MISSING: rep_sb_printf(sb, "in golden, missing from run\n"); return;
+    case REP_PROB_EXTRA: rep_sb_printf(sb, "in run, not in golden\n"); return;
+    case REP_PROB_FRAME_MISSING: rep_sb_printf(sb, "frame missing from run\n"); return;
+    case REP_PROB_FRAME_EXTRA: rep_sb_printf(sb, "frame not in golden\n"); return;
+    case REP_PROB_NONE: break;
+    }
+    if (e->verdict == REP_V_SIZE) {
+        rep_sb_printf(sb, "run %s, golden %s\n", e->run_shape ? e->run_shape : "?",
+                      e->golden_shape ? e->golden_shape : "?");
+        return;
+    }
+    if (m->fail_why & REP_WHY_NONFINITE) {
+        if (!r->golden_dir) {
+            rep_sb_printf(sb, "%llu NaN, %llu Inf in run (no golden) first at (%d,%d)\n",
+                          (unsigned long long)m->run_nan, (unsigned long long)m->run_inf, m->nf_x, m->nf_y);
+            return;
+        }
+        rep_sb_printf(sb, "%llu NaN, %llu Inf in run (golden %llu) first at (%d,%d).%s: run %g, golden %g",
+                      (unsigned long long)m->run_nan, (unsigned long long)m->run_inf,
+                      (unsigned long long)(m->golden_nan + m->golden_inf), m->nf_x, m->nf_y, m->nf_channel,
+                      (double)m->nf_run, (double)m->nf_golden);
+        if (m->max_x >= 0)
+            rep_sb_printf(sb, "  max |Δ| %.2e at (%d,%d).%s", m->max_abs, m->max_x, m->max_y, m->max_channel);
+        rep_sb_printf(sb, "\n");
+        return;
+    }
+    if (m->max_x >= 0)
+        rep_sb_printf(sb, "max |Δ| %.2e at (%d,%d).%s  rmse %.1e", m->max_abs, m->max_x, m->max_y,
+                      m->max_channel, m->rmse);
+    else
+        rep_sb_printf(sb, "max |Δ| 0 (%llu values differ in bits only)", (unsigned long long)m->values_differing);
+    if (e->verdict == REP_V_FAIL) {
+        rep_sb_printf(sb, "  over fail %.2f%% (tol fail %g, %g%%)", m->fail_percent, e->tol.fail, e->tol.failpercent);
+        why_text(sb, m->fail_why, m, 1, &e->tol);
+    } else if (e->verdict == REP_V_WARN) {
+        rep_sb_printf(sb, "  over warn %.2f%% (tol warn %g, %g%%)", m->warn_percent, e->tol.warn, e->tol.warnpercent);
+        why_text(sb, m->warn_why, m, 0, &e->tol);
+    } else {
+        rep_sb_printf(sb, "  within tolerance (tol fail %g, %g%%)", e->tol.fail, e->tol.failpercent);
+    }
+    rep_sb_printf(sb, "\n");
+}
+
+char *rep_report_text(const rep_report *r, int quiet)
+{
+    rep_sb sb = {0};
+    if (!quiet) {
+        rep_sb_printf(&sb, "replay: run %s\n", r->run_dir ? r->run_dir : "(none)");
+        if (r->golden_dir)
+            rep_sb_printf(&sb, "        golden %s (tolerances %s)\n", r->golden_dir,
+                          r->tol_path ? r->tol_path : "built-in");
+        else
+            rep_sb_printf(&sb, "        no golden: integrity and non-finite values only\n");
+        rep_sb_printf(&sb, "        %d frames, %d buffers per frame\n", r->frames, r->buffers_per_frame);
+        if (r->golden_dir && r->exit != REP_UNREADABLE) {
+            if (r->digest_frame >= 0)
+                rep_sb_printf(&sb, "        first digest difference (manifests): frame %d %s (%s)\n", r->digest_frame,
+                              r->digest_buffer, r->digest_why);
+            else
+                rep_sb_printf(&sb, "        manifests: every digest matches the golden's\n");
+        }
+    }
+    const rep_entry **order = rep_xcalloc(r->count, sizeof *order);
+    size_t n = 0;
+    for (size_t i = 0; i < r->count; i++)
+        if (listed(&r->entries[i]) && (!quiet || is_failure(&r->entries[i])))
+            order[n++] = &r->entries[i];
+    qsort(order, n, sizeof *order, worst_first);
+    for (size_t i = 0; i < n; i++)
+        line(&sb, r, order[i]);
+    free(order);
+
+    if (r->exit == REP_UNREADABLE) {
+        rep_sb_printf(&sb, "replay: UNREADABLE — %s\n", r->error.msg);
+        return sb.s;
+    }
+    size_t cnt[REP_V_COUNT] = {0};
+    for (size_t i = 0; i < r->count; i++)
+        cnt[r->entries[i].verdict]++;
+    rep_sb_printf(&sb, "replay: %s — ", exit_word(r->exit));
+    if (cnt[REP_V_SIZE])
+        rep_sb_printf(&sb, "%zu size mismatch, ", cnt[REP_V_SIZE]);
+    if (r->golden_dir)
+        rep_sb_printf(&sb, "%zu failed, %zu warned, %zu within tolerance, %zu bit-exact (%zu buffers, %d frames)\n",
+                      cnt[REP_V_FAIL], cnt[REP_V_WARN], cnt[REP_V_WITHIN], cnt[REP_V_BITEXACT], r->count, r->frames);
+    else
+        rep_sb_printf(&sb, "%zu failed, %zu checked (%zu buffers, %d frames; no golden: integrity and non-finite only)\n",
+                      cnt[REP_V_FAIL], cnt[REP_V_CHECKED], r->count, r->frames);
+    return sb.s;
+}
+
+static void add_num(cJSON *o, const char *k, double v)
+{
+    if (isfinite(v))
+        cJSON_AddNumberToObject(o, k, v);
+    else
+        cJSON_AddNullToObject(o, k);
+}
+
+static void add_str(cJSON *o, const char *k, const char *v)
+{
+    if (v)
+        cJSON_AddStringToObject(o, k, v);
+    else
+        cJSON_AddNullToObject(o, k);
+}
+
+static cJSON *xy(int x, int y, const char *channel)
+{
+    if (x < 0)
+        return cJSON_CreateNull();
+    cJSON *o = cJSON_CreateObject();
+    cJSON_AddNumberToObject(o, "x", x);
+    cJSON_AddNumberToObject(o, "y", y);
+    if (channel)
+        cJSON_AddStringToObject(o, "channel", channel);
+    return o;
+}
+
+static cJSON *why_json(unsigned why)
+{
+    cJSON *a = cJSON_CreateArray();
+    if (why & REP_WHY_PERCENT) cJSON_AddItemToArray(a, cJSON_CreateString("percent"));
+    if (why & REP_WHY_HARD) cJSON_AddItemToArray(a, cJSON_CreateString("hard"));
+    if (why & REP_WHY_RMSE) cJSON_AddItemToArray(a, cJSON_CreateString("rmse"));
+    if (why & REP_WHY_NONFINITE) cJSON_AddItemToArray(a, cJSON_CreateString("nonfinite"));
+    if (why & REP_WHY_EXACT) cJSON_AddItemToArray(a, cJSON_CreateString("exact"));
+    return a;
+}
+
+static cJSON *tol_json(const rep_entry *e)
+{
+    const rep_tol *t = &e->tol;
+    cJSON *o = cJSON_CreateObject();
+    add_str(o, "match", e->tol_match);
+    cJSON_AddBoolToObject(o, "exact", t->exact);
+    add_num(o, "warn", t->warn);
+    add_num(o, "warnrelative", t->warnrelative);
+    add_num(o, "warnpercent", t->warnpercent);
+    add_num(o, "hardwarn", t->hardwarn);
+    add_num(o, "fail", t->fail);
+    add_num(o, "failrelative", t->failrelative);
+    add_num(o, "failpercent", t->failpercent);
+    add_num(o, "hardfail", t->hardfail);
+    add_num(o, "rmse_warn", t->rmse_warn);
+    add_num(o, "rmse_fail", t->rmse_fail);
+    return o;
+}
+
+static cJSON *metrics_json(const rep_report *r, const rep_metrics *m)
+{
+    cJSON *o = cJSON_CreateObject();
+    cJSON_AddNumberToObject(o, "pixels", (double)m->pixels);
+    if (r->golden_dir) {
+        cJSON_AddNumberToObject(o, "values_differing", (double)m->values_differing);
+        add_num(o, "max_abs_error", m->max_abs);
+        cJSON_AddItemToObject(o, "max_at", xy(m->max_x, m->max_y, m->max_channel));
+        add_num(o, "mean_abs_error", m->mean_abs);
+        add_num(o, "rmse", m->rmse);
+        add_num(o, "psnr", m->psnr);
+        cJSON_AddNumberToObject(o, "fail_pixels", (double)m->fail_pixels);
+        add_num(o, "fail_percent", m->fail_percent);
+        cJSON_AddItemToObject(o, "first_fail", xy(m->first_fail_x, m->first_fail_y, NULL));
+        cJSON_AddNumberToObject(o, "warn_pixels", (double)m->warn_pixels);
+        add_num(o, "warn_percent", m->warn_percent);
+    }
+    cJSON *rn = cJSON_AddObjectToObject(o, "run");
+    cJSON_AddNumberToObject(rn, "nan", (double)m->run_nan);
+    cJSON_AddNumberToObject(rn, "inf", (double)m->run_inf);
+    if (r->golden_dir) {
+        cJSON *gn = cJSON_AddObjectToObject(o, "golden");
+        cJSON_AddNumberToObject(gn, "nan", (double)m->golden_nan);
+        cJSON_AddNumberToObject(gn, "inf", (double)m->golden_inf);
+        cJSON_AddNumberToObject(o, "nonfinite_mismatch", (double)m->nonfinite_mismatch);
+        cJSON_AddItemToObject(o, "first_nonfinite_mismatch", xy(m->nf_x, m->nf_y, m->nf_channel));
+    } else {
+        cJSON_AddItemToObject(o, "first_nonfinite", xy(m->nf_x, m->nf_y, NULL));
+    }
+    cJSON_AddItemToObject(o, "fail_reasons", why_json(m->fail_why));
+    cJSON_AddItemToObject(o, "warn_reasons", why_json(m->warn_why));
+    return o;
+}
+
+static const char *problem_name(rep_problem p)
+{
+    switch (p) {
+    case REP_PROB_MISSING: return "missing from run";
+    case REP_PROB_EXTRA: return "not in golden";
+    case REP_PROB_FRAME_MISSING: return "frame missing from run";
+    case REP_PROB_FRAME_EXTRA: return "frame not in golden";
+    case REP_PROB_NONE: break;
+    }
+    return NULL;
+}
+
+char *rep_report_json(const rep_report *r)
+{
+    cJSON *root = cJSON_CreateObject();
+    cJSON_AddStringToObject(root, "format", "ispm-replay-report");
+    cJSON_AddNumberToObject(root, "format_version", 1);
+    add_str(root, "run", r->run_dir);
+    add_str(root, "golden", r->golden_dir);
+    add_str(root, "tolerances", r->golden_dir ? (r->tol_path ? r->tol_path : "built-in") : NULL);
+    cJSON_AddStringToObject(root, "verdict", exit_word(r->exit));
+    cJSON_AddNumberToObject(root, "exit_code", (double)r->exit);
+    if (r->exit == REP_UNREADABLE)
+        cJSON_AddStringToObject(root, "error", r->error.msg);
+    cJSON_AddNumberToObject(root, "frame_count", r->frames);
+    cJSON_AddNumberToObject(root, "buffer_count", (double)r->count);
+    cJSON *counts = cJSON_AddObjectToObject(root, "counts");
+    size_t cnt[REP_V_COUNT] = {0};
+    for (size_t i = 0; i < r->count; i++)
+        cnt[r->entries[i].verdict]++;
+    for (int v = 0; v < REP_V_COUNT; v++)
+        if (v != REP_V_CHECKED || !r->golden_dir)
+            cJSON_AddNumberToObject(counts, rep_verdict_name((rep_verdict)v), (double)cnt[v]);
+    if (r->golden_dir && r->digest_frame >= 0) {
+        cJSON *d = cJSON_AddObjectToObject(root, "first_digest_difference");
+        cJSON_AddNumberToObject(d, "frame", r->digest_frame);
+        cJSON_AddStringToObject(d, "buffer", r->digest_buffer);
+        cJSON_AddStringToObject(d, "reason", r->digest_why);
+    } else {
+        cJSON_AddNullToObject(root, "first_digest_difference");
+    }
+    const rep_entry *first = NULL;
+    for (size_t i = 0; i < r->count && !first; i++)
+        if (listed(&r->entries[i]))
+            first = &r->entries[i];
+    if (first) {
+        cJSON *d = cJSON_AddObjectToObject(root, "first_difference");
+        cJSON_AddNumberToObject(d, "frame", first->frame);
+        cJSON_AddStringToObject(d, "buffer", first->buffer);
+        cJSON_AddStringToObject(d, "verdict", rep_verdict_name(first->verdict));
+    } else {
+        cJSON_AddNullToObject(root, "first_difference");
+    }
+    cJSON *frames = cJSON_AddArrayToObject(root, "frames");
+    cJSON *bufs = NULL;
+    int cur = -1;
+    for (size_t i = 0; i < r->count; i++) {
+        const rep_entry *e = &r->entries[i];
+        if (e->frame != cur || !bufs) {
+            cur = e->frame;
+            cJSON *f = cJSON_CreateObject();
+            cJSON_AddNumberToObject(f, "index", cur);
+            bufs = cJSON_AddArrayToObject(f, "buffers");
+            cJSON_AddItemToArray(frames, f);
+        }
+        cJSON *b = cJSON_CreateObject();
+        cJSON_AddStringToObject(b, "name", e->buffer);
+        cJSON_AddStringToObject(b, "verdict", rep_verdict_name(e->verdict));
+        add_str(b, "problem", problem_name(e->problem));
+        if (e->verdict == REP_V_SIZE) {
+            add_str(b, "run_shape", e->run_shape);
+            add_str(b, "golden_shape", e->golden_shape);
+        }
+        if (e->compared) {
+            if (r->golden_dir)
+                cJSON_AddItemToObject(b, "tolerance", tol_json(e));
+            cJSON_AddItemToObject(b, "metrics", metrics_json(r, &e->m));
+        }
+        cJSON_AddItemToArray(bufs, b);
+    }
+    char *text = cJSON_Print(root);
+    cJSON_Delete(root);
+    if (!text) {
+        fprintf(stderr, "ispm: out of memory\n");
+        abort();
+    }
+    char *out = rep_xprintf("%s\n", text);
+    cJSON_free(text);
+    return out;
+}
+
+eng_result rep_report_write(const rep_report *r, const char *dir, eng_error *err)
+{
+    eng_result res = rep_mkdirs(dir, err);
+    if (res != ENG_OK)
+        return res;
+    char *json = rep_report_json(r);
+    char *txt = rep_report_text(r, 0);
+    char *jp = rep_path_join(dir, "report.json");
+    char *tp = rep_path_join(dir, "report.txt");
+    res = rep_write_atomic(jp, json, strlen(json), err);
+    if (res == ENG_OK)
+        res = rep_write_atomic(tp, txt, strlen(txt), err);
+    free(jp);
+    free(tp);
+    free(json);
+    free(txt);
+    return res;
+}

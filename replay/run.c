@@ -1,0 +1,373 @@
+/* run.c — the run reader: a run folder's manifest.json, parsed and checked, and its frame
+ * files, decoded and checked against it.
+ *
+ * Replay must never compare a file it cannot trust, so everything a run claims is verified
+ * before use: the manifest says the run is complete, lists as many frames as frame_count, in
+ * order, each with a file name that stays inside the run folder, and buffers whose sizes are
+ * bounded (a lying width × height × channels could otherwise ask for terabytes). A decoded
+ * frame must hold exactly the listed parts, with the listed sizes and channel sets, and each
+ * part's content digest (eng_buffer_digest over the decoded floats) must equal the manifest's:
+ * a mismatch is a corrupt or tampered file. Keys the reader does not use (tool, settings, gl,
+ * ...) are left alone so the capture module can grow the manifest. rep_run owns every string
+ * it holds and is freed whole by rep_run_close.
+ */
+#define _POSIX_C_SOURCE 200809L
+
+#include "rep_internal.h"
+
+#include <cjson/cJSON.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define MAX_DIM 65536
+
+/* Reads an integral number in [lo, hi] from obj[key]. */
+static eng_result get_int(const char *file, const char *where, const cJSON *obj, const char *key,
+                          double lo, double hi, int64_t *out, eng_error *err)
+{
+    const cJSON *v = cJSON_GetObjectItemCaseSensitive(obj, key);
+    if (!v)
+        return eng_fail(err, ENG_ERR_INVALID, "%s: %s: missing \"%s\"", file, where, key);
+    double d = v->valuedouble;
+    if (!cJSON_IsNumber(v) || !isfinite(d) || d != floor(d) || d < lo || d > hi)
+        return eng_fail(err, ENG_ERR_INVALID, "%s: %s: \"%s\" must be an integer in [%.0f, %.0f]", file,
+                        where, key, lo, hi);
+    *out = (int64_t)d;
+    return ENG_OK;
+}
+
+static const char *get_string(const cJSON *obj, const char *key)
+{
+    const cJSON *v = cJSON_GetObjectItemCaseSensitive(obj, key);
+    return cJSON_IsString(v) && v->valuestring ? v->valuestring : NULL;
+}
+
+static int is_digest(const char *s)
+{
+    if (strlen(s) != 32)
+        return 0;
+    for (; *s; s++)
+        if (!((*s >= '0' && *s <= '9') || (*s >= 'a' && *s <= 'f')))
+            return 0;
+    return 1;
+}
+
+/* A frame file must name something inside the run folder. */
+static int is_safe_relative(const char *f)
+{
+    if (!f[0] || f[0] == '/' || strchr(f, '\\'))
+        return 0;
+    for (const char *p = f; *p;) {
+        const char *e = strchr(p, '/');
+        size_t n = e ? (size_t)(e - p) : strlen(p);
+        if (n == 0 || (n == 1 && p[0] == '.') || (n == 2 && p[0] == '.' && p[1] == '.'))
+            return 0;
+        p += n + (e ? 1 : 0);
+        if (e && !*p)
+            return 0;
+    }
+    return 1;
+}
+
+static void free_buffer(rep_buffer_info *b)
+{
+    free(b->name);
+    for (int c = 0; c < ENG_MAX_CHANNELS; c++)
+        free(b->channels[c]);
+}
+
+void rep_run_close(rep_run *run)
+{
+    if (!run)
+        return;
+    for (int i = 0; i < run->frame_count; i++) {
+        rep_frame_info *f = &run->frames[i];
+        for (int j = 0; j < f->buffer_count; j++)
+            free_buffer(&f->buffers[j]);
+        free(f->buffers);
+        free(f->file);
+        free(f->path);
+    }
+    free(run->frames);
+    free(run->sequence_name);
+    free(run->manifest_path);
+    free(run->dir);
+    free(run);
+}
+
+int rep_frame_find(const rep_frame_info *f, const char *name)
+{
+    for (int j = 0; j < f->buffer_count; j++)
+        if (strcmp(f->buffers[j].name, name) == 0)
+            return j;
+    return -1;
+}
+
+static eng_result parse_buffer(const char *mf, const char *where, const cJSON *jb, rep_buffer_info *b,
+                               eng_error *err)
+{
+    if (!cJSON_IsObject(jb))
+        return eng_fail(err, ENG_ERR_INVALID, "%s: %s: not an object", mf, where);
+    const char *name = get_string(jb, "name");
+    if (!name || !name[0])
+        return eng_fail(err, ENG_ERR_INVALID, "%s: %s: \"name\" must be a non-empty string", mf, where);
+    b->name = rep_xstrdup(name);
+    int64_t w, h;
+    eng_result r;
+    if ((r = get_int(mf, where, jb, "width", 1, MAX_DIM, &w, err)) != ENG_OK ||
+        (r = get_int(mf, where, jb, "height", 1, MAX_DIM, &h, err)) != ENG_OK)
+        return r;
+    b->width = (int)w;
+    b->height = (int)h;
+    const cJSON *ch = cJSON_GetObjectItemCaseSensitive(jb, "channels");
+    int n = cJSON_IsArray(ch) ? cJSON_GetArraySize(ch) : 0;
+    if (n < 1 || n > ENG_MAX_CHANNELS)
+        return eng_fail(err, ENG_ERR_INVALID, "%s: %s (%s): \"channels\" must list 1 to %d names", mf, where,
+                        name, ENG_MAX_CHANNELS);
+    for (int c = 0; c < n; c++) {
+        const cJSON *cn = cJSON_GetArrayItem(ch, c);
+        if (!cJSON_IsString(cn) || !cn->valuestring[0])
+            return eng_fail(err, ENG_ERR_INVALID, "%s: %s (%s): channel %d is not a non-empty string", mf,
+                            where, name, c);
+        for (int k = 0; k < c; k++)
+            if (strcmp(b->channels[k], cn->valuestring) == 0)
+                return eng_fail(err, ENG_ERR_INVALID, "%s: %s (%s): channel \"%s\" listed twice", mf, where,
+                                name, cn->valuestring);
+        b->channels[c] = rep_xstrdup(cn->valuestring);
+        b->channel_count = c + 1;
+    }
+    if ((size_t)w * (size_t)h * (size_t)n > REP_MAX_FLOATS)
+        return eng_fail(err, ENG_ERR_INVALID, "%s: %s (%s): %lldx%lldx%d floats, more than the %zu allowed", mf,
+                        where, name, (long long)w, (long long)h, n, REP_MAX_FLOATS);
+    const char *dg = get_string(jb, "digest");
+    if (!dg || !is_digest(dg))
+        return eng_fail(err, ENG_ERR_INVALID, "%s: %s (%s): \"digest\" must be 32 lowercase hex digits", mf,
+                        where, name);
+    memcpy(b->digest, dg, 33);
+    if (cJSON_GetObjectItemCaseSensitive(jb, "nan") || cJSON_GetObjectItemCaseSensitive(jb, "inf")) {
+        int64_t nn, ni;
+        double cap = (double)w * (double)h * (double)n;
+        if ((r = get_int(mf, where, jb, "nan", 0, cap, &nn, err)) != ENG_OK ||
+            (r = get_int(mf, where, jb, "inf", 0, cap, &ni, err)) != ENG_OK)
+            return r;
+        b->nan = (uint64_t)nn;
+        b->inf = (uint64_t)ni;
+        b->has_nonfinite_counts = 1;
+    }
+    return ENG_OK;
+}
+
+static eng_result parse_frame(rep_run *run, int i, const cJSON *jf, eng_error *err)
+{
+    const char *mf = run->manifest_path;
+    rep_frame_info *f = &run->frames[i];
+    char where[96];
+    snprintf(where, sizeof where, "frames[%d]", i);
+    if (!cJSON_IsObject(jf))
+        return eng_fail(err, ENG_ERR_INVALID, "%s: %s: not an object", mf, where);
+    int64_t idx;
+    eng_result r = get_int(mf, where, jf, "index", 0, 1e9, &idx, err);
+    if (r != ENG_OK)
+        return r;
+    if (idx != i)
+        return eng_fail(err, ENG_ERR_INVALID, "%s: %s: \"index\" is %lld, expected %d (frames out of order)",
+                        mf, where, (long long)idx, i);
+    f->index = i;
+    const cJSON *t = cJSON_GetObjectItemCaseSensitive(jf, "time");
+    if (t && (!cJSON_IsNumber(t) || !isfinite(t->valuedouble)))
+        return eng_fail(err, ENG_ERR_INVALID, "%s: %s: \"time\" must be a finite number", mf, where);
+    f->time = t ? t->valuedouble : 0.0;
+    const char *file = get_string(jf, "file");
+    if (!file || !is_safe_relative(file))
+        return eng_fail(err, ENG_ERR_INVALID,
+                        "%s: %s: \"file\" must be a relative path inside the run folder", mf, where);
+    f->file = rep_xstrdup(file);
+    f->path = rep_path_join(run->dir, file);
+    const cJSON *jbs = cJSON_GetObjectItemCaseSensitive(jf, "buffers");
+    if (!cJSON_IsArray(jbs))
+        return eng_fail(err, ENG_ERR_INVALID, "%s: %s: \"buffers\" must be an array", mf, where);
+    int n = cJSON_GetArraySize(jbs);
+    if (n < 1 || n > REP_MAX_PARTS)
+        return eng_fail(err, ENG_ERR_INVALID, "%s: %s: %d buffers, expected 1 to %d", mf, where, n,
+                        REP_MAX_PARTS);
+    f->buffers = rep_xcalloc((size_t)n, sizeof *f->buffers);
+    for (int j = 0; j < n; j++) {
+        char bw[128];
+        snprintf(bw, sizeof bw, "%s.buffers[%d]", where, j);
+        f->buffer_count = j + 1;
+        if ((r = parse_buffer(mf, bw, cJSON_GetArrayItem(jbs, j), &f->buffers[j], err)) != ENG_OK)
+            return r;
+        for (int k = 0; k < j; k++)
+            if (strcmp(f->buffers[k].name, f->buffers[j].name) == 0)
+                return eng_fail(err, ENG_ERR_INVALID, "%s: %s: buffer \"%s\" listed twice", mf, where,
+                                f->buffers[j].name);
+    }
+    if (!rep_is_file(f->path))
+        return eng_fail(err, ENG_ERR_IO, "%s: frame %d's file is missing (listed in %s)", f->path, i, mf);
+    return ENG_OK;
+}
+
+static eng_result parse_manifest(rep_run *run, const cJSON *root, eng_error *err)
+{
+    const char *mf = run->manifest_path;
+    if (!cJSON_IsObject(root))
+        return eng_fail(err, ENG_ERR_INVALID, "%s: not a JSON object", mf);
+    const char *format = get_string(root, "format");
+    if (!format || strcmp(format, "ispm-run") != 0)
+        return eng_fail(err, ENG_ERR_INVALID, "%s: \"format\" is not \"ispm-run\"", mf);
+    int64_t version;
+    eng_result r = get_int(mf, "top level", root, "format_version", 0, 1e9, &version, err);
+    if (r != ENG_OK)
+        return r;
+    if (version != 1)
+        return eng_fail(err, ENG_ERR_UNSUPPORTED, "%s: format_version %lld, this replay reads 1", mf,
+                        (long long)version);
+    if (!cJSON_IsTrue(cJSON_GetObjectItemCaseSensitive(root, "complete")))
+        return eng_fail(err, ENG_ERR_INVALID, "%s: run is incomplete (\"complete\" is not true)", mf);
+    const cJSON *res = cJSON_GetObjectItemCaseSensitive(root, "resolution");
+    if (res) {
+        const cJSON *w = cJSON_GetArrayItem(res, 0), *h = cJSON_GetArrayItem(res, 1);
+        if (!cJSON_IsArray(res) || cJSON_GetArraySize(res) != 2 || !cJSON_IsNumber(w) || !cJSON_IsNumber(h) ||
+            w->valuedouble < 1 || w->valuedouble > MAX_DIM || h->valuedouble < 1 || h->valuedouble > MAX_DIM)
+            return eng_fail(err, ENG_ERR_INVALID, "%s: \"resolution\" must be [width, height]", mf);
+        run->width = (int)w->valuedouble;
+        run->height = (int)h->valuedouble;
+    }
+    const cJSON *seq = cJSON_GetObjectItemCaseSensitive(root, "sequence");
+    const char *sname = cJSON_IsObject(seq) ? get_string(seq, "name") : NULL;
+    if (sname)
+        run->sequence_name = rep_xstrdup(sname);
+    int64_t fc;
+    if ((r = get_int(mf, "top level", root, "frame_count", 1, 1e7, &fc, err)) != ENG_OK)
+        return r;
+    const cJSON *frames = cJSON_GetObjectItemCaseSensitive(root, "frames");
+    if (!cJSON_IsArray(frames))
+        return eng_fail(err, ENG_ERR_INVALID, "%s: \"frames\" must be an array", mf);
+    int n = cJSON_GetArraySize(frames);
+    if (n != fc)
+        return eng_fail(err, ENG_ERR_INVALID, "%s: frame_count is %lld but %d frames are listed", mf,
+                        (long long)fc, n);
+    run->frames = rep_xcalloc((size_t)n, sizeof *run->frames);
+    const cJSON *jf = frames->child;
+    for (int i = 0; i < n; i++, jf = jf->next) {
+        run->frame_count = i + 1;
+        if ((r = parse_frame(run, i, jf, err)) != ENG_OK)
+            return r;
+    }
+    return ENG_OK;
+}
+
+eng_result rep_run_open(const char *dir, rep_run **out, eng_error *err)
+{
+    *out = NULL;
+    if (!rep_is_dir(dir))
+        return eng_fail(err, ENG_ERR_IO, "%s: run folder does not exist", dir);
+    rep_run *run = rep_xcalloc(1, sizeof *run);
+    run->dir = rep_xstrdup(dir);
+    run->manifest_path = rep_path_join(dir, "manifest.json");
+    char *text = NULL;
+    size_t len = 0;
+    eng_result r = eng_read_file(run->manifest_path, REP_MAX_JSON_BYTES, &text, &len, err);
+    if (r != ENG_OK) {
+        if (!rep_is_file(run->manifest_path))
+            r = eng_fail(err, ENG_ERR_IO, "%s: missing: the run is incomplete or not a run", run->manifest_path);
+        rep_run_close(run);
+        return r;
+    }
+    const char *end = NULL;
+    cJSON *root = cJSON_ParseWithLengthOpts(text, len, &end, 0);
+    if (!root) {
+        size_t at = end && end >= text ? (size_t)(end - text) : 0;
+        r = eng_fail(err, ENG_ERR_PARSE, "%s: byte %zu: not valid JSON", run->manifest_path, at);
+    } else {
+        r = parse_manifest(run, root, err);
+    }
+    cJSON_Delete(root);
+    free(text);
+    if (r != ENG_OK) {
+        rep_run_close(run);
+        return r;
+    }
+    *out = run;
+    return ENG_OK;
+}
+
+/* Does the decoded part have exactly the manifest's channel set? */
+static int same_channels(const rep_part *p, const rep_buffer_info *b)
+{
+    if (p->channel_count != b->channel_count)
+        return 0;
+    for (int c = 0; c < b->channel_count; c++) {
+        int found = 0;
+        for (int k = 0; k < p->channel_count && !found; k++)
+            found = strcmp(p->channels[k], b->channels[c]) == 0;
+        if (!found)
+            return 0;
+    }
+    return 1;
+}
+
+static eng_result verify_part(const char *path, const rep_part *p, const rep_buffer_info *b, eng_error *err)
+{
+    if (p->width != b->width || p->height != b->height)
+        return eng_fail(err, ENG_ERR_INVALID, "%s: part %s: %dx%d in the file, %dx%d in the manifest", path,
+                        p->name, p->width, p->height, b->width, b->height);
+    if (!same_channels(p, b))
+        return eng_fail(err, ENG_ERR_INVALID, "%s: part %s: channels differ from the manifest's", path, p->name);
+    eng_buffer view = rep_part_buffer(p);
+    char dg[40];
+    eng_buffer_digest(&view, dg);
+    if (strcmp(dg, b->digest) != 0)
+        return eng_fail(err, ENG_ERR_INVALID,
+                        "%s: part %s: decoded digest %s does not match the manifest's %s (corrupt or tampered file)",
+                        path, p->name, dg, b->digest);
+    if (b->has_nonfinite_counts) {
+        uint64_t nn, ni;
+        eng_buffer_nonfinite(&view, &nn, &ni, NULL, NULL);
+        if (nn != b->nan || ni != b->inf)
+            return eng_fail(err, ENG_ERR_INVALID,
+                            "%s: part %s: %llu NaN and %llu Inf decoded, the manifest says %llu and %llu", path,
+                            p->name, (unsigned long long)nn, (unsigned long long)ni,
+                            (unsigned long long)b->nan, (unsigned long long)b->inf);
+    }
+    return ENG_OK;
+}
+
+eng_result rep_run_read_frame(const rep_run *run, int frame, rep_part **out, eng_error *err)
+{
+    *out = NULL;
+    const rep_frame_info *f = &run->frames[frame];
+    rep_part *parts = NULL;
+    int count = 0;
+    eng_result r = rep_oiio_read_parts(f->path, REP_MAX_FLOATS, &parts, &count, err);
+    if (r != ENG_OK)
+        return r;
+    rep_part *sorted = rep_xcalloc((size_t)f->buffer_count, sizeof *sorted);
+    int *taken = rep_xcalloc((size_t)f->buffer_count, sizeof *taken);
+    for (int k = 0; k < count && r == ENG_OK; k++) {
+        int j = rep_frame_find(f, parts[k].name);
+        if (j < 0)
+            r = eng_fail(err, ENG_ERR_INVALID, "%s: part %s is not listed in %s", f->path, parts[k].name,
+                         run->manifest_path);
+        else if (taken[j])
+            r = eng_fail(err, ENG_ERR_INVALID, "%s: part %s appears twice", f->path, parts[k].name);
+        else if ((r = verify_part(f->path, &parts[k], &f->buffers[j], err)) == ENG_OK) {
+            taken[j] = 1;
+            sorted[j] = parts[k];
+            memset(&parts[k], 0, sizeof parts[k]);
+        }
+    }
+    for (int j = 0; j < f->buffer_count && r == ENG_OK; j++)
+        if (!taken[j])
+            r = eng_fail(err, ENG_ERR_INVALID, "%s: part %s, listed in %s, is missing", f->path,
+                         f->buffers[j].name, run->manifest_path);
+    rep_parts_free(parts, count);
+    free(taken);
+    if (r != ENG_OK) {
+        rep_parts_free(sorted, f->buffer_count);
+        return r;
+    }
+    *out = sorted;
+    return ENG_OK;
+}

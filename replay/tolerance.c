@@ -1,0 +1,185 @@
+/* tolerance.c — tolerances.json: how far each buffer of a run may stray from its golden.
+ *
+ * The keys follow idiff's options (-warn/-fail/-failrelative/-failpercent/-hardfail, and the
+ * warn twins) plus "exact" (bit-identical or fail) and RMSE limits. A file has a "default"
+ * block and an ordered "buffers" list of rules, each with an fnmatch "match" pattern; the
+ * first rule that matches a buffer name wins, keys it leaves out come from "default", and
+ * keys "default" leaves out from the built-in defaults. The file is validated strictly: a
+ * typo'd key or a negative threshold silently falling back to a default would make a
+ * regression test pass that should fail. rep_tolerances owns its patterns and path.
+ */
+#define _POSIX_C_SOURCE 200809L
+
+#include "rep_internal.h"
+
+#include <cjson/cJSON.h>
+#include <fnmatch.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+static const char *const KEYS[] = {"warn", "warnrelative", "warnpercent", "hardwarn", "fail", "failrelative",
+                                   "failpercent", "hardfail", "rmse_warn", "rmse_fail"};
+#define KEY_COUNT (sizeof KEYS / sizeof KEYS[0])
+
+static double *field(rep_tol *t, size_t k)
+{
+    double *f[KEY_COUNT] = {&t->warn, &t->warnrelative, &t->warnpercent, &t->hardwarn, &t->fail,
+                            &t->failrelative, &t->failpercent, &t->hardfail, &t->rmse_warn, &t->rmse_fail};
+    return f[k];
+}
+
+void rep_tol_builtin(rep_tol *t)
+{
+    memset(t, 0, sizeof *t);
+    t->warn = 0;
+    t->warnrelative = 0;
+    t->warnpercent = 0;
+    t->hardwarn = INFINITY;
+    t->fail = 1e-4;
+    t->failrelative = 1e-4;
+    t->failpercent = 0;
+    t->hardfail = 1e-2;
+    t->rmse_warn = INFINITY;
+    t->rmse_fail = INFINITY;
+}
+
+/* Overrides t with the keys of one JSON block. allow_match: the block is a rule. */
+static eng_result parse_block(const char *path, const char *where, const cJSON *obj, rep_tol *t,
+                              int allow_match, eng_error *err)
+{
+    if (!cJSON_IsObject(obj))
+        return eng_fail(err, ENG_ERR_INVALID, "%s: %s: must be an object", path, where);
+    for (const cJSON *v = obj->child; v; v = v->next) {
+        const char *key = v->string;
+        if (allow_match && strcmp(key, "match") == 0)
+            continue;
+        if (strcmp(key, "exact") == 0) {
+            if (!cJSON_IsBool(v))
+                return eng_fail(err, ENG_ERR_INVALID, "%s: %s: \"exact\" must be true or false", path, where);
+            t->exact = cJSON_IsTrue(v);
+            continue;
+        }
+        size_t k = 0;
+        while (k < KEY_COUNT && strcmp(KEYS[k], key) != 0)
+            k++;
+        if (k == KEY_COUNT)
+            return eng_fail(err, ENG_ERR_INVALID, "%s: %s: unknown key \"%s\"", path, where, key);
+        if (!cJSON_IsNumber(v) || !isfinite(v->valuedouble) || v->valuedouble < 0)
+            return eng_fail(err, ENG_ERR_INVALID, "%s: %s: \"%s\" must be a finite number >= 0", path, where,
+                            key);
+        *field(t, k) = v->valuedouble;
+    }
+    return ENG_OK;
+}
+
+void rep_tol_free(rep_tolerances *t)
+{
+    if (!t)
+        return;
+    for (int i = 0; i < t->rule_count; i++)
+        free(t->rules[i].match);
+    free(t->rules);
+    free(t->path);
+    free(t);
+}
+
+static eng_result parse_root(const char *path, const cJSON *root, rep_tolerances *t, eng_error *err)
+{
+    if (!cJSON_IsObject(root))
+        return eng_fail(err, ENG_ERR_INVALID, "%s: must be a JSON object", path);
+    for (const cJSON *v = root->child; v; v = v->next)
+        if (strcmp(v->string, "default") != 0 && strcmp(v->string, "buffers") != 0)
+            return eng_fail(err, ENG_ERR_INVALID, "%s: unknown key \"%s\"", path, v->string);
+    const cJSON *def = cJSON_GetObjectItemCaseSensitive(root, "default");
+    eng_result r;
+    if (def && (r = parse_block(path, "default", def, &t->def, 0, err)) != ENG_OK)
+        return r;
+    const cJSON *rules = cJSON_GetObjectItemCaseSensitive(root, "buffers");
+    if (!rules)
+        return ENG_OK;
+    if (!cJSON_IsArray(rules))
+        return eng_fail(err, ENG_ERR_INVALID, "%s: \"buffers\" must be an array", path);
+    int n = cJSON_GetArraySize(rules);
+    t->rules = rep_xcalloc((size_t)n, sizeof *t->rules);
+    int i = 0;
+    for (const cJSON *jr = rules->child; jr; jr = jr->next, i++) {
+        char where[64];
+        snprintf(where, sizeof where, "buffers[%d]", i);
+        const cJSON *m = cJSON_GetObjectItemCaseSensitive(jr, "match");
+        if (!cJSON_IsString(m) || !m->valuestring[0])
+            return eng_fail(err, ENG_ERR_INVALID, "%s: %s: \"match\" must be a non-empty pattern", path, where);
+        rep_tol_rule *rule = &t->rules[t->rule_count++];
+        rule->match = rep_xstrdup(m->valuestring);
+        rule->tol = t->def;
+        if ((r = parse_block(path, where, jr, &rule->tol, 1, err)) != ENG_OK)
+            return r;
+    }
+    return ENG_OK;
+}
+
+eng_result rep_tol_parse(const char *path, const char *json, size_t len, rep_tolerances **out, eng_error *err)
+{
+    *out = NULL;
+    rep_tolerances *t = rep_xcalloc(1, sizeof *t);
+    rep_tol_builtin(&t->def);
+    const char *end = NULL;
+    cJSON *root = cJSON_ParseWithLengthOpts(json, len, &end, 0);
+    eng_result r;
+    if (!root) {
+        size_t at = end && end >= json ? (size_t)(end - json) : 0;
+        r = eng_fail(err, ENG_ERR_PARSE, "%s: byte %zu: not valid JSON", path, at);
+    } else {
+        r = parse_root(path, root, t, err);
+    }
+    cJSON_Delete(root);
+    if (r != ENG_OK) {
+        rep_tol_free(t);
+        return r;
+    }
+    t->path = rep_xstrdup(path);
+    *out = t;
+    return ENG_OK;
+}
+
+eng_result rep_tol_load(const char *path, int missing_ok, rep_tolerances **out, eng_error *err)
+{
+    *out = NULL;
+    if (missing_ok && !rep_is_file(path) && !rep_is_dir(path)) {
+        rep_tolerances *t = rep_xcalloc(1, sizeof *t);
+        rep_tol_builtin(&t->def);
+        *out = t;
+        return ENG_OK;
+    }
+    char *text = NULL;
+    size_t len = 0;
+    eng_result r = eng_read_file(path, REP_MAX_JSON_BYTES, &text, &len, err);
+    if (r != ENG_OK)
+        return r;
+    r = rep_tol_parse(path, text, len, out, err);
+    free(text);
+    return r;
+}
+
+const char *rep_tol_lookup(const rep_tolerances *t, const char *buffer, rep_tol *out)
+{
+    for (int i = 0; i < t->rule_count; i++)
+        if (fnmatch(t->rules[i].match, buffer, 0) == 0) {
+            *out = t->rules[i].tol;
+            return t->rules[i].match;
+        }
+    *out = t->def;
+    return "default";
+}
+
+char *rep_tol_default_json(void)
+{
+    rep_tol d;
+    rep_tol_builtin(&d);
+    return rep_xprintf("{\n"
+                       "  \"default\": {\"warn\": %g, \"fail\": %g, \"failrelative\": %g, \"failpercent\": %g, "
+                       "\"hardfail\": %g},\n"
+                       "  \"buffers\": []\n"
+                       "}\n",
+                       d.warn, d.fail, d.failrelative, d.failpercent, d.hardfail);
+}

@@ -1,0 +1,247 @@
+/* util.c — the replay module's plumbing: allocation that ends the process when memory runs out
+ * (the one out-of-memory hook, as in ispm_core), path joining, a growing string, and the file
+ * operations bless and the report writer need to be atomic: mkdir -p, write-then-rename, copy
+ * with fsync, and rm -rf that never follows a symbolic link out of the tree it removes.
+ */
+#define _XOPEN_SOURCE 700
+
+#include "rep_internal.h"
+
+#include <errno.h>
+#include <fcntl.h>
+#include <ftw.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+static void oom(void)
+{
+    fprintf(stderr, "ispm: out of memory\n");
+    abort();
+}
+
+void *rep_xmalloc(size_t n)
+{
+    void *p = malloc(n ? n : 1);
+    if (!p)
+        oom();
+    return p;
+}
+
+void *rep_xcalloc(size_t n, size_t size)
+{
+    void *p = calloc(n ? n : 1, size ? size : 1);
+    if (!p)
+        oom();
+    return p;
+}
+
+void *rep_xrealloc(void *p, size_t n)
+{
+    void *q = realloc(p, n ? n : 1);
+    if (!q)
+        oom();
+    return q;
+}
+
+char *rep_xstrdup(const char *s)
+{
+    size_t n = strlen(s) + 1;
+    char *p = rep_xmalloc(n);
+    memcpy(p, s, n);
+    return p;
+}
+
+static char *vxprintf(const char *fmt, va_list ap)
+{
+    va_list aq;
+    va_copy(aq, ap);
+    int n = vsnprintf(NULL, 0, fmt, aq);
+    va_end(aq);
+    if (n < 0)
+        n = 0;
+    char *p = rep_xmalloc((size_t)n + 1);
+    vsnprintf(p, (size_t)n + 1, fmt, ap);
+    return p;
+}
+
+char *rep_xprintf(const char *fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    char *p = vxprintf(fmt, ap);
+    va_end(ap);
+    return p;
+}
+
+char *rep_path_join(const char *dir, const char *name)
+{
+    size_t n = strlen(dir);
+    if (n > 0 && dir[n - 1] == '/')
+        return rep_xprintf("%s%s", dir, name);
+    return rep_xprintf("%s/%s", dir, name);
+}
+
+void rep_sb_printf(rep_sb *sb, const char *fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    char *p = vxprintf(fmt, ap);
+    va_end(ap);
+    size_t n = strlen(p);
+    if (sb->len + n + 1 > sb->cap) {
+        size_t cap = sb->cap ? sb->cap : 256;
+        while (cap < sb->len + n + 1)
+            cap *= 2;
+        sb->s = rep_xrealloc(sb->s, cap);
+        sb->cap = cap;
+    }
+    memcpy(sb->s + sb->len, p, n + 1);
+    sb->len += n;
+    free(p);
+}
+
+int rep_is_file(const char *path)
+{
+    struct stat st;
+    return stat(path, &st) == 0 && S_ISREG(st.st_mode);
+}
+
+int rep_is_dir(const char *path)
+{
+    struct stat st;
+    return stat(path, &st) == 0 && S_ISDIR(st.st_mode);
+}
+
+eng_result rep_mkdirs(const char *path, eng_error *err)
+{
+    if (!path[0])
+        return eng_fail(err, ENG_ERR_IO, "cannot create a folder with an empty name");
+    char *p = rep_xstrdup(path);
+    for (char *s = p + 1; ; s++) {
+        int end = *s == 0;
+        if (*s == '/' || end) {
+            *s = 0;
+            if (p[0] && mkdir(p, 0777) != 0 && errno != EEXIST) {
+                eng_result r = eng_fail(err, ENG_ERR_IO, "%s: cannot create folder: %s", p, strerror(errno));
+                free(p);
+                return r;
+            }
+            if (end)
+                break;
+            *s = '/';
+        }
+    }
+    eng_result r = ENG_OK;
+    if (!rep_is_dir(path))
+        r = eng_fail(err, ENG_ERR_IO, "%s: not a folder", path);
+    free(p);
+    return r;
+}
+
+/* Writes len bytes to an already open descriptor and syncs it; closes fd in every case. */
+static eng_result write_all(int fd, const char *path, const char *data, size_t len, eng_error *err)
+{
+    size_t done = 0;
+    while (done < len) {
+        ssize_t w = write(fd, data + done, len - done);
+        if (w < 0) {
+            if (errno == EINTR)
+                continue;
+            int e = errno;
+            close(fd);
+            return eng_fail(err, ENG_ERR_IO, "%s: cannot write: %s", path, strerror(e));
+        }
+        done += (size_t)w;
+    }
+    if (fsync(fd) != 0) {
+        int e = errno;
+        close(fd);
+        return eng_fail(err, ENG_ERR_IO, "%s: cannot sync: %s", path, strerror(e));
+    }
+    if (close(fd) != 0)
+        return eng_fail(err, ENG_ERR_IO, "%s: cannot close: %s", path, strerror(errno));
+    return ENG_OK;
+}
+
+eng_result rep_write_atomic(const char *path, const char *data, size_t len, eng_error *err)
+{
+    char *tmp = rep_xprintf("%s.tmp", path);
+    int fd = open(tmp, O_WRONLY | O_CREAT | O_TRUNC, 0666);
+    if (fd < 0) {
+        eng_result r = eng_fail(err, ENG_ERR_IO, "%s: cannot create: %s", tmp, strerror(errno));
+        free(tmp);
+        return r;
+    }
+    eng_result r = write_all(fd, tmp, data, len, err);
+    if (r == ENG_OK && rename(tmp, path) != 0)
+        r = eng_fail(err, ENG_ERR_IO, "%s: cannot rename into place: %s", path, strerror(errno));
+    if (r != ENG_OK)
+        unlink(tmp);
+    free(tmp);
+    return r;
+}
+
+eng_result rep_copy_file(const char *src, const char *dst, eng_error *err)
+{
+    int in = open(src, O_RDONLY);
+    if (in < 0)
+        return eng_fail(err, ENG_ERR_IO, "%s: cannot open: %s", src, strerror(errno));
+    int out = open(dst, O_WRONLY | O_CREAT | O_TRUNC, 0666);
+    if (out < 0) {
+        int e = errno;
+        close(in);
+        return eng_fail(err, ENG_ERR_IO, "%s: cannot create: %s", dst, strerror(e));
+    }
+    char buf[1 << 16];
+    for (;;) {
+        ssize_t n = read(in, buf, sizeof buf);
+        if (n < 0 && errno == EINTR)
+            continue;
+        if (n < 0) {
+            int e = errno;
+            close(in);
+            close(out);
+            return eng_fail(err, ENG_ERR_IO, "%s: cannot read: %s", src, strerror(e));
+        }
+        if (n == 0)
+            break;
+        size_t done = 0;
+        while (done < (size_t)n) {
+            ssize_t w = write(out, buf + done, (size_t)n - done);
+            if (w < 0 && errno == EINTR)
+                continue;
+            if (w < 0) {
+                int e = errno;
+                close(in);
+                close(out);
+                return eng_fail(err, ENG_ERR_IO, "%s: cannot write: %s", dst, strerror(e));
+            }
+            done += (size_t)w;
+        }
+    }
+    close(in);
+    return write_all(out, dst, NULL, 0, err);
+}
+
+static int remove_one(const char *path, const struct stat *st, int flag, struct FTW *ftw)
+{
+    (void)st;
+    (void)ftw;
+    int rc = (flag == FTW_DP) ? rmdir(path) : unlink(path);
+    return rc != 0 && errno != ENOENT ? -1 : 0;
+}
+
+eng_result rep_remove_tree(const char *path, eng_error *err)
+{
+    struct stat st;
+    if (lstat(path, &st) != 0)
+        return errno == ENOENT ? ENG_OK : eng_fail(err, ENG_ERR_IO, "%s: %s", path, strerror(errno));
+    if (!S_ISDIR(st.st_mode))
+        return unlink(path) == 0 ? ENG_OK : eng_fail(err, ENG_ERR_IO, "%s: cannot remove: %s", path, strerror(errno));
+    if (nftw(path, remove_one, 32, FTW_DEPTH | FTW_PHYS) != 0)
+        return eng_fail(err, ENG_ERR_IO, "%s: cannot remove: %s", path, strerror(errno));
+    return ENG_OK;
+}

@@ -1,0 +1,49 @@
+#!/usr/bin/env bash
+# The CLI contract: --help everywhere, one-line errors naming the file for bad input, exit
+# codes a CI script can trust, and no run that looks complete after a failure (disk full).
+# usage: e2e_cli.sh ISPM SOURCE_DIR WORK_DIR
+set -u
+ISPM=$1; SRC=$2; WORK=$3
+SEQ=$SRC/scenes/cornell-box/cornell-box-ci.json
+fail() { echo "FAIL: $*"; exit 1; }
+rm -rf "$WORK"; mkdir -p "$WORK"
+
+for c in record replay bless; do
+  "$ISPM" $c --help > "$WORK/help.txt" || fail "$c --help exited $?"
+  grep -q "usage: ispm $c" "$WORK/help.txt" || fail "$c --help prints no usage"
+done
+"$ISPM" --help > /dev/null || fail "--help"
+"$ISPM" frobnicate > /dev/null 2>&1; [ $? -eq 2 ] || fail "unknown command must exit 2"
+"$ISPM" record "$SEQ" > /dev/null 2>&1; [ $? -eq 2 ] || fail "record without -o must exit 2"
+
+# expect_input_error FILE: record exits 2 with exactly one line on stderr naming FILE.
+expect_input_error() {
+  "$ISPM" record "$1" -o "$WORK/bad" --quiet 2> "$WORK/err.txt"; rc=$?
+  [ $rc -eq 2 ] || fail "record $1: exit $rc, want 2"
+  [ "$(wc -l < "$WORK/err.txt")" -eq 1 ] || { cat "$WORK/err.txt"; fail "record $1: want one error line"; }
+  grep -qF "$(basename "$1")" "$WORK/err.txt" || { cat "$WORK/err.txt"; fail "error does not name $1"; }
+  [ ! -f "$WORK/bad/manifest.json" ] || fail "a manifest was written for bad input"
+}
+expect_input_error "$WORK/missing.json"
+printf '{"scene": "x.gltf", "frames": 2,' > "$WORK/truncated.json"; expect_input_error "$WORK/truncated.json"
+sed 's/"frames": *[0-9]*/"frames": -3/' "$SEQ" > "$WORK/negative.json"; expect_input_error "$WORK/negative.json"
+printf '{"scene": "nowhere.gltf", "frames": 1, "fps": 8, "resolution": [8, 8], "camera": {"node": "Camera"}}' \
+  > "$WORK/noscene.json"; expect_input_error "$WORK/noscene.json"
+mkdir -p "$WORK/s"; printf '{"asset": {"version": "2.0"}, "nodes": [{"mesh": 7}]}' > "$WORK/s/bad.gltf"
+printf '{"scene": "bad.gltf", "frames": 1, "fps": 8, "resolution": [8, 8], "camera": {"node": "Camera"}}' \
+  > "$WORK/s/badscene.json"; expect_input_error "$WORK/s/badscene.json"
+
+# Disk full (a file-size limit): record fails with exit 1, says so, and leaves no manifest.
+( ulimit -f 200; "$ISPM" record "$SEQ" -o "$WORK/full" --quiet ) 2> "$WORK/full.err"; rc=$?
+[ $rc -eq 1 ] || { cat "$WORK/full.err"; fail "disk full: exit $rc, want 1"; }
+[ ! -f "$WORK/full/manifest.json" ] || fail "disk full: a manifest was written"
+"$ISPM" replay "$WORK/full" > /dev/null 2>&1; [ $? -eq 4 ] || fail "replay accepted an incomplete run"
+
+# An existing run is not overwritten without --force.
+"$ISPM" record "$SEQ" -o "$WORK/run" --quiet || fail "record"
+"$ISPM" record "$SEQ" -o "$WORK/run" --quiet 2> /dev/null; [ $? -ne 0 ] || fail "overwrote a run without --force"
+# bless refuses an incomplete run and accepts a complete one.
+"$ISPM" bless "$WORK/full" "$WORK/g1" > /dev/null 2>&1; [ $? -eq 2 ] || fail "bless accepted an incomplete run"
+"$ISPM" bless "$WORK/run" "$WORK/g2" > /dev/null || fail "bless"
+"$ISPM" replay "$WORK/run" --golden "$WORK/g2" > /dev/null || fail "replay against a fresh bless"
+echo "e2e_cli: ok"

@@ -1,0 +1,962 @@
+/* test_capture.c — Check suite for capture/: the multi-part EXR writer (read back through
+ * the OpenEXR C decode path, bit-exact), the listener's run folder and manifest, the
+ * atomicity rules (no manifest before cap_finish, refusal to overwrite, old manifest removed
+ * first) and failure paths (file-size limit standing in for a full disk, bad buffers).
+ * Sequences, scenes and buffers are built by hand: no GL engine is involved. */
+#define _XOPEN_SOURCE 700
+
+#include "cap.h"
+#include "eng.h"
+
+#include <check.h>
+#include <cjson/cJSON.h>
+#include <openexr.h>
+
+#include <dirent.h>
+#include <errno.h>
+#include <float.h>
+#include <ftw.h>
+#include <math.h>
+#include <signal.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/resource.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+/* ---------------------------------------------------------------- helpers */
+
+static int rm_entry(const char *path, const struct stat *st, int flag, struct FTW *ftw)
+{
+    (void)st;
+    (void)flag;
+    (void)ftw;
+    return remove(path);
+}
+
+static void rm_rf(const char *dir)
+{
+    nftw(dir, rm_entry, 16, FTW_DEPTH | FTW_PHYS);
+}
+
+static char *make_tmpdir(char buf[256])
+{
+    snprintf(buf, 256, "/tmp/test_capture.XXXXXX");
+    ck_assert_ptr_nonnull(mkdtemp(buf));
+    return buf;
+}
+
+static int exists(const char *dir, const char *name)
+{
+    char p[512];
+    snprintf(p, sizeof p, "%s/%s", dir, name);
+    struct stat st;
+    return stat(p, &st) == 0;
+}
+
+/* Number of entries in dir whose name ends with suffix. */
+static int count_suffix(const char *dir, const char *suffix)
+{
+    DIR *d = opendir(dir);
+    if (!d)
+        return 0;
+    int n = 0;
+    struct dirent *e;
+    size_t m = strlen(suffix);
+    while ((e = readdir(d)) != NULL) {
+        size_t k = strlen(e->d_name);
+        if (k >= m && strcmp(e->d_name + k - m, suffix) == 0)
+            n++;
+    }
+    closedir(d);
+    return n;
+}
+
+static uint32_t bits(float f)
+{
+    uint32_t u;
+    memcpy(&u, &f, sizeof u);
+    return u;
+}
+
+static float from_bits(uint32_t u)
+{
+    float f;
+    memcpy(&f, &u, sizeof f);
+    return f;
+}
+
+/* One part as decoded from a file. Channels in file order (the EXR sorts them by name);
+ * data interleaved in that order, top row first. */
+typedef struct rd_part {
+    char name[128];
+    int width, height, channel_count;
+    char channels[ENG_MAX_CHANNELS][64];
+    exr_storage_t storage;
+    exr_compression_t compression;
+    exr_lineorder_t lineorder;
+    exr_attr_box2i_t display;
+    int32_t frame;   /* "ispm:frame", -1 if absent */
+    double time;     /* "ispm:time" */
+    float *data;
+} rd_part;
+
+static void quiet_exr(exr_const_context_t ctxt, exr_result_t code, const char *msg)
+{
+    (void)ctxt;
+    (void)code;
+    (void)msg;
+}
+
+/* Reads every part of an EXR through the C decode pipeline. Fails the test on any error. */
+static int read_exr(const char *path, rd_part **out)
+{
+    exr_context_initializer_t init = EXR_DEFAULT_CONTEXT_INITIALIZER;
+    init.error_handler_fn = quiet_exr;
+    exr_context_t ctxt = NULL;
+    ck_assert_int_eq(exr_start_read(&ctxt, path, &init), EXR_ERR_SUCCESS);
+    int count = 0;
+    ck_assert_int_eq(exr_get_count(ctxt, &count), EXR_ERR_SUCCESS);
+    rd_part *parts = calloc((size_t)count, sizeof *parts);
+    ck_assert_ptr_nonnull(parts);
+    for (int p = 0; p < count; p++) {
+        rd_part *rp = &parts[p];
+        const char *name = NULL;
+        ck_assert_int_eq(exr_get_name(ctxt, p, &name), EXR_ERR_SUCCESS);
+        snprintf(rp->name, sizeof rp->name, "%s", name ? name : "");
+        ck_assert_int_eq(exr_get_storage(ctxt, p, &rp->storage), EXR_ERR_SUCCESS);
+        ck_assert_int_eq(exr_get_compression(ctxt, p, &rp->compression), EXR_ERR_SUCCESS);
+        ck_assert_int_eq(exr_get_lineorder(ctxt, p, &rp->lineorder), EXR_ERR_SUCCESS);
+        if (exr_attr_get_int(ctxt, p, "ispm:frame", &rp->frame) != EXR_ERR_SUCCESS)
+            rp->frame = -1;
+        if (exr_attr_get_double(ctxt, p, "ispm:time", &rp->time) != EXR_ERR_SUCCESS)
+            rp->time = -1.0;
+        ck_assert_int_eq(exr_get_display_window(ctxt, p, &rp->display), EXR_ERR_SUCCESS);
+        exr_attr_box2i_t dw;
+        ck_assert_int_eq(exr_get_data_window(ctxt, p, &dw), EXR_ERR_SUCCESS);
+        ck_assert_int_eq(dw.min.x, 0);
+        ck_assert_int_eq(dw.min.y, 0);
+        rp->width = dw.max.x - dw.min.x + 1;
+        rp->height = dw.max.y - dw.min.y + 1;
+        const exr_attr_chlist_t *cl = NULL;
+        ck_assert_int_eq(exr_get_channels(ctxt, p, &cl), EXR_ERR_SUCCESS);
+        ck_assert_int_le(cl->num_channels, ENG_MAX_CHANNELS);
+        rp->channel_count = cl->num_channels;
+        for (int c = 0; c < cl->num_channels; c++) {
+            ck_assert_int_eq(cl->entries[c].pixel_type, EXR_PIXEL_FLOAT);
+            snprintf(rp->channels[c], sizeof rp->channels[c], "%s", cl->entries[c].name.str);
+        }
+        size_t nc = (size_t)rp->channel_count, row = (size_t)rp->width * nc;
+        rp->data = calloc(row * (size_t)rp->height, sizeof(float));
+        ck_assert_ptr_nonnull(rp->data);
+        int32_t lines = 0;
+        ck_assert_int_eq(exr_get_scanlines_per_chunk(ctxt, p, &lines), EXR_ERR_SUCCESS);
+        exr_decode_pipeline_t dec = EXR_DECODE_PIPELINE_INITIALIZER;
+        int inited = 0;
+        for (int y = 0; y < rp->height; y += lines) {
+            exr_chunk_info_t ci;
+            ck_assert_int_eq(exr_read_scanline_chunk_info(ctxt, p, y, &ci), EXR_ERR_SUCCESS);
+            if (inited)
+                ck_assert_int_eq(exr_decoding_update(ctxt, p, &ci, &dec), EXR_ERR_SUCCESS);
+            else
+                ck_assert_int_eq(exr_decoding_initialize(ctxt, p, &ci, &dec), EXR_ERR_SUCCESS);
+            inited = 1;
+            for (int k = 0; k < dec.channel_count; k++) {
+                exr_coding_channel_info_t *ch = &dec.channels[k];
+                int idx = -1;
+                for (int c = 0; c < rp->channel_count; c++)
+                    if (strcmp(rp->channels[c], ch->channel_name) == 0)
+                        idx = c;
+                ck_assert_int_ge(idx, 0);
+                ch->user_bytes_per_element = 4;
+                ch->user_data_type = EXR_PIXEL_FLOAT;
+                ch->user_pixel_stride = (int32_t)(nc * 4);
+                ch->user_line_stride = (int32_t)(row * 4);
+                ch->decode_to_ptr = (uint8_t *)(rp->data + (size_t)ci.start_y * row + (size_t)idx);
+            }
+            ck_assert_int_eq(exr_decoding_choose_default_routines(ctxt, p, &dec), EXR_ERR_SUCCESS);
+            ck_assert_int_eq(exr_decoding_run(ctxt, p, &dec), EXR_ERR_SUCCESS);
+        }
+        if (inited)
+            exr_decoding_destroy(ctxt, &dec);
+    }
+    exr_finish(&ctxt);
+    *out = parts;
+    return count;
+}
+
+static void free_parts(rd_part *parts, int count)
+{
+    for (int i = 0; i < count; i++)
+        free(parts[i].data);
+    free(parts);
+}
+
+/* Asserts that a decoded part holds exactly buffer b (name, size, channel set, every value
+ * bit for bit, same row order). */
+static void assert_part_equals(const rd_part *rp, const eng_buffer *b)
+{
+    ck_assert_str_eq(rp->name, b->name);
+    ck_assert_int_eq(rp->width, b->width);
+    ck_assert_int_eq(rp->height, b->height);
+    ck_assert_int_eq(rp->channel_count, b->channel_count);
+    for (int c = 0; c < b->channel_count; c++) {
+        int idx = -1;
+        for (int k = 0; k < rp->channel_count; k++)
+            if (strcmp(rp->channels[k], b->channels[c]) == 0)
+                idx = k;
+        ck_assert_msg(idx >= 0, "channel %s missing in part %s", b->channels[c], b->name);
+        for (int y = 0; y < b->height; y++)
+            for (int x = 0; x < b->width; x++) {
+                size_t pix = (size_t)y * (size_t)b->width + (size_t)x;
+                uint32_t want = bits(b->data[pix * (size_t)b->channel_count + (size_t)c]);
+                uint32_t got = bits(rp->data[pix * (size_t)rp->channel_count + (size_t)idx]);
+                ck_assert_msg(want == got, "%s.%s (%d,%d): wrote %08x, read %08x", b->name,
+                              b->channels[c], x, y, (unsigned)want, (unsigned)got);
+            }
+    }
+    /* Replay recomputes digests from decoded files: they must match capture's. */
+    const char *names[ENG_MAX_CHANNELS];
+    for (int k = 0; k < rp->channel_count; k++)
+        names[k] = rp->channels[k];
+    eng_buffer decoded = {rp->name, rp->width, rp->height, rp->channel_count, names, rp->data};
+    char d1[40], d2[40];
+    eng_buffer_digest(b, d1);
+    eng_buffer_digest(&decoded, d2);
+    ck_assert_str_eq(d1, d2);
+}
+
+/* No Check macros here or in what the disk-full child calls: Check reports through a file,
+ * which the child's file-size limit would break. */
+static float *pattern(int w, int h, int nc, float base)
+{
+    float *d = malloc((size_t)w * (size_t)h * (size_t)nc * sizeof(float));
+    if (!d)
+        abort();
+    for (int i = 0; i < w * h * nc; i++)
+        d[i] = base + (float)i * 0.25f;
+    return d;
+}
+
+/* ---------------------------------------------------------------- EXR writer */
+
+START_TEST(test_exr_roundtrip)
+{
+    char dir[256], path[512];
+    make_tmpdir(dir);
+    snprintf(path, sizeof path, "%s/two.exr", dir);
+
+    /* 7x5 RGB, every value distinct, rows distinguishable so a flip would show. */
+    enum { W = 7, H = 5 };
+    float rgb[W * H * 3];
+    for (int i = 0; i < W * H * 3; i++)
+        rgb[i] = (float)(i + 1) * 1.5f;
+    rgb[0] = -3.25f;                       /* negative, top-left R */
+    rgb[4] = FLT_TRUE_MIN * 7.0f;          /* denormal */
+    rgb[8] = 3.0e38f;                      /* large */
+    rgb[10] = -0.0f;
+    rgb[W * 3 * (H - 1)] = 1.0e-30f;       /* bottom-left R */
+    rgb[20] = from_bits(0x7fc01234u);      /* NaN with a payload */
+    rgb[21] = -INFINITY;
+    const char *rgb_names[] = {"R", "G", "B"};
+    eng_buffer b0 = {"direct.radiance", W, H, 3, rgb_names, rgb};
+
+    float *xyz = pattern(4, 3, 3, -10.0f);
+    const char *xyz_names[] = {"X", "Y", "Z"};
+    eng_buffer b1 = {"gbuffer.position", 4, 3, 3, xyz_names, xyz};
+
+    const eng_buffer *bufs[] = {&b0, &b1};
+    eng_error err = {{0}};
+    ck_assert_int_eq(cap_write_exr(path, bufs, 2, &err), ENG_OK);
+    ck_assert_int_eq(count_suffix(dir, ".tmp"), 0);
+
+    rd_part *parts = NULL;
+    int n = read_exr(path, &parts);
+    ck_assert_int_eq(n, 2);
+    for (int i = 0; i < 2; i++) {
+        ck_assert_int_eq(parts[i].storage, EXR_STORAGE_SCANLINE);
+        ck_assert_int_eq(parts[i].compression, EXR_COMPRESSION_ZIP);
+        ck_assert_int_eq(parts[i].lineorder, EXR_LINEORDER_INCREASING_Y);
+        ck_assert_int_eq(parts[i].frame, -1);
+        /* A shared attribute: equal in every part (the C++ library refuses the file
+         * otherwise), holding every part's data window. */
+        ck_assert_int_eq(parts[i].display.min.x, 0);
+        ck_assert_int_eq(parts[i].display.min.y, 0);
+        ck_assert_int_eq(parts[i].display.max.x, W - 1);
+        ck_assert_int_eq(parts[i].display.max.y, H - 1);
+    }
+    assert_part_equals(&parts[0], &b0);
+    assert_part_equals(&parts[1], &b1);
+    /* Row 0 is the top row: the first value of the file is the announced top-left pixel. */
+    int r_idx = -1;
+    for (int c = 0; c < 3; c++)
+        if (strcmp(parts[0].channels[c], "R") == 0)
+            r_idx = c;
+    ck_assert_int_ge(r_idx, 0);
+    ck_assert_uint_eq(bits(parts[0].data[r_idx]), bits(-3.25f));
+    ck_assert_uint_eq(bits(parts[0].data[(size_t)W * 3 * (H - 1) + (size_t)r_idx]), bits(1.0e-30f));
+    free_parts(parts, n);
+
+    /* Rewriting replaces the file atomically. */
+    rgb[1] = 42.0f;
+    ck_assert_int_eq(cap_write_exr(path, bufs, 2, &err), ENG_OK);
+    n = read_exr(path, &parts);
+    assert_part_equals(&parts[0], &b0);
+    free_parts(parts, n);
+
+    free(xyz);
+    rm_rf(dir);
+}
+END_TEST
+
+START_TEST(test_exr_single_part_keeps_name)
+{
+    char dir[256], path[512];
+    make_tmpdir(dir);
+    snprintf(path, sizeof path, "%s/one.exr", dir);
+    float *z = pattern(3, 17, 1, 0.5f); /* more rows than one ZIP chunk (16) */
+    const char *zn[] = {"Z"};
+    eng_buffer b = {"gbuffer.depth", 3, 17, 1, zn, z};
+    const eng_buffer *bufs[] = {&b};
+    eng_error err = {{0}};
+    ck_assert_int_eq(cap_write_exr(path, bufs, 1, &err), ENG_OK);
+    rd_part *parts = NULL;
+    int n = read_exr(path, &parts);
+    ck_assert_int_eq(n, 1);
+    assert_part_equals(&parts[0], &b);
+    free_parts(parts, n);
+    free(z);
+    rm_rf(dir);
+}
+END_TEST
+
+START_TEST(test_exr_rejects_bad_input)
+{
+    char dir[256], path[512];
+    make_tmpdir(dir);
+    snprintf(path, sizeof path, "%s/bad.exr", dir);
+    float v[12] = {0};
+    const char *rgb[] = {"R", "G", "B"};
+    const char *dup[] = {"R", "R", "B"};
+    eng_buffer a = {"a", 2, 2, 3, rgb, v};
+    eng_buffer a2 = {"a", 2, 2, 3, rgb, v};
+    eng_buffer d = {"d", 2, 2, 3, dup, v};
+    eng_buffer z = {"z", 0, 2, 3, rgb, v};
+    eng_buffer nc0 = {"c", 2, 2, 0, rgb, v};
+    eng_buffer nc17 = {"c", 1, 1, ENG_MAX_CHANNELS + 1, rgb, v};
+    eng_error err = {{0}};
+    const eng_buffer *twice[] = {&a, &a2};
+    ck_assert_int_eq(cap_write_exr(path, twice, 2, &err), ENG_ERR_INVALID);
+    ck_assert_int_ne(err.msg[0], 0);
+    const eng_buffer *one[1] = {&d};
+    ck_assert_int_eq(cap_write_exr(path, one, 1, &err), ENG_ERR_INVALID);
+    one[0] = &z;
+    ck_assert_int_eq(cap_write_exr(path, one, 1, &err), ENG_ERR_INVALID);
+    one[0] = &nc0;
+    ck_assert_int_eq(cap_write_exr(path, one, 1, &err), ENG_ERR_INVALID);
+    one[0] = &nc17;
+    ck_assert_int_eq(cap_write_exr(path, one, 1, &err), ENG_ERR_INVALID);
+    ck_assert_int_eq(cap_write_exr(path, one, 0, &err), ENG_ERR_INVALID);
+    ck_assert_int_eq(count_suffix(dir, ".exr"), 0);
+    ck_assert_int_eq(count_suffix(dir, ".tmp"), 0);
+    rm_rf(dir);
+}
+END_TEST
+
+/* ---------------------------------------------------------------- listener */
+
+static void make_seq(seq_sequence *s, int frames, int w, int h)
+{
+    memset(s, 0, sizeof *s);
+    snprintf(s->path, sizeof s->path, "/seq/test.json");
+    snprintf(s->scene_path, sizeof s->scene_path, "/seq/box.gltf");
+    snprintf(s->name, sizeof s->name, "capture-test");
+    s->frame_count = frames;
+    s->fps = 8.0;
+    s->width = w;
+    s->height = h;
+    snprintf(s->camera_node, sizeof s->camera_node, "Camera");
+    s->settings.shadow_map_size = 256; /* the rest zero: defaults */
+    snprintf(s->digest, sizeof s->digest, "0123456789abcdef0123456789abcdef");
+}
+
+static void make_scene(scn_scene *sc)
+{
+    memset(sc, 0, sizeof *sc);
+    snprintf(sc->path, sizeof sc->path, "/seq/box.gltf");
+    snprintf(sc->digest, sizeof sc->digest, "fedcba9876543210fedcba9876543210");
+}
+
+static cap_capture *make_capture(const char *run, const seq_sequence *s, const scn_scene *sc, int overwrite)
+{
+    static const char *const det[] = {"LP_NATIVE_VECTOR_WIDTH", "128", "LP_NUM_THREADS", "2", NULL};
+    cap_desc d = {0};
+    d.run_dir = run;
+    d.sequence = s;
+    d.scene = sc;
+    d.gl_version = "4.5 (Core Profile) Mesa 22.3.6";
+    d.gl_renderer = "llvmpipe (LLVM 15.0.6, 128 bits)";
+    d.tool_version = "0.1.0";
+    d.git_revision = "abc123";
+    d.command_line = "ispm record seq.json --out run";
+    d.overwrite = overwrite;
+    d.determinism = det;
+    cap_capture *c = NULL;
+    eng_error err = {{0}};
+    eng_result r = cap_create(&d, &c, &err);
+    ck_assert_msg(r == ENG_OK, "cap_create: %s", err.msg);
+    ck_assert_ptr_nonnull(c);
+    return c;
+}
+
+/* The buffers one fake frame announces; values depend on the frame. */
+typedef struct fake_frame {
+    float *pos, *alb, *rad, *shadow;
+    eng_buffer bpos, balb, brad, bshadow;
+} fake_frame;
+
+static const char *const XYZ[] = {"X", "Y", "Z"};
+static const char *const RGB[] = {"R", "G", "B"};
+static const char *const ZN[] = {"Z"};
+
+static void fake_init(fake_frame *f, int frame, int w, int h)
+{
+    f->pos = pattern(w, h, 3, (float)frame * 100.0f);
+    f->alb = pattern(w, h, 3, 0.125f + (float)frame);
+    f->rad = pattern(w, h, 3, -1.0f - (float)frame);
+    f->shadow = pattern(w, h, 1, 7.0f);
+    /* 2 NaN and 1 Inf, the first non-finite pixel at (3, 1). */
+    f->rad[((size_t)1 * (size_t)w + 3) * 3 + 1] = NAN;
+    f->rad[((size_t)2 * (size_t)w + 0) * 3 + 2] = -NAN;
+    f->rad[((size_t)2 * (size_t)w + 5) * 3 + 0] = INFINITY;
+    f->bpos = (eng_buffer){"gbuffer.position", w, h, 3, XYZ, f->pos};
+    f->balb = (eng_buffer){"gbuffer.albedo", w, h, 3, RGB, f->alb};
+    f->brad = (eng_buffer){"direct.radiance", w, h, 3, RGB, f->rad};
+    f->bshadow = (eng_buffer){"shadow.light0", w, h, 1, ZN, f->shadow};
+}
+
+static void fake_free(fake_frame *f)
+{
+    free(f->pos);
+    free(f->alb);
+    free(f->rad);
+    free(f->shadow);
+}
+
+static eng_frame_stats fake_stats(int frame)
+{
+    eng_frame_stats st;
+    memset(&st, 0, sizeof st);
+    st.frame = frame;
+    st.time = frame / 8.0;
+    st.pass_count = 2;
+    snprintf(st.passes[0].name, sizeof st.passes[0].name, "gbuffer");
+    st.passes[0].ms = 1.234 + frame;
+    snprintf(st.passes[1].name, sizeof st.passes[1].name, "direct");
+    st.passes[1].ms = 0.5;
+    return st;
+}
+
+/* Announces one fake frame in full; returns the first non-zero callback result. */
+static int run_frame(const eng_listener *l, int frame, int w, int h)
+{
+    fake_frame f;
+    fake_init(&f, frame, w, h);
+    int rc = l->frame_begin(l->user, frame, frame / 8.0);
+    const eng_buffer *order[] = {&f.bpos, &f.bshadow, &f.balb, &f.brad};
+    for (int i = 0; i < 4 && !rc; i++)
+        rc = l->buffer(l->user, frame, order[i]);
+    eng_frame_stats st = fake_stats(frame);
+    if (!rc)
+        rc = l->frame_end(l->user, &st);
+    fake_free(&f);
+    return rc;
+}
+
+static cJSON *load_manifest(const char *run)
+{
+    char p[512];
+    snprintf(p, sizeof p, "%s/manifest.json", run);
+    char *text = NULL;
+    size_t len = 0;
+    eng_error err = {{0}};
+    ck_assert_int_eq(eng_read_file(p, 1 << 24, &text, &len, &err), ENG_OK);
+    cJSON *j = cJSON_ParseWithLength(text, len);
+    free(text);
+    ck_assert_ptr_nonnull(j);
+    return j;
+}
+
+static cJSON *get(const cJSON *o, const char *key)
+{
+    cJSON *v = cJSON_GetObjectItemCaseSensitive(o, key);
+    ck_assert_msg(v != NULL, "manifest lacks \"%s\"", key);
+    return v;
+}
+
+static const char *gets(const cJSON *o, const char *key)
+{
+    cJSON *v = get(o, key);
+    ck_assert_msg(cJSON_IsString(v), "\"%s\" is not a string", key);
+    return v->valuestring;
+}
+
+static double getn(const cJSON *o, const char *key)
+{
+    cJSON *v = get(o, key);
+    ck_assert_msg(cJSON_IsNumber(v), "\"%s\" is not a number", key);
+    return v->valuedouble;
+}
+
+START_TEST(test_listener_full_flow)
+{
+    char dir[256], run[300];
+    make_tmpdir(dir);
+    snprintf(run, sizeof run, "%s/a/run", dir); /* nested: mkdir -p */
+    enum { W = 6, H = 4 };
+    seq_sequence seq;
+    make_seq(&seq, 2, W, H);
+    seq.capture_count = 2;
+    snprintf(seq.capture[0], sizeof seq.capture[0], "gbuffer.*");
+    snprintf(seq.capture[1], sizeof seq.capture[1], "direct.radiance");
+    scn_scene scene;
+    make_scene(&scene);
+    cap_capture *c = make_capture(run, &seq, &scene, 0);
+    ck_assert(exists(run, "frames"));
+    ck_assert(!exists(run, "manifest.json"));
+    eng_listener l = cap_listener(c);
+
+    /* Frame 1 first: frames may be rendered in any order. The source memory is scribbled
+     * on after each announcement, as an engine reusing its buffers would. */
+    for (int k = 0; k < 2; k++) {
+        int frame = 1 - k;
+        fake_frame f;
+        fake_init(&f, frame, W, H);
+        ck_assert_int_eq(l.frame_begin(l.user, frame, frame / 8.0), 0);
+        const eng_buffer *order[] = {&f.bpos, &f.bshadow, &f.balb, &f.brad};
+        fake_frame keep;
+        fake_init(&keep, frame, W, H);
+        for (int i = 0; i < 4; i++) {
+            ck_assert_int_eq(l.buffer(l.user, frame, order[i]), 0);
+            float *d = (float *)order[i]->data;
+            for (int v = 0; v < W * H * order[i]->channel_count; v++)
+                d[v] = 999.0f;
+        }
+        eng_frame_stats st = fake_stats(frame);
+        ck_assert_int_eq(l.frame_end(l.user, &st), 0);
+        eng_error err = {{0}};
+        ck_assert_int_eq(cap_status(c, &err), ENG_OK);
+        ck_assert(!exists(run, "manifest.json"));
+
+        char path[512];
+        snprintf(path, sizeof path, "%s/frames/%06d.exr", run, frame);
+        rd_part *parts = NULL;
+        int n = read_exr(path, &parts);
+        ck_assert_int_eq(n, 3); /* shadow.light0 filtered out */
+        assert_part_equals(&parts[0], &keep.bpos);
+        assert_part_equals(&parts[1], &keep.balb);
+        assert_part_equals(&parts[2], &keep.brad);
+        for (int i = 0; i < n; i++) {
+            ck_assert_int_eq(parts[i].frame, frame);
+            ck_assert(parts[i].time == frame / 8.0);
+        }
+        free_parts(parts, n);
+        fake_free(&f);
+        fake_free(&keep);
+    }
+    ck_assert_int_eq(count_suffix(run, ".tmp"), 0);
+    ck_assert(!exists(run, "manifest.json"));
+
+    eng_error err = {{0}};
+    ck_assert_msg(cap_finish(c, &err) == ENG_OK, "cap_finish: %s", err.msg);
+    cap_destroy(c);
+    ck_assert(exists(run, "manifest.json"));
+    ck_assert(!exists(run, "manifest.json.tmp"));
+
+    cJSON *m = load_manifest(run);
+    ck_assert_str_eq(gets(m, "format"), "ispm-run");
+    ck_assert(getn(m, "format_version") == 1);
+    const cJSON *tool = get(m, "tool");
+    ck_assert_str_eq(gets(tool, "name"), "ispm");
+    ck_assert_str_eq(gets(tool, "version"), "0.1.0");
+    ck_assert_str_eq(gets(tool, "git"), "abc123");
+    ck_assert_str_eq(gets(m, "command"), "ispm record seq.json --out run");
+    const cJSON *sq = get(m, "sequence");
+    ck_assert_str_eq(gets(sq, "path"), "/seq/test.json");
+    ck_assert_str_eq(gets(sq, "name"), "capture-test");
+    ck_assert_str_eq(gets(sq, "digest"), seq.digest);
+    ck_assert_str_eq(gets(get(m, "scene"), "digest"), scene.digest);
+    ck_assert_str_eq(gets(get(m, "scene"), "path"), "/seq/box.gltf");
+    const cJSON *res = get(m, "resolution");
+    ck_assert_int_eq(cJSON_GetArraySize(res), 2);
+    ck_assert(cJSON_GetArrayItem(res, 0)->valuedouble == W);
+    ck_assert(cJSON_GetArrayItem(res, 1)->valuedouble == H);
+    ck_assert(getn(m, "fps") == 8.0);
+    ck_assert(getn(m, "frame_count") == 2);
+    ck_assert_str_eq(gets(m, "camera"), "Camera");
+    const cJSON *st = get(m, "settings");
+    ck_assert(getn(st, "shadow_map_size") == 256);
+    ck_assert(getn(st, "pcf_radius") == 1);
+    ck_assert(getn(st, "shadow_bias") == 0.002); /* shortest form of 0.002f */
+    ck_assert(getn(st, "exposure") == 0);
+    ck_assert(getn(st, "threads") == 2);
+    const cJSON *det = get(m, "determinism");
+    ck_assert_str_eq(gets(det, "LP_NATIVE_VECTOR_WIDTH"), "128");
+    ck_assert_str_eq(gets(det, "LP_NUM_THREADS"), "2");
+    ck_assert_int_eq(cJSON_GetArraySize(det), 2);
+    ck_assert_str_eq(gets(get(m, "gl"), "renderer"), "llvmpipe (LLVM 15.0.6, 128 bits)");
+    ck_assert(cJSON_IsTrue(get(m, "complete")));
+
+    const cJSON *frames = get(m, "frames");
+    ck_assert_int_eq(cJSON_GetArraySize(frames), 2);
+    for (int i = 0; i < 2; i++) {
+        const cJSON *f = cJSON_GetArrayItem(frames, i);
+        ck_assert(getn(f, "index") == i);
+        ck_assert(getn(f, "time") == i / 8.0);
+        char rel[64];
+        snprintf(rel, sizeof rel, "frames/%06d.exr", i);
+        ck_assert_str_eq(gets(f, "file"), rel);
+        const cJSON *passes = get(f, "passes");
+        ck_assert_int_eq(cJSON_GetArraySize(passes), 2);
+        ck_assert_str_eq(gets(cJSON_GetArrayItem(passes, 0), "name"), "gbuffer");
+        ck_assert(getn(cJSON_GetArrayItem(passes, 0), "ms") == 1.234 + i);
+        ck_assert_str_eq(gets(cJSON_GetArrayItem(passes, 1), "name"), "direct");
+
+        fake_frame ff;
+        fake_init(&ff, i, W, H);
+        const eng_buffer *want[] = {&ff.bpos, &ff.balb, &ff.brad};
+        const cJSON *bufs = get(f, "buffers");
+        ck_assert_int_eq(cJSON_GetArraySize(bufs), 3);
+        for (int b = 0; b < 3; b++) {
+            const cJSON *jb = cJSON_GetArrayItem(bufs, b);
+            ck_assert_str_eq(gets(jb, "name"), want[b]->name);
+            ck_assert(getn(jb, "width") == W);
+            ck_assert(getn(jb, "height") == H);
+            const cJSON *ch = get(jb, "channels");
+            ck_assert_int_eq(cJSON_GetArraySize(ch), 3);
+            for (int k = 0; k < 3; k++)
+                ck_assert_str_eq(cJSON_GetArrayItem(ch, k)->valuestring, want[b]->channels[k]);
+            char dg[40];
+            eng_buffer_digest(want[b], dg);
+            ck_assert_str_eq(gets(jb, "digest"), dg);
+            const cJSON *fn = get(jb, "first_nonfinite");
+            if (want[b] == &ff.brad) {
+                ck_assert(getn(jb, "nan") == 2);
+                ck_assert(getn(jb, "inf") == 1);
+                ck_assert(cJSON_IsArray(fn));
+                ck_assert(cJSON_GetArrayItem(fn, 0)->valuedouble == 3);
+                ck_assert(cJSON_GetArrayItem(fn, 1)->valuedouble == 1);
+            } else {
+                ck_assert(getn(jb, "nan") == 0);
+                ck_assert(getn(jb, "inf") == 0);
+                ck_assert(cJSON_IsNull(fn));
+            }
+        }
+        fake_free(&ff);
+    }
+    cJSON_Delete(m);
+    rm_rf(dir);
+}
+END_TEST
+
+START_TEST(test_finish_needs_every_frame)
+{
+    char dir[256];
+    make_tmpdir(dir);
+    seq_sequence seq;
+    make_seq(&seq, 2, 8, 8);
+    scn_scene scene;
+    make_scene(&scene);
+    cap_capture *c = make_capture(dir, &seq, &scene, 0);
+    eng_listener l = cap_listener(c);
+    ck_assert_int_eq(run_frame(&l, 0, 8, 8), 0);
+    ck_assert(exists(dir, "frames/000000.exr"));
+    eng_error err = {{0}};
+    ck_assert_int_eq(cap_finish(c, &err), ENG_ERR_INVALID);
+    ck_assert(!exists(dir, "manifest.json"));
+
+    /* A frame outside the sequence is refused. */
+    ck_assert_int_ne(l.frame_begin(l.user, 2, 0.25), 0);
+    ck_assert_int_eq(cap_status(c, &err), ENG_ERR_INVALID);
+    cap_destroy(c);
+    rm_rf(dir);
+}
+END_TEST
+
+START_TEST(test_existing_run)
+{
+    char dir[256];
+    make_tmpdir(dir);
+    seq_sequence seq;
+    make_seq(&seq, 1, 8, 8);
+    scn_scene scene;
+    make_scene(&scene);
+
+    /* Unrelated files do not make a run. */
+    char p[512];
+    snprintf(p, sizeof p, "%s/notes.txt", dir);
+    FILE *f = fopen(p, "w");
+    ck_assert_ptr_nonnull(f);
+    fputs("hello\n", f);
+    fclose(f);
+
+    cap_capture *c = make_capture(dir, &seq, &scene, 0);
+    eng_listener l = cap_listener(c);
+    ck_assert_int_eq(run_frame(&l, 0, 8, 8), 0);
+    eng_error err = {{0}};
+    ck_assert_int_eq(cap_finish(c, &err), ENG_OK);
+    cap_destroy(c);
+    ck_assert(exists(dir, "manifest.json"));
+
+    cap_desc d = {0};
+    d.run_dir = dir;
+    d.sequence = &seq;
+    d.scene = &scene;
+    c = (cap_capture *)&d; /* must be reset to NULL on failure */
+    ck_assert_int_eq(cap_create(&d, &c, &err), ENG_ERR_IO);
+    ck_assert_ptr_null(c);
+    ck_assert(exists(dir, "manifest.json"));
+    ck_assert(exists(dir, "frames/000000.exr"));
+
+    /* Frames alone (a crashed run) are a run too. */
+    snprintf(p, sizeof p, "%s/manifest.json", dir);
+    ck_assert_int_eq(unlink(p), 0);
+    ck_assert(!exists(dir, "manifest.json"));
+    ck_assert_int_eq(cap_create(&d, &c, &err), ENG_ERR_IO);
+    ck_assert_ptr_null(c);
+
+    /* Overwrite: the old manifest is gone right after create, before any frame. */
+    c = make_capture(dir, &seq, &scene, 1);
+    ck_assert(!exists(dir, "manifest.json"));
+    ck_assert_int_eq(count_suffix(dir, ".tmp"), 0);
+    char frames[300];
+    snprintf(frames, sizeof frames, "%s/frames", dir);
+    ck_assert_int_eq(count_suffix(frames, ".exr"), 0);
+    ck_assert(exists(dir, "notes.txt"));
+    cap_destroy(c);
+    rm_rf(dir);
+}
+END_TEST
+
+START_TEST(test_overwrite_removes_manifest_first)
+{
+    char dir[256];
+    make_tmpdir(dir);
+    seq_sequence seq;
+    make_seq(&seq, 1, 8, 8);
+    scn_scene scene;
+    make_scene(&scene);
+    cap_capture *c = make_capture(dir, &seq, &scene, 0);
+    eng_listener l = cap_listener(c);
+    ck_assert_int_eq(run_frame(&l, 0, 8, 8), 0);
+    eng_error err = {{0}};
+    ck_assert_int_eq(cap_finish(c, &err), ENG_OK);
+    cap_destroy(c);
+
+    /* Leftovers of a crash: temp files of ours are cleaned up too. */
+    char p[512];
+    snprintf(p, sizeof p, "%s/frames/000007.exr.tmp", dir);
+    fclose(fopen(p, "w"));
+    snprintf(p, sizeof p, "%s/manifest.json.tmp", dir);
+    fclose(fopen(p, "w"));
+
+    c = make_capture(dir, &seq, &scene, 1);
+    ck_assert(!exists(dir, "manifest.json"));
+    ck_assert(!exists(dir, "manifest.json.tmp"));
+    ck_assert(!exists(dir, "frames/000000.exr"));
+    ck_assert(!exists(dir, "frames/000007.exr.tmp"));
+    l = cap_listener(c);
+    ck_assert_int_eq(run_frame(&l, 0, 8, 8), 0);
+    ck_assert(!exists(dir, "manifest.json"));
+    ck_assert_int_eq(cap_finish(c, &err), ENG_OK);
+    ck_assert(exists(dir, "manifest.json"));
+    cap_destroy(c);
+    rm_rf(dir);
+}
+END_TEST
+
+/* Runs one frame in a child whose file-size limit is limit bytes (writes past it fail
+ * with EFBIG, the stand-in for a full disk). Exit status 0 when every expectation held,
+ * otherwise the number of the failed one. */
+static int disk_full_child(const char *run, long limit)
+{
+    signal(SIGXFSZ, SIG_IGN);
+    struct rlimit rl = {(rlim_t)limit, (rlim_t)limit};
+    if (setrlimit(RLIMIT_FSIZE, &rl) != 0)
+        return 1;
+    seq_sequence seq;
+    make_seq(&seq, 1, 64, 48);
+    scn_scene scene;
+    make_scene(&scene);
+    cap_desc d = {0};
+    d.run_dir = run;
+    d.sequence = &seq;
+    d.scene = &scene;
+    d.overwrite = 1;
+    cap_capture *c = NULL;
+    eng_error err = {{0}};
+    if (cap_create(&d, &c, &err) != ENG_OK)
+        return 2;
+    eng_listener l = cap_listener(c);
+    if (run_frame(&l, 0, 64, 48) == 0)
+        return 3;
+    memset(&err, 0, sizeof err);
+    if (cap_status(c, &err) != ENG_ERR_IO)
+        return 4;
+    if (!strstr(err.msg, "frames/000000.exr") || !strstr(err.msg, strerror(EFBIG)))
+        return 5;
+    if (cap_finish(c, &err) == ENG_OK)
+        return 6;
+    cap_destroy(c);
+    return 0;
+}
+
+START_TEST(test_disk_full)
+{
+    char dir[256], run[300], frames[320];
+    make_tmpdir(dir);
+    snprintf(run, sizeof run, "%s/run", dir);
+    snprintf(frames, sizeof frames, "%s/frames", run);
+
+    /* The size of the complete frame file, to place limits inside it. Noise-like values
+     * keep ZIP from shrinking it to nothing. */
+    seq_sequence seq;
+    make_seq(&seq, 1, 64, 48);
+    scn_scene scene;
+    make_scene(&scene);
+    cap_capture *c = make_capture(run, &seq, &scene, 0);
+    eng_listener l = cap_listener(c);
+    ck_assert_int_eq(run_frame(&l, 0, 64, 48), 0);
+    cap_destroy(c);
+    struct stat st;
+    char p[512];
+    snprintf(p, sizeof p, "%s/000000.exr", frames);
+    ck_assert_int_eq(stat(p, &st), 0);
+    long size = (long)st.st_size;
+    ck_assert_int_gt(size, 2000);
+
+    const long limits[] = {0, 1, 300, size / 2, size - 1};
+    for (size_t i = 0; i < sizeof limits / sizeof limits[0]; i++) {
+        fflush(NULL);
+        pid_t pid = fork();
+        ck_assert_int_ge(pid, 0);
+        if (pid == 0)
+            _exit(disk_full_child(run, limits[i]));
+        int status = 0;
+        ck_assert_int_eq(waitpid(pid, &status, 0), pid);
+        ck_assert_msg(WIFEXITED(status) && WEXITSTATUS(status) == 0,
+                      "limit %ld: child failed expectation %d", limits[i], WEXITSTATUS(status));
+        ck_assert_int_eq(count_suffix(frames, ".exr"), 0);
+        ck_assert_int_eq(count_suffix(frames, ".tmp"), 0);
+        ck_assert(!exists(run, "manifest.json"));
+        ck_assert(!exists(run, "manifest.json.tmp"));
+    }
+    rm_rf(dir);
+}
+END_TEST
+
+START_TEST(test_duplicate_buffer_rejected)
+{
+    char dir[256];
+    make_tmpdir(dir);
+    seq_sequence seq;
+    make_seq(&seq, 1, 4, 4);
+    scn_scene scene;
+    make_scene(&scene);
+    cap_capture *c = make_capture(dir, &seq, &scene, 0);
+    eng_listener l = cap_listener(c);
+    float *n1 = pattern(4, 4, 3, 0.0f);
+    eng_buffer b = {"gbuffer.normal", 4, 4, 3, XYZ, n1};
+    ck_assert_int_eq(l.frame_begin(l.user, 0, 0.0), 0);
+    ck_assert_int_eq(l.buffer(l.user, 0, &b), 0);
+    ck_assert_int_ne(l.buffer(l.user, 0, &b), 0);
+    eng_error err = {{0}};
+    ck_assert_int_eq(cap_status(c, &err), ENG_ERR_INVALID);
+    ck_assert_ptr_nonnull(strstr(err.msg, "gbuffer.normal"));
+    eng_frame_stats st = fake_stats(0);
+    ck_assert_int_ne(l.frame_end(l.user, &st), 0); /* sticky */
+    ck_assert(!exists(dir, "frames/000000.exr"));
+    ck_assert_int_eq(cap_finish(c, &err), ENG_ERR_INVALID);
+    ck_assert(!exists(dir, "manifest.json"));
+    cap_destroy(c);
+    free(n1);
+    rm_rf(dir);
+}
+END_TEST
+
+START_TEST(test_bad_buffers_rejected)
+{
+    char dir[256];
+    make_tmpdir(dir);
+    seq_sequence seq;
+    make_seq(&seq, 1, 4, 4);
+    scn_scene scene;
+    make_scene(&scene);
+    float v[4 * 4 * ENG_MAX_CHANNELS] = {0};
+    const char *many[ENG_MAX_CHANNELS + 1];
+    for (int i = 0; i <= ENG_MAX_CHANNELS; i++)
+        many[i] = "C";
+    const char *dup[] = {"X", "Y", "X"};
+    eng_buffer bad[] = {
+        {"a.zero_channels", 4, 4, 0, XYZ, v},
+        {"a.too_many", 4, 4, ENG_MAX_CHANNELS + 1, many, v},
+        {"a.dup_channels", 4, 4, 3, dup, v},
+        {"a.zero_width", 0, 4, 3, XYZ, v},
+        {"a.neg_height", 4, -1, 3, XYZ, v},
+    };
+    for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
+        cap_capture *c = make_capture(dir, &seq, &scene, 1);
+        eng_listener l = cap_listener(c);
+        ck_assert_int_eq(l.frame_begin(l.user, 0, 0.0), 0);
+        ck_assert_msg(l.buffer(l.user, 0, &bad[i]) != 0, "%s accepted", bad[i].name);
+        eng_error err = {{0}};
+        ck_assert_int_eq(cap_status(c, &err), ENG_ERR_INVALID);
+        cap_destroy(c);
+    }
+
+    /* A frame in which nothing matches the capture patterns has nothing to write. */
+    seq.capture_count = 1;
+    snprintf(seq.capture[0], sizeof seq.capture[0], "final.*");
+    cap_capture *c = make_capture(dir, &seq, &scene, 1);
+    eng_listener l = cap_listener(c);
+    ck_assert_int_ne(run_frame(&l, 0, 4, 4), 0);
+    eng_error err = {{0}};
+    ck_assert_int_eq(cap_status(c, &err), ENG_ERR_INVALID);
+    ck_assert(!exists(dir, "frames/000000.exr"));
+    cap_destroy(c);
+    cap_destroy(NULL);
+    rm_rf(dir);
+}
+END_TEST
+
+static Suite *capture_suite(void)
+{
+    Suite *s = suite_create("capture");
+    TCase *exr = tcase_create("exr");
+    tcase_add_test(exr, test_exr_roundtrip);
+    tcase_add_test(exr, test_exr_single_part_keeps_name);
+    tcase_add_test(exr, test_exr_rejects_bad_input);
+    suite_add_tcase(s, exr);
+    TCase *run = tcase_create("run");
+    tcase_add_test(run, test_listener_full_flow);
+    tcase_add_test(run, test_finish_needs_every_frame);
+    tcase_add_test(run, test_existing_run);
+    tcase_add_test(run, test_overwrite_removes_manifest_first);
+    tcase_add_test(run, test_disk_full);
+    tcase_add_test(run, test_duplicate_buffer_rejected);
+    tcase_add_test(run, test_bad_buffers_rejected);
+    suite_add_tcase(s, run);
+    return s;
+}
+
+int main(void)
+{
+    SRunner *sr = srunner_create(capture_suite());
+    srunner_run_all(sr, CK_NORMAL);
+    int failed = srunner_ntests_failed(sr);
+    srunner_free(sr);
+    return failed == 0 ? EXIT_SUCCESS : EXIT_FAILURE;
+}

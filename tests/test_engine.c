@@ -1,0 +1,387 @@
+/* test_engine.c — Check suite of the engine: the GL passes on the canonical Cornell box
+ * (../shared/scenes/cornell-box/README.md) against closed-form values, and the structure of
+ * what the engine announces (names, channels, motion vectors). Determinism across thread
+ * counts and processes is tested end to end (tests/e2e_determinism.sh), since llvmpipe's
+ * thread count is fixed per process. */
+#include "eng.h"
+
+#include <check.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define CORNELL_GLTF ISPM_SOURCE_DIR "/scenes/cornell-box/cornell-box.gltf"
+#define PI_D 3.14159265358979323846
+
+/* A listener that keeps copies of selected buffers of one frame. */
+typedef struct kept {
+    char name[64];
+    int w, h, n;
+    char channels[ENG_MAX_CHANNELS][32];
+    float *data;
+} kept;
+
+typedef struct keeper {
+    int count;
+    kept bufs[64];
+    int frame_end_calls;
+    eng_frame_stats last_stats;
+} keeper;
+
+static int keep_buffer(void *user, int frame, const eng_buffer *b)
+{
+    (void)frame;
+    keeper *k = user;
+    ck_assert_int_lt(k->count, 64);
+    kept *d = &k->bufs[k->count++];
+    snprintf(d->name, sizeof d->name, "%s", b->name);
+    d->w = b->width;
+    d->h = b->height;
+    d->n = b->channel_count;
+    for (int c = 0; c < b->channel_count; c++)
+        snprintf(d->channels[c], sizeof d->channels[c], "%s", b->channels[c]);
+    size_t sz = (size_t)b->width * b->height * b->channel_count * sizeof(float);
+    d->data = malloc(sz);
+    memcpy(d->data, b->data, sz);
+    return 0;
+}
+
+static int keep_end(void *user, const eng_frame_stats *st)
+{
+    keeper *k = user;
+    k->frame_end_calls++;
+    k->last_stats = *st;
+    return 0;
+}
+
+static void keeper_clear(keeper *k)
+{
+    for (int i = 0; i < k->count; i++)
+        free(k->bufs[i].data);
+    memset(k, 0, sizeof *k);
+}
+
+static const kept *find(const keeper *k, const char *name)
+{
+    for (int i = 0; i < k->count; i++)
+        if (!strcmp(k->bufs[i].name, name))
+            return &k->bufs[i];
+    return NULL;
+}
+
+typedef struct fixture {
+    scn_scene *scene;
+    seq_sequence seq;
+    eng_engine *eng;
+    keeper keep;
+} fixture;
+
+static void setup(fixture *f, int size, int frames, int shadow)
+{
+    memset(f, 0, sizeof *f);
+    eng_error err;
+    char json[1024];
+    snprintf(json, sizeof json,
+             "{\"name\":\"test\",\"scene\":\"%s\",\"frames\":%d,\"fps\":8,\"resolution\":[%d,%d],"
+             "\"camera\":{\"node\":\"Camera\"},\"settings\":{\"shadow_map_size\":%d,\"threads\":2}}",
+             CORNELL_GLTF, frames, size, size, shadow);
+    ck_assert_msg(seq_parse("inline.json", json, strlen(json), &f->seq, &err) == ENG_OK, "%s", err.msg);
+    ck_assert_msg(scn_load_gltf(f->seq.scene_path, &f->scene, &err) == ENG_OK, "%s", err.msg);
+    eng_desc d = {f->scene, &f->seq};
+    ck_assert_msg(eng_create(&d, &f->eng, &err) == ENG_OK, "%s", err.msg);
+    eng_listener l = {&f->keep, NULL, keep_buffer, keep_end};
+    ck_assert_int_eq(eng_add_listener(f->eng, &l), ENG_OK);
+}
+
+static void teardown(fixture *f)
+{
+    keeper_clear(&f->keep);
+    eng_destroy(f->eng);
+    scn_destroy(f->scene);
+}
+
+static void render(fixture *f, int frame)
+{
+    eng_error err;
+    keeper_clear(&f->keep);
+    ck_assert_msg(eng_render_frame(f->eng, frame, &err) == ENG_OK, "%s", err.msg);
+}
+
+/* ---------------------------------------------------------------- announced buffers */
+
+START_TEST(announces_design_buffer_names)
+{
+    fixture f;
+    setup(&f, 64, 2, 64);
+    render(&f, 0);
+    static const struct {
+        const char *name;
+        int n;
+        const char *ch0;
+    } want[] = {
+        {"shadow.light0.face0", 1, "Z"}, {"shadow.light0.face5", 1, "Z"}, {"gbuffer.position", 3, "X"},
+        {"gbuffer.normal", 3, "X"},      {"gbuffer.albedo", 3, "R"},      {"gbuffer.material", 5, "roughness"},
+        {"gbuffer.depth", 1, "Z"},       {"gbuffer.motion", 2, "X"},      {"direct.radiance", 3, "R"},
+        {"composite.radiance", 3, "R"},  {"final.display", 3, "R"},
+    };
+    for (size_t i = 0; i < sizeof want / sizeof want[0]; i++) {
+        const kept *b = find(&f.keep, want[i].name);
+        ck_assert_msg(b != NULL, "buffer %s not announced", want[i].name);
+        ck_assert_int_eq(b->n, want[i].n);
+        ck_assert_str_eq(b->channels[0], want[i].ch0);
+    }
+    ck_assert_int_eq(find(&f.keep, "gbuffer.position")->w, 64);
+    ck_assert_int_eq(find(&f.keep, "shadow.light0.face2")->w, 64);
+    ck_assert_str_eq(find(&f.keep, "gbuffer.material")->channels[4], "id");
+    ck_assert_int_eq(f.keep.frame_end_calls, 1);
+    /* Every pass reports its time. */
+    const char *passes[] = {"scene", "shadow", "gbuffer", "direct", "composite"};
+    for (size_t i = 0; i < 5; i++) {
+        int found = 0;
+        for (int p = 0; p < f.keep.last_stats.pass_count; p++)
+            if (!strcmp(f.keep.last_stats.passes[p].name, passes[i])) {
+                found = 1;
+                ck_assert(f.keep.last_stats.passes[p].ms >= 0.0);
+            }
+        ck_assert_msg(found, "pass %s has no time", passes[i]);
+    }
+    teardown(&f);
+}
+END_TEST
+
+/* ---------------------------------------------------------------- analytic direct light */
+
+/* Every floor pixel that sees the light has direct radiance (Kd/π)·I·cosθ/d² from its own
+ * G-buffer position, within 0.5% (README of the Cornell box). Pixels whose PCF footprint may
+ * straddle a shadow edge are excluded: those where any of 16 points on a ring around P
+ * (radius: PCF radius + 2 texels of the shadow map at that distance) is occluded. */
+START_TEST(cornell_floor_matches_analytic_direct_light)
+{
+    fixture f;
+    const int size = 256, smap = 1024;
+    setup(&f, size, 1, smap);
+    render(&f, 0);
+    const kept *pos = find(&f.keep, "gbuffer.position");
+    const kept *nrm = find(&f.keep, "gbuffer.normal");
+    const kept *alb = find(&f.keep, "gbuffer.albedo");
+    const kept *rad = find(&f.keep, "direct.radiance");
+    ck_assert(pos && nrm && alb && rad);
+    const float light[3] = {0.0f, 1.8f, 0.0f};
+    const double I = 3.0;
+    int floor_px = 0, checked = 0, shadowed = 0;
+    double worst = 0.0;
+    for (int y = 0; y < size; y++)
+        for (int x = 0; x < size; x++) {
+            size_t i = (size_t)y * size + x;
+            const float *p = pos->data + 3 * i, *n = nrm->data + 3 * i;
+            if (fabsf(p[1]) > 1e-4f || n[1] < 0.999f)
+                continue;
+            floor_px++;
+            double dx = light[0] - p[0], dy = light[1] - p[1], dz = light[2] - p[2];
+            double d2 = dx * dx + dy * dy + dz * dz, d = sqrt(d2);
+            /* Visibility at P and on a ring around it (PCF radius + 2 texels of the shadow
+             * map at this distance): all clear → lit, all blocked → black, else an edge. */
+            double ring = (1 + 2) * 2.0 * d / smap;
+            float from[3] = {p[0], p[1] + 1e-3f, p[2]};
+            int blocked = eng_occluded(f.eng, from, light);
+            for (int k = 0; k < 16; k++) {
+                double a = 2.0 * PI_D * k / 16.0;
+                float q[3] = {(float)(p[0] + ring * cos(a)), p[1] + 1e-3f, (float)(p[2] + ring * sin(a))};
+                blocked += eng_occluded(f.eng, q, light);
+            }
+            if (blocked == 17) {
+                shadowed++;
+                for (int c = 0; c < 3; c++)
+                    ck_assert_msg(rad->data[3 * i + c] == 0.0f, "pixel (%d,%d) is in umbra but lit: %f", x, y,
+                                  rad->data[3 * i + c]);
+                continue;
+            }
+            if (blocked)
+                continue;
+            double cos_t = dy / d;
+            for (int c = 0; c < 3; c++) {
+                double expect = alb->data[3 * i + c] / PI_D * I * cos_t / d2;
+                double got = rad->data[3 * i + c];
+                double rel = fabs(got - expect) / expect;
+                if (rel > worst)
+                    worst = rel;
+                ck_assert_msg(rel <= 0.005, "pixel (%d,%d) channel %d: %.6f, analytic %.6f (%.3f%%)", x, y, c, got,
+                              expect, rel * 100);
+            }
+            checked++;
+        }
+    fprintf(stderr, "analytic: %d floor pixels, %d checked, %d occluded, worst relative error %.2e\n", floor_px,
+            checked, shadowed, worst);
+    ck_assert_int_gt(floor_px, 5000);
+    ck_assert_int_gt(checked, floor_px / 2);
+    ck_assert_int_gt(shadowed, 100);
+
+    /* The README's worked example: floor point (−0.2, 0, 0.6) near pixel (106, 234). */
+    size_t i = (size_t)234 * size + 106;
+    const float *p = pos->data + 3 * i;
+    ck_assert_msg(fabsf(p[0] + 0.2f) < 0.01f && fabsf(p[1]) < 1e-4f && fabsf(p[2] - 0.6f) < 0.01f,
+                  "pixel (106,234) is at (%f,%f,%f)", p[0], p[1], p[2]);
+    ck_assert_msg(fabs(rad->data[3 * i] - 0.17944) / 0.17944 < 0.01, "R at (106,234) = %f", rad->data[3 * i]);
+    teardown(&f);
+}
+END_TEST
+
+START_TEST(gbuffer_holds_spec_materials_and_camera_depth)
+{
+    fixture f;
+    setup(&f, 128, 1, 128);
+    render(&f, 0);
+    const kept *alb = find(&f.keep, "gbuffer.albedo");
+    const kept *mat = find(&f.keep, "gbuffer.material");
+    const kept *depth = find(&f.keep, "gbuffer.depth");
+    const kept *pos = find(&f.keep, "gbuffer.position");
+    /* The centre pixel looks straight down −Z from (0,1,3.9): it sees the back wall (albedo
+     * 0.725, 0.71, 0.68) at z = −1.04 unless a box is in the way; its depth is 3.9 − z. */
+    size_t c = (size_t)64 * 128 + 64;
+    ck_assert_float_eq_tol(depth->data[c], 3.9f - pos->data[3 * c + 2], 1e-4f);
+    /* Left wall, middle height: red (0.63, 0.065, 0.05). */
+    size_t l = (size_t)64 * 128 + 3;
+    ck_assert_float_eq_tol(alb->data[3 * l + 0], 0.63f, 1e-6f);
+    ck_assert_float_eq_tol(alb->data[3 * l + 1], 0.065f, 1e-6f);
+    ck_assert_float_eq_tol(alb->data[3 * l + 2], 0.05f, 1e-6f);
+    /* Materials: roughness 1, metallic 0, no transmission, ior 1.5, a valid id. */
+    ck_assert_float_eq(mat->data[5 * l + 0], 1.0f);
+    ck_assert_float_eq(mat->data[5 * l + 1], 0.0f);
+    ck_assert_float_eq(mat->data[5 * l + 2], 0.0f);
+    ck_assert(mat->data[5 * l + 4] >= 0.0f);
+    teardown(&f);
+}
+END_TEST
+
+START_TEST(motion_vectors_follow_the_moving_box)
+{
+    fixture f;
+    setup(&f, 96, 8, 64);
+    render(&f, 0);
+    const kept *m0 = find(&f.keep, "gbuffer.motion");
+    for (size_t i = 0; i < (size_t)96 * 96 * 2; i++)
+        ck_assert_msg(m0->data[i] == 0.0f, "frame 0 motion must be zero");
+    keeper_clear(&f.keep);
+    render(&f, 3);
+    const kept *m = find(&f.keep, "gbuffer.motion");
+    const kept *pos = find(&f.keep, "gbuffer.position");
+    /* The camera dollies along −Z, so every surface pixel moves; pixels reproject to the
+     * previous frame: check one against the closed form using the camera of frame 2. */
+    int nonzero = 0;
+    for (size_t i = 0; i < (size_t)96 * 96; i++)
+        if (m->data[2 * i] != 0.0f || m->data[2 * i + 1] != 0.0f)
+            nonzero++;
+    ck_assert_int_gt(nonzero, 96 * 96 / 2);
+    /* A static point on the back wall: previous camera z = 3.9 − 0.3·(2/8) = 3.825. */
+    size_t y = 20, x = 70, i = y * 96 + x;
+    const float *p = pos->data + 3 * i;
+    double cam_prev = 3.9 - 0.3 * (2.0 / 8.0);
+    double f_ = 1.0 / tan(20.0 * PI_D / 180.0);
+    double ndc_x = f_ * (p[0] - 0.0) / (cam_prev - p[2]);
+    double ndc_y = f_ * (p[1] - 1.0) / (cam_prev - p[2]);
+    double prev_px = (ndc_x * 0.5 + 0.5) * 96.0, prev_py = (0.5 - ndc_y * 0.5) * 96.0;
+    ck_assert_msg(fabs((x + 0.5 + m->data[2 * i]) - prev_px) < 0.05, "x: %f vs %f", x + 0.5 + m->data[2 * i], prev_px);
+    ck_assert_msg(fabs((y + 0.5 + m->data[2 * i + 1]) - prev_py) < 0.05, "y: %f vs %f", y + 0.5 + m->data[2 * i + 1],
+                  prev_py);
+    teardown(&f);
+}
+END_TEST
+
+START_TEST(point_light_cube_faces_hold_distances)
+{
+    fixture f;
+    setup(&f, 32, 1, 64);
+    render(&f, 0);
+    /* Face 3 (−Y) looks straight down from the light at (0,1.8,0): its centre texel holds
+     * the distance to the first surface below, which Embree finds independently. */
+    const kept *face = find(&f.keep, "shadow.light0.face3");
+    ck_assert(face);
+    float centre = face->data[(size_t)32 * 64 + 32];
+    float from[3] = {0.0f, 1.8f, 0.0f};
+    /* Find the first hit straight down by bisection on occlusion. */
+    double lo = 0.0, hi = 1.8 + 0.01;
+    for (int it = 0; it < 40; it++) {
+        double mid = 0.5 * (lo + hi);
+        float to[3] = {0.0f, (float)(1.8 - mid), 0.0f};
+        if (eng_occluded(f.eng, from, to))
+            hi = mid;
+        else
+            lo = mid;
+    }
+    ck_assert_msg(fabs(centre - hi) < 0.02, "face3 centre %f, ray hit at %f", centre, hi);
+    /* Face 2 (+Y) looks at the ceiling 0.19 m above. */
+    float up = find(&f.keep, "shadow.light0.face2")->data[(size_t)32 * 64 + 32];
+    ck_assert_float_eq_tol(up, 0.19f, 0.005f);
+    teardown(&f);
+}
+END_TEST
+
+START_TEST(final_display_is_srgb_of_composite)
+{
+    fixture f;
+    setup(&f, 48, 1, 64);
+    render(&f, 0);
+    const kept *lin = find(&f.keep, "composite.radiance");
+    const kept *dir = find(&f.keep, "direct.radiance");
+    const kept *disp = find(&f.keep, "final.display");
+    for (size_t i = 0; i < (size_t)48 * 48 * 3; i++) {
+        ck_assert(lin->data[i] == dir->data[i]); /* no indirect yet: composite = direct */
+        double v = lin->data[i] < 0 ? 0 : lin->data[i] > 1 ? 1 : lin->data[i];
+        double s = v <= 0.0031308 ? 12.92 * v : 1.055 * pow(v, 1.0 / 2.4) - 0.055;
+        ck_assert_msg(fabs(s - disp->data[i]) < 2e-5, "display %f vs sRGB %f", disp->data[i], s);
+    }
+    teardown(&f);
+}
+END_TEST
+
+static int refuse_buffer(void *user, int frame, const eng_buffer *b)
+{
+    (void)frame;
+    (void)b;
+    (*(int *)user)++;
+    return 1;
+}
+
+START_TEST(listener_refusal_aborts_render)
+{
+    fixture f;
+    setup(&f, 16, 1, 16);
+    int calls = 0;
+    eng_listener l = {&calls, NULL, refuse_buffer, NULL};
+    ck_assert_int_eq(eng_add_listener(f.eng, &l), ENG_OK);
+    eng_error err;
+    ck_assert_int_eq(eng_render_frame(f.eng, 0, &err), ENG_ERR_ABORTED);
+    ck_assert_int_eq(calls, 1);
+    ck_assert_int_eq(eng_render_frame(f.eng, 5, &err), ENG_ERR_INVALID);
+    teardown(&f);
+}
+END_TEST
+
+static Suite *engine_suite(void)
+{
+    Suite *s = suite_create("engine");
+    TCase *t = tcase_create("passes");
+    tcase_set_timeout(t, 300);
+    tcase_add_test(t, announces_design_buffer_names);
+    tcase_add_test(t, gbuffer_holds_spec_materials_and_camera_depth);
+    tcase_add_test(t, motion_vectors_follow_the_moving_box);
+    tcase_add_test(t, point_light_cube_faces_hold_distances);
+    tcase_add_test(t, final_display_is_srgb_of_composite);
+    tcase_add_test(t, listener_refusal_aborts_render);
+    suite_add_tcase(s, t);
+    TCase *a = tcase_create("analytic");
+    tcase_set_timeout(a, 600);
+    tcase_add_test(a, cornell_floor_matches_analytic_direct_light);
+    suite_add_tcase(s, a);
+    return s;
+}
+
+int main(void)
+{
+    SRunner *r = srunner_create(engine_suite());
+    srunner_run_all(r, CK_NORMAL);
+    int failed = srunner_ntests_failed(r);
+    srunner_free(r);
+    return failed ? EXIT_FAILURE : EXIT_SUCCESS;
+}

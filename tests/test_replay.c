@@ -1,0 +1,1290 @@
+/* test_replay.c — the replay module's Check suite.
+ *
+ * Three tiers: pure logic (tolerance files, the per-buffer comparison on small synthetic
+ * arrays, where every verdict rule and the non-finite rule are pinned down), the OIIO shim
+ * round trip, and end-to-end replays of fixture runs. The capture module is built in parallel,
+ * so fixture runs are made here: frames written with rep_oiio_write_parts, manifests with
+ * cJSON and eng_buffer_digest, in the layout capture writes. Each end-to-end test damages a
+ * copy of a good run in exactly one way and checks the exit code and what the report names.
+ * Tests check result codes and report fields, never message text.
+ */
+#define _XOPEN_SOURCE 700
+
+#include <check.h>
+#include <cjson/cJSON.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include "rep.h"
+#include "rep_internal.h"
+
+/* ---------------------------------------------------------------- helpers */
+
+static char g_tmp[4096];
+
+static void tmp_setup(void)
+{
+    const char *base = getenv("TMPDIR");
+    snprintf(g_tmp, sizeof g_tmp, "%s/ispm-test-replay-XXXXXX", base && base[0] ? base : "/tmp");
+    ck_assert_ptr_nonnull(mkdtemp(g_tmp));
+}
+
+static void tmp_teardown(void)
+{
+    rep_remove_tree(g_tmp, NULL);
+}
+
+static char *tpath(const char *name)
+{
+    return rep_path_join(g_tmp, name);
+}
+
+/* A buffer of a fixture run. */
+typedef struct fx_buf {
+    char name[64];
+    int w, h, nch;
+    const char *ch[4];
+    float *data;
+} fx_buf;
+
+typedef struct fx_frame {
+    int count;
+    fx_buf bufs[8];
+} fx_frame;
+
+#define FX_FRAMES 3
+
+typedef struct fx_run {
+    int frames;
+    fx_frame f[FX_FRAMES];
+} fx_run;
+
+static void fx_set(fx_buf *b, const char *name, int w, int h, const char *c0, const char *c1, const char *c2,
+                   unsigned seed)
+{
+    free(b->data);
+    snprintf(b->name, sizeof b->name, "%s", name);
+    b->w = w;
+    b->h = h;
+    b->ch[0] = c0;
+    b->ch[1] = c1;
+    b->ch[2] = c2;
+    b->nch = c2 ? 3 : c1 ? 2 : 1;
+    b->data = malloc(sizeof(float) * (size_t)(w * h * b->nch));
+    ck_assert_ptr_nonnull(b->data);
+    for (int i = 0; i < w * h * b->nch; i++)
+        b->data[i] = 0.25f + (float)((i * 37u + seed * 101u) % 97u) / 97.0f;
+}
+
+static void fx_make(fx_run *r)
+{
+    memset(r, 0, sizeof *r);
+    r->frames = FX_FRAMES;
+    for (int i = 0; i < FX_FRAMES; i++) {
+        fx_frame *f = &r->f[i];
+        f->count = 3;
+        fx_set(&f->bufs[0], "gbuffer.position", 8, 6, "X", "Y", "Z", (unsigned)(10 * i + 1));
+        fx_set(&f->bufs[1], "direct.radiance", 8, 6, "R", "G", "B", (unsigned)(10 * i + 2));
+        fx_set(&f->bufs[2], "shadow.light0", 4, 4, "Z", NULL, NULL, (unsigned)(10 * i + 3));
+    }
+}
+
+static void fx_free(fx_run *r)
+{
+    for (int i = 0; i < FX_FRAMES; i++)
+        for (int j = 0; j < 8; j++)
+            free(r->f[i].bufs[j].data);
+}
+
+static eng_buffer fx_view(const fx_buf *b)
+{
+    eng_buffer e = {b->name, b->w, b->h, b->nch, b->ch, b->data};
+    return e;
+}
+
+static float *fx_at(fx_run *r, int frame, int buf, int x, int y, int c)
+{
+    fx_buf *b = &r->f[frame].bufs[buf];
+    return &b->data[((size_t)y * (size_t)b->w + (size_t)x) * (size_t)b->nch + (size_t)c];
+}
+
+/* Writes frames/NNNNNN.exr and manifest.json (unless no_manifest) into dir. */
+static void fx_write_ex(const fx_run *r, const char *dir, int complete, int no_manifest)
+{
+    eng_error err = {{0}};
+    char *frames = rep_path_join(dir, "frames");
+    ck_assert_int_eq(rep_mkdirs(frames, &err), ENG_OK);
+    cJSON *root = cJSON_CreateObject();
+    cJSON_AddStringToObject(root, "format", "ispm-run");
+    cJSON_AddNumberToObject(root, "format_version", 1);
+    cJSON *tool = cJSON_AddObjectToObject(root, "tool");
+    cJSON_AddStringToObject(tool, "name", "ispm");
+    cJSON_AddStringToObject(tool, "version", "0.1.0");
+    cJSON_AddStringToObject(tool, "git", "test");
+    cJSON_AddStringToObject(root, "command", "test_replay");
+    cJSON *seq = cJSON_AddObjectToObject(root, "sequence");
+    cJSON_AddStringToObject(seq, "path", "fixture.json");
+    cJSON_AddStringToObject(seq, "name", "fixture");
+    cJSON_AddStringToObject(seq, "digest", "00000000000000000000000000000000");
+    cJSON *res = cJSON_AddArrayToObject(root, "resolution");
+    cJSON_AddItemToArray(res, cJSON_CreateNumber(8));
+    cJSON_AddItemToArray(res, cJSON_CreateNumber(6));
+    cJSON_AddNumberToObject(root, "fps", 8);
+    cJSON_AddNumberToObject(root, "frame_count", r->frames);
+    cJSON_AddStringToObject(root, "camera", "Camera");
+    cJSON *jframes = cJSON_AddArrayToObject(root, "frames");
+    for (int i = 0; i < r->frames; i++) {
+        const fx_frame *f = &r->f[i];
+        char file[64], *path;
+        snprintf(file, sizeof file, "frames/%06d.exr", i);
+        path = rep_path_join(dir, file);
+        eng_buffer views[8];
+        cJSON *jf = cJSON_CreateObject();
+        cJSON_AddNumberToObject(jf, "index", i);
+        cJSON_AddNumberToObject(jf, "time", i / 8.0);
+        cJSON_AddStringToObject(jf, "file", file);
+        cJSON *jb = cJSON_AddArrayToObject(jf, "buffers");
+        for (int j = 0; j < f->count; j++) {
+            views[j] = fx_view(&f->bufs[j]);
+            char dg[40];
+            uint64_t nn, ni;
+            int fx, fy;
+            eng_buffer_digest(&views[j], dg);
+            eng_buffer_nonfinite(&views[j], &nn, &ni, &fx, &fy);
+            cJSON *b = cJSON_CreateObject();
+            cJSON_AddStringToObject(b, "name", f->bufs[j].name);
+            cJSON_AddNumberToObject(b, "width", f->bufs[j].w);
+            cJSON_AddNumberToObject(b, "height", f->bufs[j].h);
+            cJSON *ch = cJSON_AddArrayToObject(b, "channels");
+            for (int c = 0; c < f->bufs[j].nch; c++)
+                cJSON_AddItemToArray(ch, cJSON_CreateString(f->bufs[j].ch[c]));
+            cJSON_AddStringToObject(b, "digest", dg);
+            cJSON_AddNumberToObject(b, "nan", (double)nn);
+            cJSON_AddNumberToObject(b, "inf", (double)ni);
+            if (fx < 0) {
+                cJSON_AddNullToObject(b, "first_nonfinite");
+            } else {
+                cJSON *p = cJSON_AddArrayToObject(b, "first_nonfinite");
+                cJSON_AddItemToArray(p, cJSON_CreateNumber(fx));
+                cJSON_AddItemToArray(p, cJSON_CreateNumber(fy));
+            }
+            cJSON_AddItemToArray(jb, b);
+        }
+        cJSON_AddItemToArray(jframes, jf);
+        ck_assert_msg(rep_oiio_write_parts(path, views, f->count, &err) == ENG_OK, "%s", err.msg);
+        free(path);
+    }
+    cJSON_AddBoolToObject(root, "complete", complete);
+    char *text = cJSON_Print(root);
+    cJSON_Delete(root);
+    if (!no_manifest) {
+        char *mp = rep_path_join(dir, "manifest.json");
+        ck_assert_int_eq(rep_write_atomic(mp, text, strlen(text), &err), ENG_OK);
+        free(mp);
+    }
+    cJSON_free(text);
+    free(frames);
+}
+
+static void fx_write(const fx_run *r, const char *dir)
+{
+    fx_write_ex(r, dir, 1, 0);
+}
+
+/* Writes an unmodified fixture to <tmp>/golden and returns its path. */
+static char *make_golden(void)
+{
+    fx_run g;
+    fx_make(&g);
+    char *dir = tpath("golden");
+    fx_write(&g, dir);
+    fx_free(&g);
+    return dir;
+}
+
+static rep_exit replay(const char *run, const char *golden, eng_error *err)
+{
+    rep_options o = {0};
+    o.run_dir = run;
+    o.golden_dir = golden;
+    o.quiet = 1;
+    return rep_replay(&o, NULL, err);
+}
+
+static cJSON *load_json(const char *path)
+{
+    char *text = NULL;
+    size_t len = 0;
+    eng_error err;
+    ck_assert_msg(eng_read_file(path, 1 << 24, &text, &len, &err) == ENG_OK, "%s", err.msg);
+    cJSON *j = cJSON_Parse(text);
+    free(text);
+    ck_assert_ptr_nonnull(j);
+    return j;
+}
+
+static cJSON *report_of(const char *run)
+{
+    char *dir = rep_path_join(run, "replay");
+    char *p = rep_path_join(dir, "report.json");
+    cJSON *j = load_json(p);
+    free(p);
+    free(dir);
+    return j;
+}
+
+/* The buffer entry for (frame, name) in report.json, or NULL. */
+static const cJSON *report_entry(const cJSON *rep, int frame, const char *name)
+{
+    const cJSON *frames = cJSON_GetObjectItem(rep, "frames");
+    const cJSON *f;
+    cJSON_ArrayForEach(f, frames)
+    {
+        if ((int)cJSON_GetObjectItem(f, "index")->valuedouble != frame)
+            continue;
+        const cJSON *b;
+        cJSON_ArrayForEach(b, cJSON_GetObjectItem(f, "buffers"))
+        if (strcmp(cJSON_GetObjectItem(b, "name")->valuestring, name) == 0)
+            return b;
+    }
+    return NULL;
+}
+
+static const char *str_of(const cJSON *o, const char *k)
+{
+    const cJSON *v = cJSON_GetObjectItem(o, k);
+    ck_assert_msg(cJSON_IsString(v), "key %s is not a string", k);
+    return v->valuestring;
+}
+
+static double num_of(const cJSON *o, const char *k)
+{
+    const cJSON *v = cJSON_GetObjectItem(o, k);
+    ck_assert_msg(cJSON_IsNumber(v), "key %s is not a number", k);
+    return v->valuedouble;
+}
+
+/* ---------------------------------------------------------------- tolerances */
+
+static rep_tolerances *parse_tol(const char *json, eng_result expect)
+{
+    rep_tolerances *t = NULL;
+    eng_error err = {{0}};
+    eng_result r = rep_tol_parse("tol.json", json, strlen(json), &t, &err);
+    ck_assert_msg(r == expect, "got %s (%s), expected %s", eng_result_name(r), err.msg, eng_result_name(expect));
+    return t;
+}
+
+START_TEST(tol_first_match_wins_and_defaults_fill)
+{
+    rep_tolerances *t = parse_tol("{\"default\": {\"fail\": 0.5, \"warn\": 0.1},"
+                                  " \"buffers\": ["
+                                  "  {\"match\": \"gbuffer.*\", \"exact\": true},"
+                                  "  {\"match\": \"gbuffer.position\", \"fail\": 7},"
+                                  "  {\"match\": \"direct.radiance\", \"fail\": 1e-5, \"failpercent\": 0.05,"
+                                  "   \"rmse_fail\": 1e-5}]}",
+                                  ENG_OK);
+    rep_tol tol;
+    ck_assert_str_eq(rep_tol_lookup(t, "gbuffer.position", &tol), "gbuffer.*");
+    ck_assert_int_eq(tol.exact, 1);
+    ck_assert_double_eq(tol.fail, 0.5); /* from "default", not from the later rule */
+    ck_assert_str_eq(rep_tol_lookup(t, "direct.radiance", &tol), "direct.radiance");
+    ck_assert_int_eq(tol.exact, 0);
+    ck_assert_double_eq(tol.fail, 1e-5);
+    ck_assert_double_eq(tol.failpercent, 0.05);
+    ck_assert_double_eq(tol.rmse_fail, 1e-5);
+    ck_assert_double_eq(tol.warn, 0.1);         /* from "default" */
+    ck_assert_double_eq(tol.hardfail, 1e-2);    /* built-in */
+    ck_assert_double_eq(tol.failrelative, 1e-4);
+    ck_assert(isinf(tol.rmse_warn));
+    ck_assert_str_eq(rep_tol_lookup(t, "shadow.light0", &tol), "default");
+    ck_assert_double_eq(tol.fail, 0.5);
+    rep_tol_free(t);
+}
+END_TEST
+
+START_TEST(tol_builtin_defaults)
+{
+    rep_tol d;
+    rep_tol_builtin(&d);
+    ck_assert_double_eq(d.warn, 0);
+    ck_assert_double_eq(d.fail, 1e-4);
+    ck_assert_double_eq(d.failrelative, 1e-4);
+    ck_assert_double_eq(d.failpercent, 0);
+    ck_assert_double_eq(d.hardfail, 1e-2);
+    ck_assert_int_eq(d.exact, 0);
+    /* The default file bless writes parses to the same values. */
+    char *json = rep_tol_default_json();
+    rep_tolerances *t = parse_tol(json, ENG_OK);
+    ck_assert_int_eq(memcmp(&t->def, &d, sizeof d), 0);
+    rep_tol_free(t);
+    free(json);
+}
+END_TEST
+
+START_TEST(tol_rejects_bad_files)
+{
+    ck_assert_ptr_null(parse_tol("{\"default\": {\"fial\": 1}}", ENG_ERR_INVALID));
+    ck_assert_ptr_null(parse_tol("{\"buffers\": [{\"match\": \"a\", \"tolerance\": 1}]}", ENG_ERR_INVALID));
+    ck_assert_ptr_null(parse_tol("{\"default\": {\"fail\": -1}}", ENG_ERR_INVALID));
+    ck_assert_ptr_null(parse_tol("{\"buffers\": [{\"match\": \"a\", \"hardfail\": -0.5}]}", ENG_ERR_INVALID));
+    ck_assert_ptr_null(parse_tol("{\"default\": {\"fail\": 1e999}}", ENG_ERR_INVALID));
+    ck_assert_ptr_null(parse_tol("{\"default\": {\"fail\": \"1\"}}", ENG_ERR_INVALID));
+    ck_assert_ptr_null(parse_tol("{\"default\": {\"exact\": 1}}", ENG_ERR_INVALID));
+    ck_assert_ptr_null(parse_tol("{\"buffers\": [{\"fail\": 1}]}", ENG_ERR_INVALID));
+    ck_assert_ptr_null(parse_tol("{\"defaults\": {}}", ENG_ERR_INVALID));
+    ck_assert_ptr_null(parse_tol("{\"default\": {\"fail\": 1}", ENG_ERR_PARSE));
+}
+END_TEST
+
+START_TEST(tol_missing_file)
+{
+    rep_tolerances *t = NULL;
+    eng_error err;
+    char *p = tpath("nope.json");
+    ck_assert_int_eq(rep_tol_load(p, 1, &t, &err), ENG_OK);
+    ck_assert_ptr_null(t->path);
+    ck_assert_double_eq(t->def.fail, 1e-4);
+    rep_tol_free(t);
+    ck_assert_int_eq(rep_tol_load(p, 0, &t, &err), ENG_ERR_IO);
+    free(p);
+}
+END_TEST
+
+/* ---------------------------------------------------------------- comparison */
+
+enum { CW = 10, CH = 10 };
+
+typedef struct cmp_pair {
+    float a[CW * CH], b[CW * CH];
+    eng_buffer run, golden;
+} cmp_pair;
+
+static const char *const Y_CH[] = {"Y"};
+
+static void pair_init(cmp_pair *p, float v)
+{
+    for (int i = 0; i < CW * CH; i++)
+        p->a[i] = p->b[i] = v;
+    eng_buffer e = {"t", CW, CH, 1, Y_CH, NULL};
+    p->run = p->golden = e;
+    p->run.data = p->a;
+    p->golden.data = p->b;
+}
+
+static rep_tol loose(void)
+{
+    rep_tol t;
+    rep_tol_builtin(&t);
+    t.warn = 1e30;
+    t.fail = 1e30;
+    t.failpercent = 100;
+    t.warnpercent = 100;
+    t.hardfail = 1e30;
+    return t;
+}
+
+START_TEST(cmp_identical_is_bitexact)
+{
+    cmp_pair p;
+    pair_init(&p, 0.5f);
+    rep_tol t;
+    rep_tol_builtin(&t);
+    rep_metrics m;
+    ck_assert_int_eq(rep_compare(&p.run, &p.golden, &t, &m), REP_V_BITEXACT);
+    ck_assert_double_eq(m.max_abs, 0);
+    ck_assert_int_eq(m.max_x, -1);
+}
+END_TEST
+
+START_TEST(cmp_tiny_diff_within_or_warn)
+{
+    cmp_pair p;
+    pair_init(&p, 0.5f);
+    p.a[37] = 0.5f + 1e-6f;
+    rep_tol t;
+    rep_tol_builtin(&t);
+    t.warn = 1e-5;
+    rep_metrics m;
+    ck_assert_int_eq(rep_compare(&p.run, &p.golden, &t, &m), REP_V_WITHIN);
+    ck_assert_int_eq(m.max_x, 7);
+    ck_assert_int_eq(m.max_y, 3);
+    ck_assert_str_eq(m.max_channel, "Y");
+    ck_assert_uint_eq(m.values_differing, 1);
+    t.warn = 0; /* the built-in warn: any difference warns */
+    ck_assert_int_eq(rep_compare(&p.run, &p.golden, &t, &m), REP_V_WARN);
+    ck_assert_uint_eq(m.warn_pixels, 1);
+    ck_assert(m.warn_why & REP_WHY_PERCENT);
+}
+END_TEST
+
+START_TEST(cmp_failpercent)
+{
+    cmp_pair p;
+    pair_init(&p, 0.5f);
+    p.a[55] = 0.501f; /* d 1e-3 > fail 1e-4 on 1 pixel of 100 */
+    rep_tol t;
+    rep_tol_builtin(&t);
+    rep_metrics m;
+    ck_assert_int_eq(rep_compare(&p.run, &p.golden, &t, &m), REP_V_FAIL);
+    ck_assert(m.fail_why & REP_WHY_PERCENT);
+    ck_assert_uint_eq(m.fail_pixels, 1);
+    ck_assert_double_eq_tol(m.fail_percent, 1.0, 1e-12);
+    ck_assert_int_eq(m.first_fail_x, 5);
+    ck_assert_int_eq(m.first_fail_y, 5);
+    t.failpercent = 2;
+    ck_assert_int_eq(rep_compare(&p.run, &p.golden, &t, &m), REP_V_WARN);
+    t.warn = 1e-2;
+    ck_assert_int_eq(rep_compare(&p.run, &p.golden, &t, &m), REP_V_WITHIN);
+}
+END_TEST
+
+START_TEST(cmp_hardfail)
+{
+    cmp_pair p;
+    pair_init(&p, 0.5f);
+    p.a[0] = 1.0f;
+    rep_tol t = loose();
+    t.hardfail = 0.1;
+    rep_metrics m;
+    ck_assert_int_eq(rep_compare(&p.run, &p.golden, &t, &m), REP_V_FAIL);
+    ck_assert_uint_eq(m.fail_why, REP_WHY_HARD);
+    t.hardfail = 0.5; /* equal to the threshold passes */
+    ck_assert_int_eq(rep_compare(&p.run, &p.golden, &t, &m), REP_V_WITHIN);
+    t.hardwarn = 0.2;
+    ck_assert_int_eq(rep_compare(&p.run, &p.golden, &t, &m), REP_V_WARN);
+    ck_assert_uint_eq(m.warn_why, REP_WHY_HARD);
+}
+END_TEST
+
+START_TEST(cmp_relative_threshold)
+{
+    cmp_pair p;
+    pair_init(&p, 1000.0f);
+    p.a[3] = 1000.0f + 0.0625f; /* d 6.25e-2 > fail, rel 6.2e-5 < failrelative 1e-4 */
+    rep_tol t;
+    rep_tol_builtin(&t);
+    t.hardfail = 1;
+    t.warn = 1;
+    rep_metrics m;
+    ck_assert_int_eq(rep_compare(&p.run, &p.golden, &t, &m), REP_V_WITHIN);
+    ck_assert_uint_eq(m.fail_pixels, 0);
+    t.failrelative = 1e-5;
+    ck_assert_int_eq(rep_compare(&p.run, &p.golden, &t, &m), REP_V_FAIL);
+    ck_assert_uint_eq(m.fail_pixels, 1);
+    /* Both zero: rel is 0, so a relative threshold cannot make zero fail. */
+    pair_init(&p, 0.0f);
+    t.fail = 0;
+    t.failrelative = 0;
+    ck_assert_int_eq(rep_compare(&p.run, &p.golden, &t, &m), REP_V_BITEXACT);
+}
+END_TEST
+
+START_TEST(cmp_rmse_threshold)
+{
+    cmp_pair p;
+    pair_init(&p, 0.5f);
+    for (int i = 0; i < CW * CH; i++)
+        p.a[i] = 0.5f + 0.0009765625f; /* 2^-10, exact in float */
+    rep_tol t = loose();
+    t.rmse_fail = 5e-4;
+    rep_metrics m;
+    ck_assert_int_eq(rep_compare(&p.run, &p.golden, &t, &m), REP_V_FAIL);
+    ck_assert_uint_eq(m.fail_why, REP_WHY_RMSE);
+    ck_assert_double_eq_tol(m.rmse, 0.0009765625, 1e-12);
+    ck_assert_double_eq_tol(m.mean_abs, 0.0009765625, 1e-12);
+    t.rmse_fail = 2e-3;
+    ck_assert_int_eq(rep_compare(&p.run, &p.golden, &t, &m), REP_V_WITHIN);
+    t.rmse_warn = 5e-4;
+    ck_assert_int_eq(rep_compare(&p.run, &p.golden, &t, &m), REP_V_WARN);
+}
+END_TEST
+
+START_TEST(cmp_exact_mode)
+{
+    cmp_pair p;
+    pair_init(&p, 0.0f);
+    p.a[9] = -0.0f; /* equal as numbers, different bits */
+    rep_tol t = loose();
+    rep_metrics m;
+    ck_assert_int_eq(rep_compare(&p.run, &p.golden, &t, &m), REP_V_WITHIN);
+    t.exact = 1;
+    ck_assert_int_eq(rep_compare(&p.run, &p.golden, &t, &m), REP_V_FAIL);
+    ck_assert_uint_eq(m.fail_why, REP_WHY_EXACT);
+    pair_init(&p, 0.5f);
+    ck_assert_int_eq(rep_compare(&p.run, &p.golden, &t, &m), REP_V_BITEXACT);
+}
+END_TEST
+
+START_TEST(cmp_nan_in_run_fails_whatever_the_tolerance)
+{
+    cmp_pair p;
+    pair_init(&p, 0.5f);
+    p.a[23] = NAN;
+    p.a[40] = NAN;
+    rep_tol t = loose();
+    t.failrelative = 1e30;
+    t.rmse_fail = 1e30;
+    rep_metrics m;
+    ck_assert_int_eq(rep_compare(&p.run, &p.golden, &t, &m), REP_V_FAIL);
+    ck_assert(m.fail_why & REP_WHY_NONFINITE);
+    ck_assert_uint_eq(m.run_nan, 2);
+    ck_assert_uint_eq(m.golden_nan, 0);
+    ck_assert_uint_eq(m.nonfinite_mismatch, 2);
+    ck_assert_int_eq(m.nf_x, 3);
+    ck_assert_int_eq(m.nf_y, 2);
+    ck_assert_str_eq(m.nf_channel, "Y");
+    /* A NaN that disappears is a change too. */
+    pair_init(&p, 0.5f);
+    p.b[5] = NAN;
+    ck_assert_int_eq(rep_compare(&p.run, &p.golden, &t, &m), REP_V_FAIL);
+    ck_assert_uint_eq(m.golden_nan, 1);
+}
+END_TEST
+
+START_TEST(cmp_nan_in_both_is_not_a_failure)
+{
+    cmp_pair p;
+    pair_init(&p, 0.5f);
+    p.a[11] = p.b[11] = NAN;
+    rep_tol t;
+    rep_tol_builtin(&t);
+    rep_metrics m;
+    ck_assert_int_eq(rep_compare(&p.run, &p.golden, &t, &m), REP_V_BITEXACT);
+    ck_assert_uint_eq(m.run_nan, 1);
+    ck_assert_uint_eq(m.golden_nan, 1);
+    ck_assert_uint_eq(m.nonfinite_mismatch, 0);
+    p.a[12] = p.b[12] = INFINITY;
+    p.a[13] = p.b[13] = -INFINITY;
+    ck_assert_int_eq(rep_compare(&p.run, &p.golden, &t, &m), REP_V_BITEXACT);
+    ck_assert_uint_eq(m.run_inf, 2);
+    /* Same class, different payload: not bit-exact, but no failure either. */
+    uint32_t q = 0x7fc00001u;
+    memcpy(&p.a[11], &q, 4);
+    t.warn = 1;
+    ck_assert_int_eq(rep_compare(&p.run, &p.golden, &t, &m), REP_V_WITHIN);
+    ck_assert_uint_eq(m.nonfinite_mismatch, 0);
+}
+END_TEST
+
+START_TEST(cmp_pinf_vs_ninf_fails)
+{
+    cmp_pair p;
+    pair_init(&p, 0.5f);
+    p.a[99] = INFINITY;
+    p.b[99] = -INFINITY;
+    rep_tol t = loose();
+    rep_metrics m;
+    ck_assert_int_eq(rep_compare(&p.run, &p.golden, &t, &m), REP_V_FAIL);
+    ck_assert_uint_eq(m.fail_why, REP_WHY_NONFINITE);
+    ck_assert_int_eq(m.nf_x, 9);
+    ck_assert_int_eq(m.nf_y, 9);
+    ck_assert(m.nf_run > 0 && m.nf_golden < 0);
+}
+END_TEST
+
+START_TEST(cmp_size_and_channels)
+{
+    float a[12] = {1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12}, b[12] = {3, 2, 1, 6, 5, 4, 9, 8, 7, 12, 11, 10};
+    const char *rgb[] = {"R", "G", "B"}, *bgr[] = {"B", "G", "R"}, *xyz[] = {"X", "Y", "Z"};
+    eng_buffer r = {"t", 2, 2, 3, rgb, a}, g = {"t", 2, 2, 3, bgr, b};
+    rep_tol t;
+    rep_tol_builtin(&t);
+    rep_metrics m;
+    ck_assert_int_eq(rep_compare(&r, &g, &t, &m), REP_V_BITEXACT); /* matched by name */
+    g.channels = xyz;
+    ck_assert_int_eq(rep_compare(&r, &g, &t, &m), REP_V_SIZE);
+    g.channels = bgr;
+    g.width = 4;
+    g.height = 1;
+    ck_assert_int_eq(rep_compare(&r, &g, &t, &m), REP_V_SIZE);
+    g.width = 2;
+    g.height = 2;
+    g.channel_count = 2;
+    ck_assert_int_eq(rep_compare(&r, &g, &t, &m), REP_V_SIZE);
+}
+END_TEST
+
+/* ---------------------------------------------------------------- OIIO shim */
+
+START_TEST(shim_round_trip)
+{
+    fx_run r;
+    fx_make(&r);
+    *fx_at(&r, 0, 1, 2, 3, 1) = NAN;
+    *fx_at(&r, 0, 1, 2, 4, 0) = -INFINITY;
+    *fx_at(&r, 0, 1, 2, 5, 2) = -0.0f;
+    eng_buffer v[3];
+    for (int j = 0; j < 3; j++)
+        v[j] = fx_view(&r.f[0].bufs[j]);
+    char *path = tpath("rt.exr");
+    eng_error err;
+    ck_assert_msg(rep_oiio_write_parts(path, v, 3, &err) == ENG_OK, "%s", err.msg);
+    rep_part *parts = NULL;
+    int n = 0;
+    ck_assert_msg(rep_oiio_read_parts(path, REP_MAX_FLOATS, &parts, &n, &err) == ENG_OK, "%s", err.msg);
+    ck_assert_int_eq(n, 3);
+    for (int j = 0; j < 3; j++) {
+        int k = 0;
+        while (k < n && strcmp(parts[k].name, v[j].name) != 0)
+            k++;
+        ck_assert_int_lt(k, n);
+        eng_buffer b = rep_part_buffer(&parts[k]);
+        char d1[40], d2[40];
+        eng_buffer_digest(&v[j], d1);
+        eng_buffer_digest(&b, d2);
+        ck_assert_str_eq(d1, d2); /* bit-exact, NaN and -0 included */
+        ck_assert_int_eq(b.width, v[j].width);
+        ck_assert_int_eq(b.height, v[j].height);
+    }
+    rep_parts_free(parts, n);
+    /* A cap below the largest part refuses the file before decoding it. */
+    ck_assert_int_eq(rep_oiio_read_parts(path, 100, &parts, &n, &err), ENG_ERR_INVALID);
+    ck_assert_ptr_null(parts);
+    free(path);
+    fx_free(&r);
+}
+END_TEST
+
+START_TEST(shim_rejects_garbage)
+{
+    char *path = tpath("garbage.exr");
+    eng_error err;
+    const char junk[] = "this is not an EXR file at all, just text";
+    ck_assert_int_eq(rep_write_atomic(path, junk, sizeof junk, &err), ENG_OK);
+    rep_part *parts = NULL;
+    int n = 0;
+    ck_assert_int_ne(rep_oiio_read_parts(path, REP_MAX_FLOATS, &parts, &n, &err), ENG_OK);
+    ck_assert_ptr_nonnull(strstr(err.msg, path));
+    ck_assert_ptr_null(strchr(err.msg, '\n'));
+    free(path);
+    path = tpath("missing.exr");
+    ck_assert_int_eq(rep_oiio_read_parts(path, REP_MAX_FLOATS, &parts, &n, &err), ENG_ERR_IO);
+    free(path);
+}
+END_TEST
+
+/* ---------------------------------------------------------------- end to end */
+
+START_TEST(e2e_identical_is_bitexact)
+{
+    char *golden = make_golden();
+    fx_run r;
+    fx_make(&r);
+    char *run = tpath("run");
+    fx_write(&r, run);
+    eng_error err = {{0}};
+    ck_assert_msg(replay(run, golden, &err) == REP_OK, "%s", err.msg);
+    cJSON *rep = report_of(run);
+    ck_assert_str_eq(str_of(rep, "verdict"), "OK");
+    const cJSON *counts = cJSON_GetObjectItem(rep, "counts");
+    ck_assert_double_eq(num_of(counts, "bit-exact"), 9);
+    ck_assert_double_eq(num_of(counts, "fail"), 0);
+    ck_assert_double_eq(num_of(rep, "buffer_count"), 9);
+    ck_assert(cJSON_IsNull(cJSON_GetObjectItem(rep, "first_digest_difference")));
+    ck_assert(cJSON_IsNull(cJSON_GetObjectItem(rep, "first_difference")));
+    cJSON_Delete(rep);
+    fx_free(&r);
+    free(run);
+    free(golden);
+}
+END_TEST
+
+START_TEST(e2e_one_pixel_changed)
+{
+    char *golden = make_golden();
+    fx_run r;
+    fx_make(&r);
+    *fx_at(&r, 1, 1, 3, 2, 1) += 0.5f;
+    char *run = tpath("run");
+    fx_write(&r, run);
+    eng_error err;
+    ck_assert_int_eq(replay(run, golden, &err), REP_FAIL);
+    cJSON *rep = report_of(run);
+    ck_assert_str_eq(str_of(rep, "verdict"), "FAIL");
+    ck_assert_double_eq(num_of(rep, "exit_code"), 2);
+    const cJSON *d = cJSON_GetObjectItem(rep, "first_digest_difference");
+    ck_assert_double_eq(num_of(d, "frame"), 1);
+    ck_assert_str_eq(str_of(d, "buffer"), "direct.radiance");
+    d = cJSON_GetObjectItem(rep, "first_difference");
+    ck_assert_double_eq(num_of(d, "frame"), 1);
+    ck_assert_str_eq(str_of(d, "buffer"), "direct.radiance");
+    const cJSON *e = report_entry(rep, 1, "direct.radiance");
+    ck_assert_ptr_nonnull(e);
+    ck_assert_str_eq(str_of(e, "verdict"), "fail");
+    const cJSON *m = cJSON_GetObjectItem(e, "metrics");
+    const cJSON *at = cJSON_GetObjectItem(m, "max_at");
+    ck_assert_double_eq(num_of(at, "x"), 3);
+    ck_assert_double_eq(num_of(at, "y"), 2);
+    ck_assert_str_eq(str_of(at, "channel"), "G");
+    ck_assert_double_eq_tol(num_of(m, "max_abs_error"), 0.5, 1e-6);
+    ck_assert_double_eq(num_of(m, "fail_pixels"), 1);
+    ck_assert_str_eq(str_of(report_entry(rep, 0, "direct.radiance"), "verdict"), "bit-exact");
+    ck_assert_str_eq(str_of(report_entry(rep, 1, "gbuffer.position"), "verdict"), "bit-exact");
+    ck_assert_double_eq(num_of(cJSON_GetObjectItem(rep, "counts"), "bit-exact"), 8);
+    cJSON_Delete(rep);
+    fx_free(&r);
+    free(run);
+    free(golden);
+}
+END_TEST
+
+START_TEST(e2e_nan_fails)
+{
+    char *golden = make_golden();
+    fx_run r;
+    fx_make(&r);
+    *fx_at(&r, 2, 0, 1, 1, 2) = NAN;
+    char *run = tpath("run");
+    fx_write(&r, run);
+    /* Even tolerances that would accept anything finite do not accept the NaN. */
+    char *tol = rep_path_join(golden, "tolerances.json");
+    const char *loose_json = "{\"default\": {\"warn\": 1e30, \"fail\": 1e30, \"failpercent\": 100,"
+                             " \"warnpercent\": 100, \"hardfail\": 1e30}}";
+    eng_error err;
+    ck_assert_int_eq(rep_write_atomic(tol, loose_json, strlen(loose_json), &err), ENG_OK);
+    ck_assert_int_eq(replay(run, golden, &err), REP_FAIL);
+    cJSON *rep = report_of(run);
+    const cJSON *e = report_entry(rep, 2, "gbuffer.position");
+    ck_assert_str_eq(str_of(e, "verdict"), "fail");
+    const cJSON *m = cJSON_GetObjectItem(e, "metrics");
+    ck_assert_double_eq(num_of(cJSON_GetObjectItem(m, "run"), "nan"), 1);
+    const cJSON *at = cJSON_GetObjectItem(m, "first_nonfinite_mismatch");
+    ck_assert_double_eq(num_of(at, "x"), 1);
+    ck_assert_double_eq(num_of(at, "y"), 1);
+    ck_assert_str_eq(str_of(at, "channel"), "Z");
+    cJSON_Delete(rep);
+    fx_free(&r);
+    free(tol);
+    free(run);
+    free(golden);
+}
+END_TEST
+
+START_TEST(e2e_missing_and_extra_buffer)
+{
+    char *golden = make_golden();
+    eng_error err;
+    fx_run r;
+    fx_make(&r);
+    r.f[1].count = 2; /* shadow.light0 gone from frame 1 */
+    char *run = tpath("run-missing");
+    fx_write(&r, run);
+    ck_assert_int_eq(replay(run, golden, &err), REP_FAIL);
+    cJSON *rep = report_of(run);
+    const cJSON *e = report_entry(rep, 1, "shadow.light0");
+    ck_assert_ptr_nonnull(e);
+    ck_assert_str_eq(str_of(e, "verdict"), "fail");
+    ck_assert_str_eq(str_of(e, "problem"), "missing from run");
+    cJSON_Delete(rep);
+    fx_free(&r);
+    free(run);
+
+    fx_make(&r);
+    r.f[0].count = 4;
+    fx_set(&r.f[0].bufs[3], "splat.count", 8, 6, "Y", NULL, NULL, 99);
+    run = tpath("run-extra");
+    fx_write(&r, run);
+    ck_assert_int_eq(replay(run, golden, &err), REP_FAIL);
+    rep = report_of(run);
+    e = report_entry(rep, 0, "splat.count");
+    ck_assert_ptr_nonnull(e);
+    ck_assert_str_eq(str_of(e, "problem"), "not in golden");
+    cJSON_Delete(rep);
+    fx_free(&r);
+    free(run);
+    free(golden);
+}
+END_TEST
+
+START_TEST(e2e_missing_frame)
+{
+    char *golden = make_golden();
+    fx_run r;
+    fx_make(&r);
+    r.frames = 2;
+    char *run = tpath("run");
+    fx_write(&r, run);
+    eng_error err;
+    ck_assert_int_eq(replay(run, golden, &err), REP_FAIL);
+    cJSON *rep = report_of(run);
+    ck_assert_str_eq(str_of(report_entry(rep, 2, "direct.radiance"), "problem"), "frame missing from run");
+    ck_assert_double_eq(num_of(rep, "frame_count"), 3);
+    cJSON_Delete(rep);
+    fx_free(&r);
+    free(run);
+    free(golden);
+}
+END_TEST
+
+START_TEST(e2e_size_mismatch)
+{
+    char *golden = make_golden();
+    fx_run r;
+    fx_make(&r);
+    fx_set(&r.f[0].bufs[2], "shadow.light0", 8, 8, "Z", NULL, NULL, 3);
+    *fx_at(&r, 1, 1, 0, 0, 0) += 1.0f; /* a failure as well: size still wins */
+    char *run = tpath("run");
+    fx_write(&r, run);
+    eng_error err;
+    ck_assert_int_eq(replay(run, golden, &err), REP_SIZE);
+    cJSON *rep = report_of(run);
+    ck_assert_str_eq(str_of(rep, "verdict"), "SIZE MISMATCH");
+    ck_assert_str_eq(str_of(report_entry(rep, 0, "shadow.light0"), "verdict"), "size mismatch");
+    cJSON_Delete(rep);
+    fx_free(&r);
+    free(run);
+    free(golden);
+}
+END_TEST
+
+/* A good run at <tmp>/run; returns its path. */
+static char *make_run(void)
+{
+    fx_run r;
+    fx_make(&r);
+    char *run = tpath("run");
+    fx_write(&r, run);
+    fx_free(&r);
+    return run;
+}
+
+static long file_size(const char *p)
+{
+    struct stat st;
+    ck_assert_int_eq(stat(p, &st), 0);
+    return (long)st.st_size;
+}
+
+START_TEST(e2e_truncated_exr_is_unreadable)
+{
+    char *golden = make_golden();
+    char *run = make_run();
+    char *f = rep_path_join(run, "frames/000001.exr");
+    ck_assert_int_eq(truncate(f, file_size(f) / 2), 0);
+    eng_error err = {{0}};
+    ck_assert_int_eq(replay(run, golden, &err), REP_UNREADABLE);
+    ck_assert_ptr_nonnull(strstr(err.msg, "000001.exr"));
+    cJSON *rep = report_of(run);
+    ck_assert_str_eq(str_of(rep, "verdict"), "UNREADABLE");
+    ck_assert_double_eq(num_of(rep, "exit_code"), 4);
+    cJSON_Delete(rep);
+    /* Truncated to nothing but the magic number. */
+    ck_assert_int_eq(truncate(f, 4), 0);
+    ck_assert_int_eq(replay(run, golden, &err), REP_UNREADABLE);
+    free(f);
+    free(run);
+    free(golden);
+}
+END_TEST
+
+START_TEST(e2e_tampered_exr_is_unreadable)
+{
+    char *golden = make_golden();
+    char *run = make_run();
+    char *f = rep_path_join(run, "frames/000002.exr");
+    /* Flip bytes near the end of the file: inside the last part's compressed pixels. */
+    FILE *fp = fopen(f, "r+b");
+    ck_assert_ptr_nonnull(fp);
+    long size = file_size(f);
+    for (long off = size - 24; off < size - 8; off += 4) {
+        ck_assert_int_eq(fseek(fp, off, SEEK_SET), 0);
+        int c = fgetc(fp);
+        ck_assert_int_eq(fseek(fp, off, SEEK_SET), 0);
+        fputc(c ^ 0x5a, fp);
+    }
+    fclose(fp);
+    eng_error err = {{0}};
+    ck_assert_int_eq(replay(run, golden, &err), REP_UNREADABLE);
+    ck_assert_ptr_nonnull(strstr(err.msg, "000002.exr"));
+    free(f);
+    free(run);
+    free(golden);
+}
+END_TEST
+
+START_TEST(e2e_pixels_disagree_with_manifest_digest)
+{
+    char *golden = make_golden();
+    char *run = make_run();
+    /* A well-formed EXR whose pixels are not the ones the manifest's digest describes. */
+    fx_run r;
+    fx_make(&r);
+    *fx_at(&r, 0, 0, 4, 4, 0) += 0.25f;
+    eng_buffer v[3];
+    for (int j = 0; j < 3; j++)
+        v[j] = fx_view(&r.f[0].bufs[j]);
+    char *f = rep_path_join(run, "frames/000000.exr");
+    eng_error err = {{0}};
+    ck_assert_int_eq(rep_oiio_write_parts(f, v, 3, &err), ENG_OK);
+    ck_assert_int_eq(replay(run, golden, &err), REP_UNREADABLE);
+    ck_assert_ptr_nonnull(strstr(err.msg, "000000.exr"));
+    ck_assert_ptr_nonnull(strstr(err.msg, "gbuffer.position"));
+    /* The same damage in the golden is caught too. */
+    ck_assert_int_eq(replay(golden, NULL, &err), REP_OK);
+    ck_assert_int_eq(replay(run, NULL, &err), REP_UNREADABLE);
+    fx_free(&r);
+    free(f);
+    free(run);
+    free(golden);
+}
+END_TEST
+
+START_TEST(e2e_manifest_missing_or_incomplete)
+{
+    char *golden = make_golden();
+    fx_run r;
+    fx_make(&r);
+    char *run = tpath("run-nomanifest");
+    fx_write_ex(&r, run, 1, 1);
+    eng_error err = {{0}};
+    ck_assert_int_eq(replay(run, golden, &err), REP_UNREADABLE);
+    ck_assert_ptr_nonnull(strstr(err.msg, "manifest.json"));
+    free(run);
+    run = tpath("run-incomplete");
+    fx_write_ex(&r, run, 0, 0);
+    ck_assert_int_eq(replay(run, golden, &err), REP_UNREADABLE);
+    /* The golden must be complete too. */
+    ck_assert_int_eq(replay(golden, run, &err), REP_UNREADABLE);
+    free(run);
+    /* A missing frame file listed by the manifest. */
+    run = tpath("run-nofile");
+    fx_write(&r, run);
+    char *f = rep_path_join(run, "frames/000001.exr");
+    ck_assert_int_eq(unlink(f), 0);
+    ck_assert_int_eq(replay(run, golden, &err), REP_UNREADABLE);
+    ck_assert_ptr_nonnull(strstr(err.msg, "000001.exr"));
+    /* A run folder that does not exist gets no report folder made for it. */
+    char *none = tpath("no-such-run");
+    ck_assert_int_eq(replay(none, golden, &err), REP_UNREADABLE);
+    ck_assert(!rep_is_dir(none));
+    free(none);
+    free(f);
+    free(run);
+    fx_free(&r);
+    free(golden);
+}
+END_TEST
+
+/* Writes text as <run>/manifest.json after editing the good manifest with edit(). */
+static void edit_manifest(const char *run, void (*edit)(cJSON *))
+{
+    char *mp = rep_path_join(run, "manifest.json");
+    cJSON *j = load_json(mp);
+    edit(j);
+    char *text = cJSON_Print(j);
+    eng_error err;
+    ck_assert_int_eq(rep_write_atomic(mp, text, strlen(text), &err), ENG_OK);
+    cJSON_free(text);
+    cJSON_Delete(j);
+    free(mp);
+}
+
+static cJSON *buf0(cJSON *j)
+{
+    cJSON *f0 = cJSON_GetArrayItem(cJSON_GetObjectItem(j, "frames"), 0);
+    return cJSON_GetArrayItem(cJSON_GetObjectItem(f0, "buffers"), 0);
+}
+
+static void lie_size(cJSON *j)
+{
+    cJSON_ReplaceItemInObject(buf0(j), "width", cJSON_CreateNumber(65536));
+    cJSON_ReplaceItemInObject(buf0(j), "height", cJSON_CreateNumber(65536));
+}
+
+static void lie_count(cJSON *j)
+{
+    cJSON_ReplaceItemInObject(j, "frame_count", cJSON_CreateNumber(4));
+}
+
+static void escape_path(cJSON *j)
+{
+    cJSON *f0 = cJSON_GetArrayItem(cJSON_GetObjectItem(j, "frames"), 0);
+    cJSON_ReplaceItemInObject(f0, "file", cJSON_CreateString("../golden/frames/000000.exr"));
+}
+
+static void bad_digest(cJSON *j)
+{
+    cJSON_ReplaceItemInObject(buf0(j), "digest", cJSON_CreateString("not-a-digest"));
+}
+
+START_TEST(e2e_lying_manifests_are_unreadable)
+{
+    char *golden = make_golden();
+    void (*edits[])(cJSON *) = {lie_size, lie_count, escape_path, bad_digest};
+    for (size_t i = 0; i < sizeof edits / sizeof edits[0]; i++) {
+        char *run = make_run();
+        edit_manifest(run, edits[i]);
+        eng_error err = {{0}};
+        ck_assert_msg(replay(run, golden, &err) == REP_UNREADABLE, "edit %zu", i);
+        ck_assert_ptr_nonnull(strstr(err.msg, "manifest.json"));
+        ck_assert_int_eq(rep_remove_tree(run, &err), ENG_OK);
+        free(run);
+    }
+    free(golden);
+}
+END_TEST
+
+START_TEST(e2e_bad_tolerances_are_unreadable)
+{
+    char *golden = make_golden();
+    char *run = make_run();
+    char *tol = rep_path_join(golden, "tolerances.json");
+    const char *bad = "{\"default\": {\"fail\": 1e-4, \"failprecent\": 1}}";
+    eng_error err = {{0}};
+    ck_assert_int_eq(rep_write_atomic(tol, bad, strlen(bad), &err), ENG_OK);
+    ck_assert_int_eq(replay(run, golden, &err), REP_UNREADABLE);
+    ck_assert_ptr_nonnull(strstr(err.msg, "failprecent"));
+    /* An explicit tolerances file must exist. */
+    rep_options o = {0};
+    o.run_dir = run;
+    o.golden_dir = golden;
+    char *missing = tpath("missing-tol.json");
+    o.tolerances = missing;
+    ck_assert_int_eq(rep_replay(&o, NULL, &err), REP_UNREADABLE);
+    free(missing);
+    free(tol);
+    free(run);
+    free(golden);
+}
+END_TEST
+
+START_TEST(e2e_no_golden_integrity_only)
+{
+    char *run = make_run();
+    eng_error err = {{0}};
+    ck_assert_msg(replay(run, NULL, &err) == REP_OK, "%s", err.msg);
+    cJSON *rep = report_of(run);
+    ck_assert_double_eq(num_of(cJSON_GetObjectItem(rep, "counts"), "checked"), 9);
+    cJSON_Delete(rep);
+    free(run);
+
+    fx_run r;
+    fx_make(&r);
+    *fx_at(&r, 1, 1, 6, 5, 0) = NAN;
+    *fx_at(&r, 1, 1, 7, 5, 0) = INFINITY;
+    run = tpath("run-nan");
+    fx_write(&r, run);
+    ck_assert_int_eq(replay(run, NULL, &err), REP_FAIL);
+    rep = report_of(run);
+    const cJSON *e = report_entry(rep, 1, "direct.radiance");
+    ck_assert_str_eq(str_of(e, "verdict"), "fail");
+    const cJSON *m = cJSON_GetObjectItem(e, "metrics");
+    ck_assert_double_eq(num_of(cJSON_GetObjectItem(m, "run"), "nan"), 1);
+    ck_assert_double_eq(num_of(cJSON_GetObjectItem(m, "run"), "inf"), 1);
+    ck_assert_double_eq(num_of(cJSON_GetObjectItem(m, "first_nonfinite"), "x"), 6);
+    ck_assert_double_eq(num_of(cJSON_GetObjectItem(m, "first_nonfinite"), "y"), 5);
+    cJSON_Delete(rep);
+    fx_free(&r);
+    free(run);
+}
+END_TEST
+
+START_TEST(e2e_bless_then_replay_passes)
+{
+    char *run = make_run();
+    char *golden = tpath("goldens/cornell");
+    eng_error err = {{0}};
+    ck_assert_msg(rep_bless(run, golden, &err) == ENG_OK, "%s", err.msg);
+    char *p = rep_path_join(golden, "tolerances.json");
+    ck_assert(rep_is_file(p));
+    free(p);
+    p = rep_path_join(golden, "frames/000002.exr");
+    ck_assert(rep_is_file(p));
+    free(p);
+    p = rep_xprintf("%s.tmp", golden);
+    ck_assert(!rep_is_dir(p));
+    free(p);
+    ck_assert_msg(replay(run, golden, &err) == REP_OK, "%s", err.msg);
+    /* The run's report folder is not copied into the golden. */
+    ck_assert_msg(rep_bless(run, golden, &err) == ENG_OK, "%s", err.msg);
+    p = rep_path_join(golden, "replay");
+    ck_assert(!rep_is_dir(p));
+    free(p);
+    /* Trailing slash on the golden path. */
+    p = rep_xprintf("%s/", golden);
+    ck_assert_msg(rep_bless(run, p, &err) == ENG_OK, "%s", err.msg);
+    free(p);
+    ck_assert_int_eq(rep_bless(run, run, &err), ENG_ERR_INVALID);
+    free(golden);
+    free(run);
+}
+END_TEST
+
+START_TEST(e2e_bless_keeps_tolerances)
+{
+    char *golden = make_golden();
+    char *tol = rep_path_join(golden, "tolerances.json");
+    const char *mine = "{\"buffers\": [{\"match\": \"direct.*\", \"fail\": 0.75, \"failpercent\": 1}]}\n";
+    eng_error err = {{0}};
+    ck_assert_int_eq(rep_write_atomic(tol, mine, strlen(mine), &err), ENG_OK);
+    fx_run r;
+    fx_make(&r);
+    *fx_at(&r, 0, 1, 0, 0, 0) += 0.125f;
+    char *run = tpath("run");
+    fx_write(&r, run);
+    ck_assert_msg(rep_bless(run, golden, &err) == ENG_OK, "%s", err.msg);
+    char *text = NULL;
+    size_t len;
+    ck_assert_int_eq(eng_read_file(tol, 4096, &text, &len, &err), ENG_OK);
+    ck_assert_str_eq(text, mine);
+    free(text);
+    /* The golden is now the changed run. */
+    ck_assert_int_eq(replay(run, golden, &err), REP_OK);
+    fx_free(&r);
+    free(run);
+    free(tol);
+    free(golden);
+}
+END_TEST
+
+START_TEST(e2e_bless_refuses_incomplete)
+{
+    fx_run r;
+    fx_make(&r);
+    char *golden = make_golden();
+    char *run = tpath("run-incomplete");
+    fx_write_ex(&r, run, 0, 0);
+    eng_error err = {{0}};
+    ck_assert_int_eq(rep_bless(run, golden, &err), ENG_ERR_INVALID);
+    free(run);
+    run = tpath("run-nomanifest");
+    fx_write_ex(&r, run, 1, 1);
+    ck_assert_int_eq(rep_bless(run, golden, &err), ENG_ERR_INVALID);
+    free(run);
+    run = tpath("run-truncated");
+    fx_write(&r, run);
+    char *f = rep_path_join(run, "frames/000000.exr");
+    ck_assert_int_eq(truncate(f, file_size(f) - 50), 0);
+    ck_assert_int_eq(rep_bless(run, golden, &err), ENG_ERR_INVALID);
+    ck_assert_int_eq(unlink(f), 0);
+    ck_assert_int_eq(rep_bless(run, golden, &err), ENG_ERR_INVALID);
+    /* The old golden is untouched. */
+    ck_assert_int_eq(replay(golden, NULL, &err), REP_OK);
+    free(f);
+    free(run);
+    free(golden);
+    fx_free(&r);
+}
+END_TEST
+
+START_TEST(e2e_text_report_lists_worst_first)
+{
+    char *golden = make_golden();
+    fx_run r;
+    fx_make(&r);
+    *fx_at(&r, 0, 0, 1, 1, 0) += 1e-6f;  /* frame 0: warn (built-in warn 0, under fail) */
+    *fx_at(&r, 2, 1, 5, 5, 2) += 0.25f;  /* frame 2: fail */
+    *fx_at(&r, 1, 1, 4, 4, 0) += 0.003f; /* frame 1: fail, smaller error */
+    char *run = tpath("run");
+    fx_write(&r, run);
+    char *sp = tpath("summary.txt");
+    FILE *summary = fopen(sp, "w");
+    ck_assert_ptr_nonnull(summary);
+    rep_options o = {0};
+    o.run_dir = run;
+    o.golden_dir = golden;
+    eng_error err;
+    ck_assert_int_eq(rep_replay(&o, summary, &err), REP_FAIL);
+    fclose(summary);
+    char *p = rep_path_join(run, "replay/report.txt");
+    char *txt = NULL, *sum = NULL;
+    size_t len;
+    ck_assert_int_eq(eng_read_file(p, 1 << 20, &txt, &len, &err), ENG_OK);
+    ck_assert_int_eq(eng_read_file(sp, 1 << 20, &sum, &len, &err), ENG_OK);
+    ck_assert_str_eq(txt, sum);
+    const char *f2 = strstr(txt, "FAIL  frame 2  direct.radiance");
+    const char *f1 = strstr(txt, "FAIL  frame 1  direct.radiance");
+    const char *w0 = strstr(txt, "WARN  frame 0  gbuffer.position");
+    const char *verdict = strstr(txt, "replay: FAIL");
+    ck_assert_ptr_nonnull(f2);
+    ck_assert_ptr_nonnull(f1);
+    ck_assert_ptr_nonnull(w0);
+    ck_assert_ptr_nonnull(verdict);
+    ck_assert(f2 < f1 && f1 < w0 && w0 < verdict);
+    /* Nothing but the header comes before the first failure. */
+    ck_assert_ptr_null(strstr(txt, "WARN  frame 0  gbuffer.position") < f2 ? txt : NULL);
+    free(txt);
+    free(sum);
+    free(p);
+
+    /* Quiet: only failures and the verdict line. */
+    summary = fopen(sp, "w");
+    o.quiet = 1;
+    ck_assert_int_eq(rep_replay(&o, summary, &err), REP_FAIL);
+    fclose(summary);
+    ck_assert_int_eq(eng_read_file(sp, 1 << 20, &sum, &len, &err), ENG_OK);
+    ck_assert_ptr_null(strstr(sum, "WARN"));
+    ck_assert_ptr_null(strstr(sum, "golden "));
+    ck_assert(strncmp(sum, "FAIL  frame 2", 13) == 0);
+    ck_assert_ptr_nonnull(strstr(sum, "replay: FAIL — 2 failed, 1 warned, 0 within tolerance, 6 bit-exact (9 buffers, 3 frames)"));
+    free(sum);
+    free(sp);
+    fx_free(&r);
+    free(run);
+    free(golden);
+}
+END_TEST
+
+/* ---------------------------------------------------------------- suite */
+
+static Suite *replay_suite(void)
+{
+    Suite *s = suite_create("replay");
+    TCase *unit = tcase_create("logic");
+    tcase_add_checked_fixture(unit, tmp_setup, tmp_teardown);
+    tcase_add_test(unit, tol_first_match_wins_and_defaults_fill);
+    tcase_add_test(unit, tol_builtin_defaults);
+    tcase_add_test(unit, tol_rejects_bad_files);
+    tcase_add_test(unit, tol_missing_file);
+    tcase_add_test(unit, cmp_identical_is_bitexact);
+    tcase_add_test(unit, cmp_tiny_diff_within_or_warn);
+    tcase_add_test(unit, cmp_failpercent);
+    tcase_add_test(unit, cmp_hardfail);
+    tcase_add_test(unit, cmp_relative_threshold);
+    tcase_add_test(unit, cmp_rmse_threshold);
+    tcase_add_test(unit, cmp_exact_mode);
+    tcase_add_test(unit, cmp_nan_in_run_fails_whatever_the_tolerance);
+    tcase_add_test(unit, cmp_nan_in_both_is_not_a_failure);
+    tcase_add_test(unit, cmp_pinf_vs_ninf_fails);
+    tcase_add_test(unit, cmp_size_and_channels);
+    suite_add_tcase(s, unit);
+
+    TCase *files = tcase_create("files");
+    tcase_add_checked_fixture(files, tmp_setup, tmp_teardown);
+    tcase_set_timeout(files, 120);
+    tcase_add_test(files, shim_round_trip);
+    tcase_add_test(files, shim_rejects_garbage);
+    tcase_add_test(files, e2e_identical_is_bitexact);
+    tcase_add_test(files, e2e_one_pixel_changed);
+    tcase_add_test(files, e2e_nan_fails);
+    tcase_add_test(files, e2e_missing_and_extra_buffer);
+    tcase_add_test(files, e2e_missing_frame);
+    tcase_add_test(files, e2e_size_mismatch);
+    tcase_add_test(files, e2e_truncated_exr_is_unreadable);
+    tcase_add_test(files, e2e_tampered_exr_is_unreadable);
+    tcase_add_test(files, e2e_pixels_disagree_with_manifest_digest);
+    tcase_add_test(files, e2e_manifest_missing_or_incomplete);
+    tcase_add_test(files, e2e_lying_manifests_are_unreadable);
+    tcase_add_test(files, e2e_bad_tolerances_are_unreadable);
+    tcase_add_test(files, e2e_no_golden_integrity_only);
+    tcase_add_test(files, e2e_bless_then_replay_passes);
+    tcase_add_test(files, e2e_bless_keeps_tolerances);
+    tcase_add_test(files, e2e_bless_refuses_incomplete);
+    tcase_add_test(files, e2e_text_report_lists_worst_first);
+    suite_add_tcase(s, files);
+    return s;
+}
+
+int main(void)
+{
+    SRunner *sr = srunner_create(replay_suite());
+    srunner_run_all(sr, CK_NORMAL);
+    int failed = srunner_ntests_failed(sr);
+    srunner_free(sr);
+    return failed ? EXIT_FAILURE : EXIT_SUCCESS;
+}
