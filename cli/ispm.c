@@ -79,6 +79,18 @@ static void bless_usage(FILE *f)
             "exit: 0 blessed; 2 RUN incomplete or invalid; 1 writing failed\n");
 }
 
+/* Progress listener: one line per frame with the per-pass times. */
+static int progress_frame_end(void *user, const eng_frame_stats *st)
+{
+    const seq_sequence *seq = user;
+    char line[512];
+    int n = snprintf(line, sizeof line, "  frame %d/%d  t=%.4f s ", st->frame + 1, seq->frame_count, st->time);
+    for (int i = 0; i < st->pass_count && n > 0 && (size_t)n < sizeof line; i++)
+        n += snprintf(line + n, sizeof line - (size_t)n, " %s %.1f", st->passes[i].name, st->passes[i].ms);
+    fprintf(stderr, "%s ms\n", line);
+    return 0;
+}
+
 static int exit_for(eng_result r)
 {
     switch (r) {
@@ -166,6 +178,9 @@ static int cmd_record(int argc, char **argv, const char *command_line)
     }
     eng_listener l = cap_listener(cap);
     eng_add_listener(eng, &l);
+    eng_listener progress = {seq, NULL, NULL, progress_frame_end};
+    if (!quiet)
+        eng_add_listener(eng, &progress);
     if (!quiet)
         fprintf(stderr, "ispm record: %s (%s), %d frames at %g fps, %dx%d, %s\n", seq->name, scene->path,
                 seq->frame_count, seq->fps, seq->width, seq->height, eng_gl_renderer(eng));
@@ -181,8 +196,6 @@ static int cmd_record(int argc, char **argv, const char *command_line)
             rc = EXIT_RUNTIME;
             goto done;
         }
-        if (!quiet)
-            fprintf(stderr, "  frame %d/%d  t=%.4f s\n", i + 1, seq->frame_count, i / seq->fps);
     }
     r = cap_finish(cap, &err);
     if (r != ENG_OK) {

@@ -118,6 +118,14 @@ typedef struct shadow_map {
     float far_value; /* what a texel with no geometry holds */
 } shadow_map;
 
+/* Half-angle of a spot light's shadow frustum: a little wider than the outer cone, so that
+ * the normal offset of a lookup near the cone's edge still lands inside the map. */
+static inline float shadow_spot_half_angle(float outer_cone)
+{
+    float a = outer_cone * 1.05f + 0.02f;
+    return a < 1.5f ? a : 1.5f;
+}
+
 typedef struct pass_shadow pass_shadow;
 eng_result pass_shadow_create(int size, uint32_t light_count, pass_shadow **out, eng_error *err);
 /* Renders light i's map; returns it (owned by the pass). */

@@ -77,7 +77,7 @@ const glu_target *pass_direct_run(pass_direct *p, const eng_frame_scene *fs, con
         if (type == 0)
             texel = 2.0f / (float)s->shadow_map_size;
         else if (type == 1)
-            texel = 2.0f * tanf(fminf(l->outer_cone, 1.5f)) / (float)s->shadow_map_size;
+            texel = 2.0f * tanf(shadow_spot_half_angle(l->outer_cone)) / (float)s->shadow_map_size;
         else
             texel = sm->far_value / (float)s->shadow_map_size;
         glUniform1f(loc(g, "u_shadow_texel[%d]", i), texel);

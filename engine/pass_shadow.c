@@ -83,10 +83,7 @@ static void light_views(const eng_light_pose *l, const eng_frame_scene *fs, shad
         sm->far_value = far;
     } else if (l->type == SCN_LIGHT_SPOT) {
         sm->faces = 1;
-        float fov = 2.0f * l->outer_cone;
-        if (fov > 3.0f)
-            fov = 3.0f;
-        m4_perspective(proj, fov, 1.0f, 0.01f, far);
+        m4_perspective(proj, 2.0f * shadow_spot_half_angle(l->outer_cone), 1.0f, 0.01f, far);
         float target[3] = {l->position[0] + l->direction[0], l->position[1] + l->direction[1], l->position[2] + l->direction[2]};
         float up[3] = {0, 1, 0};
         if (fabsf(l->direction[1]) > 0.99f) {

@@ -13,29 +13,31 @@
 
 #include "rep_internal.h"
 
+#include <dirent.h>
 #include <errno.h>
 #include <limits.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
-/* The run must be one replay would accept. */
+/* The run must be one replay would accept; any reason it is not becomes ENG_ERR_INVALID with
+ * the reader's message. */
 static eng_result verify_run(const char *run_dir, rep_run **out, eng_error *err)
 {
-    eng_result r = rep_run_open(run_dir, out, err);
-    if (r != ENG_OK)
-        return eng_fail(err, ENG_ERR_INVALID, "%s", err ? err->msg : "");
-    for (int i = 0; i < (*out)->frame_count; i++) {
+    eng_error why;
+    eng_result r = rep_run_open(run_dir, out, &why);
+    for (int i = 0; r == ENG_OK && i < (*out)->frame_count; i++) {
         rep_part *parts = NULL;
-        r = rep_run_read_frame(*out, i, &parts, err);
-        if (r != ENG_OK) {
-            rep_run_close(*out);
-            *out = NULL;
-            return eng_fail(err, ENG_ERR_INVALID, "%s", err ? err->msg : "");
-        }
-        rep_parts_free(parts, (*out)->frames[i].buffer_count);
+        r = rep_run_read_frame(*out, i, &parts, &why);
+        if (r == ENG_OK)
+            rep_parts_free(parts, (*out)->frames[i].buffer_count);
     }
-    return ENG_OK;
+    if (r == ENG_OK)
+        return ENG_OK;
+    rep_run_close(*out);
+    *out = NULL;
+    return eng_fail(err, ENG_ERR_INVALID, "%s", why.msg);
 }
 
 /* Creates the parent folders of path (path names a file). */
@@ -110,6 +112,36 @@ static eng_result swap_in(const char *golden, const char *tmp, eng_error *err)
     return r;
 }
 
+/* Bless replaces golden_dir wholesale, so it must be a golden already (or empty, or absent):
+ * a mistyped path must not delete an unrelated folder. */
+static eng_result check_target(const char *golden, eng_error *err)
+{
+    struct stat st;
+    if (lstat(golden, &st) != 0)
+        return ENG_OK;
+    if (!S_ISDIR(st.st_mode))
+        return eng_fail(err, ENG_ERR_INVALID, "%s: exists and is not a folder", golden);
+    char *m = rep_path_join(golden, "manifest.json");
+    char *t = rep_path_join(golden, "tolerances.json");
+    int looks_golden = rep_is_file(m) || rep_is_file(t);
+    free(m);
+    free(t);
+    if (looks_golden)
+        return ENG_OK;
+    DIR *d = opendir(golden);
+    if (!d)
+        return eng_fail(err, ENG_ERR_IO, "%s: cannot list: %s", golden, strerror(errno));
+    int empty = 1;
+    for (struct dirent *e; empty && (e = readdir(d));)
+        empty = strcmp(e->d_name, ".") == 0 || strcmp(e->d_name, "..") == 0;
+    closedir(d);
+    if (!empty)
+        return eng_fail(err, ENG_ERR_INVALID,
+                        "%s: not a golden (no manifest.json or tolerances.json) and not empty: refusing to replace it",
+                        golden);
+    return ENG_OK;
+}
+
 eng_result rep_bless(const char *run_dir, const char *golden_dir, eng_error *err)
 {
     if (!run_dir || !golden_dir || !golden_dir[0])
@@ -124,7 +156,9 @@ eng_result rep_bless(const char *run_dir, const char *golden_dir, eng_error *err
         return eng_fail(err, ENG_ERR_INVALID, "%s: cannot bless a run onto itself", run_dir);
     }
     rep_run *run = NULL;
-    eng_result r = verify_run(run_dir, &run, err);
+    eng_result r = check_target(golden, err);
+    if (r == ENG_OK)
+        r = verify_run(run_dir, &run, err);
     if (r != ENG_OK) {
         free(golden);
         return r;

@@ -135,6 +135,13 @@ eng_result write_parts(const char *path, const eng_buffer *parts, int count, eng
         return eng_fail(err, ENG_ERR_IO, "%s: no EXR writer: %s", path, pending(nullptr).c_str());
     if (count > 1 && !out->supports("multiimage"))
         return eng_fail(err, ENG_ERR_UNSUPPORTED, "%s: writer cannot hold several parts", path);
+    // OpenEXR requires every part of a multi-part file to share one display window; parts of
+    // different sizes get the union as display window and their own size as data window.
+    int full_w = 0, full_h = 0;
+    for (int i = 0; i < count; i++) {
+        full_w = parts[i].width > full_w ? parts[i].width : full_w;
+        full_h = parts[i].height > full_h ? parts[i].height : full_h;
+    }
     std::vector<OIIO::ImageSpec> specs((size_t)count);
     for (int i = 0; i < count; i++) {
         const eng_buffer &b = parts[i];
@@ -143,6 +150,9 @@ eng_result write_parts(const char *path, const eng_buffer *parts, int count, eng
                             b.width, b.height, b.channel_count);
         OIIO::ImageSpec &s = specs[(size_t)i];
         s = OIIO::ImageSpec(b.width, b.height, b.channel_count, OIIO::TypeDesc::FLOAT);
+        s.full_x = s.full_y = 0;
+        s.full_width = full_w;
+        s.full_height = full_h;
         s.channelnames.clear();
         for (int c = 0; c < b.channel_count; c++)
             s.channelnames.push_back(b.channels[c]);

@@ -57,7 +57,7 @@ int rep_is_file(const char *path); /* regular file (following links) */
 int rep_is_dir(const char *path);
 /* mkdir -p. */
 eng_result rep_mkdirs(const char *path, eng_error *err);
-/* Writes path.tmp, flushes it to disk, renames it over path: readers see the old file or the
+/* Writes path.tmp.<pid>, flushes it to disk, renames it over path: readers see the old file or the
  * new one, never a part. */
 eng_result rep_write_atomic(const char *path, const char *data, size_t len, eng_error *err);
 /* Copies a regular file's bytes to dst (created or truncated) and flushes them to disk. */

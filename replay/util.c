@@ -168,7 +168,7 @@ static eng_result write_all(int fd, const char *path, const char *data, size_t l
 
 eng_result rep_write_atomic(const char *path, const char *data, size_t len, eng_error *err)
 {
-    char *tmp = rep_xprintf("%s.tmp", path);
+    char *tmp = rep_xprintf("%s.tmp.%ld", path, (long)getpid());
     int fd = open(tmp, O_WRONLY | O_CREAT | O_TRUNC, 0666);
     if (fd < 0) {
         eng_result r = eng_fail(err, ENG_ERR_IO, "%s: cannot create: %s", tmp, strerror(errno));

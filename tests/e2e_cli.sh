@@ -16,22 +16,24 @@ done
 "$ISPM" frobnicate > /dev/null 2>&1; [ $? -eq 2 ] || fail "unknown command must exit 2"
 "$ISPM" record "$SEQ" > /dev/null 2>&1; [ $? -eq 2 ] || fail "record without -o must exit 2"
 
-# expect_input_error FILE: record exits 2 with exactly one line on stderr naming FILE.
+# expect_input_error FILE [NAMED]: record exits 2 with exactly one line on stderr naming the
+# file at fault (NAMED, default FILE itself).
 expect_input_error() {
   "$ISPM" record "$1" -o "$WORK/bad" --quiet 2> "$WORK/err.txt"; rc=$?
   [ $rc -eq 2 ] || fail "record $1: exit $rc, want 2"
   [ "$(wc -l < "$WORK/err.txt")" -eq 1 ] || { cat "$WORK/err.txt"; fail "record $1: want one error line"; }
-  grep -qF "$(basename "$1")" "$WORK/err.txt" || { cat "$WORK/err.txt"; fail "error does not name $1"; }
+  named=${2:-$(basename "$1")}
+  grep -qF "$named" "$WORK/err.txt" || { cat "$WORK/err.txt"; fail "error does not name $named"; }
   [ ! -f "$WORK/bad/manifest.json" ] || fail "a manifest was written for bad input"
 }
 expect_input_error "$WORK/missing.json"
 printf '{"scene": "x.gltf", "frames": 2,' > "$WORK/truncated.json"; expect_input_error "$WORK/truncated.json"
 sed 's/"frames": *[0-9]*/"frames": -3/' "$SEQ" > "$WORK/negative.json"; expect_input_error "$WORK/negative.json"
 printf '{"scene": "nowhere.gltf", "frames": 1, "fps": 8, "resolution": [8, 8], "camera": {"node": "Camera"}}' \
-  > "$WORK/noscene.json"; expect_input_error "$WORK/noscene.json"
+  > "$WORK/noscene.json"; expect_input_error "$WORK/noscene.json" nowhere.gltf
 mkdir -p "$WORK/s"; printf '{"asset": {"version": "2.0"}, "nodes": [{"mesh": 7}]}' > "$WORK/s/bad.gltf"
 printf '{"scene": "bad.gltf", "frames": 1, "fps": 8, "resolution": [8, 8], "camera": {"node": "Camera"}}' \
-  > "$WORK/s/badscene.json"; expect_input_error "$WORK/s/badscene.json"
+  > "$WORK/s/badscene.json"; expect_input_error "$WORK/s/badscene.json" bad.gltf
 
 # Disk full (a file-size limit): record fails with exit 1, says so, and leaves no manifest.
 ( ulimit -f 200; "$ISPM" record "$SEQ" -o "$WORK/full" --quiet ) 2> "$WORK/full.err"; rc=$?

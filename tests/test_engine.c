@@ -77,21 +77,38 @@ typedef struct fixture {
     keeper keep;
 } fixture;
 
-static void setup(fixture *f, int size, int frames, int shadow)
+static void setup_json(fixture *f, const char *json)
 {
     memset(f, 0, sizeof *f);
     eng_error err;
-    char json[1024];
-    snprintf(json, sizeof json,
-             "{\"name\":\"test\",\"scene\":\"%s\",\"frames\":%d,\"fps\":8,\"resolution\":[%d,%d],"
-             "\"camera\":{\"node\":\"Camera\"},\"settings\":{\"shadow_map_size\":%d,\"threads\":2}}",
-             CORNELL_GLTF, frames, size, size, shadow);
     ck_assert_msg(seq_parse("inline.json", json, strlen(json), &f->seq, &err) == ENG_OK, "%s", err.msg);
     ck_assert_msg(scn_load_gltf(f->seq.scene_path, &f->scene, &err) == ENG_OK, "%s", err.msg);
     eng_desc d = {f->scene, &f->seq};
     ck_assert_msg(eng_create(&d, &f->eng, &err) == ENG_OK, "%s", err.msg);
     eng_listener l = {&f->keep, NULL, keep_buffer, keep_end};
     ck_assert_int_eq(eng_add_listener(f->eng, &l), ENG_OK);
+}
+
+static void setup(fixture *f, int size, int frames, int shadow)
+{
+    char json[1024];
+    snprintf(json, sizeof json,
+             "{\"name\":\"test\",\"scene\":\"%s\",\"frames\":%d,\"fps\":8,\"resolution\":[%d,%d],"
+             "\"camera\":{\"node\":\"Camera\"},\"settings\":{\"shadow_map_size\":%d,\"threads\":2}}",
+             CORNELL_GLTF, frames, size, size, shadow);
+    setup_json(f, json);
+}
+
+/* The analytic floor scenes of tests/data/scenes/ seen from above at an angle. */
+static void setup_floor(fixture *f, const char *gltf)
+{
+    char json[1024];
+    snprintf(json, sizeof json,
+             "{\"name\":\"floor\",\"scene\":\"%s/tests/data/scenes/%s\",\"frames\":1,\"fps\":1,"
+             "\"resolution\":[128,128],\"camera\":{\"keys\":[{\"time\":0,\"position\":[0,4,3],"
+             "\"target\":[0,0,0]}],\"yfov_deg\":50},\"settings\":{\"shadow_map_size\":512}}",
+             ISPM_SOURCE_DIR, gltf);
+    setup_json(f, json);
 }
 
 static void teardown(fixture *f)
@@ -335,6 +352,71 @@ START_TEST(final_display_is_srgb_of_composite)
 }
 END_TEST
 
+/* A spot light at (0,2,0) pointing down, I = 5 W/sr, cones 0.4/0.6 rad, over a white floor
+ * (albedo 0.8): inside the inner cone L = (ρ/π)·I·cosθ/d²; in the falloff the
+ * KHR_lights_punctual smooth term t² with t = (cos α − cos outer)/(cos inner − cos outer);
+ * outside the outer cone nothing. */
+START_TEST(spot_light_matches_closed_form)
+{
+    fixture f;
+    setup_floor(&f, "floor-spot.gltf");
+    render(&f, 0);
+    const kept *pos = find(&f.keep, "gbuffer.position");
+    const kept *rad = find(&f.keep, "direct.radiance");
+    const kept *nrm = find(&f.keep, "gbuffer.normal");
+    ck_assert(find(&f.keep, "shadow.light0") != NULL);
+    int inner = 0, outer = 0, falloff = 0;
+    for (size_t i = 0; i < (size_t)128 * 128; i++) {
+        const float *p = pos->data + 3 * i;
+        if (nrm->data[3 * i + 1] < 0.999f || fabsf(p[1]) > 1e-4f)
+            continue;
+        double d2 = p[0] * p[0] + 4.0 + p[2] * p[2], d = sqrt(d2);
+        double cos_a = 2.0 / d; /* angle to the spot axis; also cosθ at the floor */
+        double t = (cos_a - cos(0.6)) / (cos(0.4) - cos(0.6));
+        t = t < 0 ? 0 : t > 1 ? 1 : t;
+        double expect = 0.8 / PI_D * 5.0 * cos_a / d2 * t * t;
+        double got = rad->data[3 * i];
+        if (t >= 1.0)
+            inner++;
+        else if (t <= 0.0)
+            outer++;
+        else
+            falloff++;
+        ck_assert_msg(fabs(got - expect) <= 0.005 * expect + 1e-7, "pixel %zu (%f,%f,%f) t=%f: %f, closed form %f", i, p[0], p[1], p[2], t, got, expect);
+    }
+    ck_assert_int_gt(inner, 1000);
+    ck_assert_int_gt(outer, 1000);
+    ck_assert_int_gt(falloff, 500);
+    teardown(&f);
+}
+END_TEST
+
+/* A directional light of 2 W/m² along (0, −0.866, −0.5) on the same floor: every floor pixel
+ * has L = (ρ/π)·E·0.866, and the floor must not shadow itself (no acne). */
+START_TEST(directional_light_matches_closed_form)
+{
+    fixture f;
+    setup_floor(&f, "floor-directional.gltf");
+    render(&f, 0);
+    const kept *pos = find(&f.keep, "gbuffer.position");
+    const kept *rad = find(&f.keep, "direct.radiance");
+    const kept *nrm = find(&f.keep, "gbuffer.normal");
+    ck_assert(find(&f.keep, "shadow.light0") != NULL);
+    double expect = 0.8 / PI_D * 2.0 * cos(30.0 * PI_D / 180.0);
+    int n = 0;
+    for (size_t i = 0; i < (size_t)128 * 128; i++) {
+        if (nrm->data[3 * i + 1] < 0.999f || fabsf(pos->data[3 * i + 1]) > 1e-4f)
+            continue;
+        n++;
+        for (int c = 0; c < 3; c++)
+            ck_assert_msg(fabs(rad->data[3 * i + c] - expect) <= 0.005 * expect, "pixel %zu: %f, closed form %f", i,
+                          rad->data[3 * i + c], expect);
+    }
+    ck_assert_int_gt(n, 5000);
+    teardown(&f);
+}
+END_TEST
+
 static int refuse_buffer(void *user, int frame, const eng_buffer *b)
 {
     (void)frame;
@@ -373,6 +455,8 @@ static Suite *engine_suite(void)
     TCase *a = tcase_create("analytic");
     tcase_set_timeout(a, 600);
     tcase_add_test(a, cornell_floor_matches_analytic_direct_light);
+    tcase_add_test(a, spot_light_matches_closed_form);
+    tcase_add_test(a, directional_light_matches_closed_form);
     suite_add_tcase(s, a);
     return s;
 }

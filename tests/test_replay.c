@@ -1110,6 +1110,15 @@ START_TEST(e2e_bless_then_replay_passes)
     ck_assert_msg(rep_bless(run, p, &err) == ENG_OK, "%s", err.msg);
     free(p);
     ck_assert_int_eq(rep_bless(run, run, &err), ENG_ERR_INVALID);
+    /* A folder that is not a golden is never replaced. */
+    char *other = tpath("precious");
+    char *keep = rep_path_join(other, "notes.txt");
+    ck_assert_int_eq(rep_mkdirs(other, &err), ENG_OK);
+    ck_assert_int_eq(rep_write_atomic(keep, "x", 1, &err), ENG_OK);
+    ck_assert_int_eq(rep_bless(run, other, &err), ENG_ERR_INVALID);
+    ck_assert(rep_is_file(keep));
+    free(keep);
+    free(other);
     free(golden);
     free(run);
 }
@@ -1207,7 +1216,10 @@ START_TEST(e2e_text_report_lists_worst_first)
     ck_assert_ptr_nonnull(verdict);
     ck_assert(f2 < f1 && f1 < w0 && w0 < verdict);
     /* Nothing but the header comes before the first failure. */
-    ck_assert_ptr_null(strstr(txt, "WARN  frame 0  gbuffer.position") < f2 ? txt : NULL);
+    const char *first = txt;
+    while (strncmp(first, "replay: run", 11) == 0 || strncmp(first, "        ", 8) == 0)
+        first = strchr(first, '\n') + 1;
+    ck_assert_ptr_eq(first, f2);
     free(txt);
     free(sum);
     free(p);
@@ -1283,6 +1295,11 @@ static Suite *replay_suite(void)
 int main(void)
 {
     SRunner *sr = srunner_create(replay_suite());
+    /* Not forking by default: OpenImageIO pulls in log4cplus 2.0 (through OpenVDB), whose thread
+     * pool, started when the library loads, deadlocks exit() in a forked child, so every forked
+     * test would hang until its timeout. CK_FORK=yes still forces forking. */
+    if (!getenv("CK_FORK"))
+        srunner_set_fork_status(sr, CK_NOFORK);
     srunner_run_all(sr, CK_NORMAL);
     int failed = srunner_ntests_failed(sr);
     srunner_free(sr);
