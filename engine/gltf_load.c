@@ -12,7 +12,8 @@
  *
  * What the loader decides for the engine:
  *   - meshes are TRIANGLES only; other modes, sparse accessors, orthographic cameras,
- *     quantized positions and unknown required extensions are ENG_ERR_UNSUPPORTED;
+ *     rotation keys stored as normalized integers and required extensions other than
+ *     lights, transmission and ior (Draco, mesh quantization, ...) are ENG_ERR_UNSUPPORTED;
  *   - textures, skins and morph targets are ignored (the base mesh at rest is kept), and so
  *     are animation channels on "weights";
  *   - primitives without NORMAL get flat normals, their vertices un-shared; normals are
@@ -908,6 +909,9 @@ static eng_result load_channel(loader *L, const gls_animation *ga, uint32_t a, u
     uint32_t comps = d->path == SCN_PATH_ROTATION ? 4 : 3;
     uint64_t per_key = d->interp == SCN_INTERP_CUBICSPLINE ? 3 : 1;
     snprintf(what, sizeof what, "%s output", swhere);
+    if (d->path == SCN_PATH_ROTATION && gs->output >= 0 && (uint32_t)gs->output < m->accessor_count &&
+        m->accessors[gs->output].normalized && m->accessors[gs->output].component_type != GLS_COMPONENT_FLOAT)
+        return fail(L, ENG_ERR_UNSUPPORTED, "%s: rotation keys as normalized integers are not supported", what);
     if ((r = read_floats(L, gs->output, what, comps, MAX_KEYS * 3, &d->values, &nout)))
         return r;
     if (nout != n * per_key)

@@ -136,6 +136,15 @@ START_TEST(cornell_digest_is_file_digest)
     ck_assert_uint_eq(s->primitives[0].vertex_count, 3);
     free(bytes);
     scn_destroy(s);
+
+    /* A .glb is digested as the file it is. */
+    s = load_ok(DATA "valid-triangle.glb");
+    ck_assert_int_eq(eng_read_file(DATA "valid-triangle.glb", 1 << 20, &bytes, &len, NULL), ENG_OK);
+    eng_digest_hex(bytes, len, hex);
+    ck_assert_str_eq(s->digest, hex);
+    ck_assert_uint_eq(s->primitives[0].index_count, 3);
+    free(bytes);
+    scn_destroy(s);
 }
 END_TEST
 
@@ -587,6 +596,7 @@ static const struct {
     eng_result want;
 } GLTF_BAD[] = {
     {"bad-truncated.gltf", ENG_ERR_PARSE},
+    {"bad-truncated.glb", ENG_ERR_PARSE},
     {"bad-not-gltf.gltf", ENG_ERR_PARSE},
     {"bad-accessor-overrun.gltf", ENG_ERR_INVALID},
     {"bad-accessor-offset-overrun.gltf", ENG_ERR_INVALID},
@@ -639,7 +649,7 @@ END_TEST
 START_TEST(gltf_valid_corpus)
 {
     static const char *const files[] = {"valid-triangle.gltf", "valid-no-normals.gltf", "valid-hierarchy.gltf",
-                                        "valid-external-buffer.gltf"};
+                                        "valid-external-buffer.gltf", "valid-triangle.glb"};
     for (size_t i = 0; i < sizeof files / sizeof files[0]; i++) {
         char path[1024];
         snprintf(path, sizeof path, DATA "%s", files[i]);
