@@ -129,7 +129,7 @@ gls_number ext_number(const tinygltf::ExtensionMap &ext, const char *ext_name, c
 
 bool starts_with(const std::string &s, const char *prefix)
 {
-    return s.compare(0, std::strlen(prefix), prefix) == 0;
+    return std::strncmp(s.c_str(), prefix, std::strlen(prefix)) == 0;
 }
 
 gls_status classify(const std::string &err)
@@ -140,11 +140,11 @@ gls_status classify(const std::string &err)
         "\"asset\" object not found", "Too short data size for glTF Binary", "Invalid magic",
         "Invalid glTF binary", "JSON Chunk end", "Insufficient storage space for Chunk1",
         "Insufficient Chunk1", "BIN Chunk", "Invalid type for chunk1"};
-    for (const char *p : io)
-        if (err.find(p) != std::string::npos)
+    for (size_t i = 0; i < sizeof io / sizeof io[0]; i++)
+        if (std::strstr(err.c_str(), io[i]))
             return GLS_ERR_IO;
-    for (const char *p : syntax)
-        if (starts_with(err, p))
+    for (size_t i = 0; i < sizeof syntax / sizeof syntax[0]; i++)
+        if (starts_with(err, syntax[i]))
             return GLS_ERR_SYNTAX;
     return GLS_ERR_GLTF;
 }
