@@ -33,24 +33,38 @@ typedef struct cap_desc {
     /* NULL-terminated key, value, key, value, ... list recorded as "determinism" in the
      * manifest (pass eng_determinism_info()); may be NULL. Copied by cap_create. */
     const char *const *determinism;
+    /* Continue an interrupted run instead of starting one (ispm record --resume): run_dir
+     * must hold run.json written by a cap_create for the same sequence, scene and settings
+     * (else ENG_ERR_INVALID) and no manifest.json (a complete run; ENG_ERR_INVALID). Every
+     * frame whose frames/NNNNNN.exr and frames/NNNNNN.json both exist counts as captured
+     * (cap_frame_done), its record read back from the .json; a frame with only one of the
+     * two is removed, to be rendered again. Ignores overwrite. */
+    int resume;
 } cap_desc;
 
 typedef struct cap_capture cap_capture;
 
 /* Creates run_dir and run_dir/frames (mkdir -p). A folder that already holds a run
- * (manifest.json or frames/ *.exr) is refused with ENG_ERR_IO unless desc->overwrite; then
- * its manifest.json is unlinked first (and the unlink made durable), then its frames/ *.exr.
- * Stale temporary files of an earlier crash (manifest.json.tmp, frames/ *.exr.tmp) are
- * removed either way. desc->sequence and desc->scene must outlive the capture; the strings
- * are copied. On failure *out is NULL. */
+ * (manifest.json, run.json or frames/ *.exr) is refused with ENG_ERR_IO unless
+ * desc->overwrite (or desc->resume, above); then its manifest.json and run.json are unlinked
+ * first (and the unlinks made durable), then its frames/ *.exr and *.json. Stale temporary
+ * files of an earlier crash (*.tmp) are removed either way. A new run then gets run.json
+ * (atomically): what the run is of (sequence and scene digests, resolution, frame count,
+ * fps, camera, settings), which --resume checks. desc->sequence and desc->scene must outlive
+ * the capture; the strings are copied. On failure *out is NULL. */
 eng_result cap_create(const cap_desc *desc, cap_capture **out, eng_error *err);
 
 /* The listener to register with eng_add_listener; its callbacks return non-zero on failure.
  * Buffers that seq_wants-style matching of sequence->capture rejects are ignored; the others
  * are copied at announce time, so the engine may reuse its memory as soon as the callback
- * returns. frame_end writes frames/NNNNNN.exr. Errors are sticky: after one callback failed,
+ * returns. frame_end writes frames/NNNNNN.exr, then frames/NNNNNN.json (the frame's manifest
+ * record, for --resume), each atomically: a frame counts as captured only when both exist. Errors are sticky: after one callback failed,
  * every later callback and cap_finish fail with the same error. */
 eng_listener cap_listener(cap_capture *c);
+
+/* Was frame already captured (by this capture, or by the interrupted run it resumes)?
+ * A resumed recording skips such frames. */
+int cap_frame_done(const cap_capture *c, int frame);
 
 /* The error that made a callback fail (ENG_OK if none); copies its message into err. */
 eng_result cap_status(const cap_capture *c, eng_error *err);

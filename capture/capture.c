@@ -14,6 +14,14 @@
  * (eng_buffer_digest, the one replay recomputes) and non-finite counts are taken from the
  * copies. After a frame is written only its small record stays in memory.
  *
+ * Resuming (ispm record --resume). cap_create writes run.json, what the run is of, before
+ * any frame; each frame's manifest record is also written beside its EXR as frames/NNNNNN.json,
+ * after the EXR's rename. So after a kill at any moment the folder holds no manifest (replay
+ * refuses it) and every frame either has both files (captured: its record is read back, the
+ * frame is not rendered again) or not (rendered again). The engine renders each frame from
+ * scratch, so the resumed run's manifest equals an uninterrupted one's up to the command line
+ * and the timings of the frames rendered after the restart.
+ *
  * The capture owns every string it was given (copied); the sequence and scene are borrowed. */
 #define _POSIX_C_SOURCE 200809L
 
@@ -33,6 +41,11 @@
 
 #define MANIFEST_NAME "manifest.json"
 #define MANIFEST_TMP_NAME "manifest.json.tmp"
+#define RUNINFO_NAME "run.json"
+#define RUNINFO_TMP_NAME "run.json.tmp"
+/* The keys of the manifest that run.json repeats and --resume compares. */
+static const char *const runinfo_keys[] = {"sequence", "scene", "resolution", "fps", "frame_count",
+                                           "camera", "settings", NULL};
 
 /* What the manifest says about one captured buffer. */
 typedef struct cap_bufrec {
@@ -191,7 +204,7 @@ static eng_result make_dirs(const char *dir, eng_error *err)
     return ENG_OK;
 }
 
-/* Does frames/ hold any *.exr? */
+/* Does frames/ hold any *.exr or *.json? */
 static eng_result frames_present(const char *frames_dir, int *present, eng_error *err)
 {
     *present = 0;
@@ -203,7 +216,7 @@ static eng_result frames_present(const char *frames_dir, int *present, eng_error
     }
     struct dirent *e;
     while ((e = readdir(d)) != NULL)
-        if (ends_with(e->d_name, ".exr")) {
+        if (ends_with(e->d_name, ".exr") || ends_with(e->d_name, ".json")) {
             *present = 1;
             break;
         }
@@ -211,7 +224,7 @@ static eng_result frames_present(const char *frames_dir, int *present, eng_error
     return ENG_OK;
 }
 
-/* Removes frames/ *.exr (when remove_frames) and frames/ *.exr.tmp. */
+/* Removes frames/ *.exr and *.json (when remove_frames) and frames/ *.tmp. */
 static eng_result clean_frames(const char *frames_dir, int remove_frames, eng_error *err)
 {
     DIR *d = opendir(frames_dir);
@@ -220,7 +233,8 @@ static eng_result clean_frames(const char *frames_dir, int remove_frames, eng_er
     eng_result r = ENG_OK;
     struct dirent *e;
     while (r == ENG_OK && (errno = 0, e = readdir(d)) != NULL) {
-        if (!ends_with(e->d_name, ".exr.tmp") && !(remove_frames && ends_with(e->d_name, ".exr")))
+        if (!ends_with(e->d_name, ".exr.tmp") && !ends_with(e->d_name, ".json.tmp") &&
+            !(remove_frames && (ends_with(e->d_name, ".exr") || ends_with(e->d_name, ".json"))))
             continue;
         char *p = cap__join(frames_dir, e->d_name);
         if (unlink(p) != 0 && errno != ENOENT)
@@ -231,34 +245,63 @@ static eng_result clean_frames(const char *frames_dir, int remove_frames, eng_er
     return r;
 }
 
-/* Prepares run_dir as cap_create documents. */
-static eng_result prepare_run_dir(const char *run_dir, const char *frames_dir, int overwrite, eng_error *err)
+/* unlink that tolerates a missing file. */
+static eng_result remove_file(const char *path, eng_error *err)
+{
+    if (unlink(path) != 0 && errno != ENOENT)
+        return eng_fail(err, ENG_ERR_IO, "%s: cannot remove: %s", path, strerror(errno));
+    return ENG_OK;
+}
+
+/* Prepares run_dir as cap_create documents (the resume checks of run.json's content and the
+ * frames come later, in cap_create). */
+static eng_result prepare_run_dir(const char *run_dir, const char *frames_dir, int overwrite, int resume,
+                                  eng_error *err)
 {
     eng_result r = make_dirs(run_dir, err);
     if (r != ENG_OK)
         return r;
     char *manifest = cap__join(run_dir, MANIFEST_NAME);
     char *manifest_tmp = cap__join(run_dir, MANIFEST_TMP_NAME);
-    int has_manifest = path_exists(manifest), has_frames = 0;
+    char *runinfo = cap__join(run_dir, RUNINFO_NAME);
+    char *runinfo_tmp = cap__join(run_dir, RUNINFO_TMP_NAME);
+    int has_manifest = path_exists(manifest), has_runinfo = path_exists(runinfo), has_frames = 0;
     r = frames_present(frames_dir, &has_frames, err);
-    if (r == ENG_OK && (has_manifest || has_frames) && !overwrite)
-        r = eng_fail(err, ENG_ERR_IO, "%s: already holds a run (use --force)", run_dir);
-    if (r == ENG_OK && has_manifest) {
-        if (unlink(manifest) != 0 && errno != ENOENT)
-            r = eng_fail(err, ENG_ERR_IO, "%s: cannot remove: %s", manifest, strerror(errno));
-        else
+    if (r == ENG_OK && resume) {
+        if (has_manifest)
+            r = eng_fail(err, ENG_ERR_INVALID, "%s: the run is complete (it has %s): nothing to resume", run_dir,
+                         MANIFEST_NAME);
+        else if (!has_runinfo)
+            r = eng_fail(err, ENG_ERR_INVALID, "%s: no %s: not a run that --resume can continue", run_dir,
+                         RUNINFO_NAME);
+    } else if (r == ENG_OK && (has_manifest || has_runinfo || has_frames) && !overwrite)
+        r = eng_fail(err, ENG_ERR_IO, "%s: already holds a run (use --force, or --resume to continue it)",
+                     run_dir);
+    /* The manifest goes first, so that no crash leaves it beside frames it does not describe;
+     * then run.json, so that no crash leaves a resumable run of the old sequence. */
+    if (r == ENG_OK && !resume && (has_manifest || has_runinfo)) {
+        if ((r = remove_file(manifest, err)) == ENG_OK && (r = cap__fsync_dir(run_dir, err)) == ENG_OK &&
+            (r = remove_file(runinfo, err)) == ENG_OK)
             r = cap__fsync_dir(run_dir, err);
     }
-    if (r == ENG_OK && unlink(manifest_tmp) != 0 && errno != ENOENT)
-        r = eng_fail(err, ENG_ERR_IO, "%s: cannot remove: %s", manifest_tmp, strerror(errno));
+    if (r == ENG_OK)
+        r = remove_file(manifest_tmp, err);
+    if (r == ENG_OK)
+        r = remove_file(runinfo_tmp, err);
     if (r == ENG_OK)
         r = make_dirs(frames_dir, err);
     if (r == ENG_OK)
-        r = clean_frames(frames_dir, overwrite, err);
+        r = clean_frames(frames_dir, overwrite && !resume, err);
     free(manifest);
     free(manifest_tmp);
+    free(runinfo);
+    free(runinfo_tmp);
     return r;
 }
+
+static eng_result write_runinfo(cap_capture *c, eng_error *err);
+static eng_result write_frame_record(cap_capture *c, int frame, eng_error *err);
+static eng_result resume_run(cap_capture *c, eng_error *err);
 
 /* ---------------------------------------------------------------- create / destroy */
 
@@ -279,7 +322,7 @@ eng_result cap_create(const cap_desc *desc, cap_capture **out, eng_error *err)
     cap_capture *c = cap__xcalloc(1, sizeof *c);
     c->run_dir = cap__xstrdup(desc->run_dir);
     c->frames_dir = cap__join(desc->run_dir, "frames");
-    eng_result r = prepare_run_dir(c->run_dir, c->frames_dir, desc->overwrite, err);
+    eng_result r = prepare_run_dir(c->run_dir, c->frames_dir, desc->overwrite, desc->resume, err);
     if (r != ENG_OK) {
         cap_destroy(c);
         return r;
@@ -304,6 +347,11 @@ eng_result cap_create(const cap_desc *desc, cap_capture **out, eng_error *err)
     c->frames = cap__xcalloc((size_t)c->frame_count, sizeof *c->frames);
     c->cur_frame = -1;
     c->status = ENG_OK;
+    r = desc->resume ? resume_run(c, err) : write_runinfo(c, err);
+    if (r != ENG_OK) {
+        cap_destroy(c);
+        return r;
+    }
     *out = c;
     return ENG_OK;
 }
@@ -329,6 +377,11 @@ void cap_destroy(cap_capture *c)
     free(c->run_dir);
     free(c->frames_dir);
     free(c);
+}
+
+int cap_frame_done(const cap_capture *c, int frame)
+{
+    return c && frame >= 0 && frame < c->frame_count && c->frames[frame].done;
 }
 
 eng_result cap_status(const cap_capture *c, eng_error *err)
@@ -480,6 +533,11 @@ static int on_frame_end(void *user, const eng_frame_stats *stats)
     }
     c->pending_count = 0;
     c->cur_frame = -1;
+    r = write_frame_record(c, frame, &c->error);
+    if (r != ENG_OK) {
+        f->done = 0;
+        return fail_cb(c, r);
+    }
     return 0;
 }
 
@@ -628,6 +686,14 @@ static cJSON *manifest_json(const cap_capture *c)
     jadd(st, "shadow_bias", jfloat(s.shadow_bias));
     jadd(st, "exposure", jfloat(s.exposure));
     jadd(st, "threads", cJSON_CreateNumber(s.threads));
+    jadd(st, "indirect", jstr(eng_indirect_name(s.indirect)));
+    jadd(st, "photon_count", cJSON_CreateNumber(s.photon_count));
+    jadd(st, "bounces", cJSON_CreateNumber(s.bounces));
+    jadd(st, "kernel_radius", jfloat(s.kernel_radius));
+    jadd(st, "normal_compression", jfloat(s.normal_compression));
+    jadd(st, "random", jstr(eng_random_name(s.random)));
+    jadd(st, "random_map_size", cJSON_CreateNumber(s.random_map_size));
+    jadd(st, "random_seed", cJSON_CreateNumber(s.random_seed));
     jadd(root, "settings", st);
 
     cJSON *det = jok(cJSON_CreateObject());
@@ -717,5 +783,197 @@ eng_result cap_finish(cap_capture *c, eng_error *err)
     cJSON_free(text);
     r = write_atomic(c->run_dir, MANIFEST_NAME, doc, err);
     free(doc);
+    return r;
+}
+
+/* ---------------------------------------------------------------- resume */
+
+/* Prints a cJSON tree with a trailing newline, as write_atomic wants it. */
+static char *json_text(cJSON *root)
+{
+    char *text = cJSON_Print(root);
+    if (!text)
+        jok(NULL);
+    size_t n = strlen(text);
+    char *doc = cap__xmalloc(n + 2);
+    memcpy(doc, text, n);
+    memcpy(doc + n, "\n", 2);
+    cJSON_free(text);
+    return doc;
+}
+
+/* run.json: the manifest's runinfo_keys, taken from the manifest this capture would write. */
+static cJSON *runinfo_json(const cap_capture *c)
+{
+    cJSON *m = manifest_json(c);
+    cJSON *info = jok(cJSON_CreateObject());
+    jadd(info, "format", cJSON_CreateString("ispm-run-info"));
+    jadd(info, "format_version", cJSON_CreateNumber(1));
+    for (int i = 0; runinfo_keys[i]; i++) {
+        cJSON *item = cJSON_DetachItemFromObjectCaseSensitive(m, runinfo_keys[i]);
+        jadd(info, runinfo_keys[i], item ? item : cJSON_CreateNull());
+    }
+    cJSON_Delete(m);
+    return info;
+}
+
+static eng_result write_runinfo(cap_capture *c, eng_error *err)
+{
+    cJSON *info = runinfo_json(c);
+    char *doc = json_text(info);
+    cJSON_Delete(info);
+    eng_result r = write_atomic(c->run_dir, RUNINFO_NAME, doc, err);
+    free(doc);
+    return r;
+}
+
+static eng_result write_frame_record(cap_capture *c, int frame, eng_error *err)
+{
+    char name[32];
+    snprintf(name, sizeof name, "%06d.json", frame);
+    cJSON *o = frame_json(&c->frames[frame], frame);
+    char *doc = json_text(o);
+    cJSON_Delete(o);
+    eng_result r = write_atomic(c->frames_dir, name, doc, err);
+    free(doc);
+    return r;
+}
+
+/* Reads a JSON file written by write_atomic; ENG_ERR_INVALID when it does not parse. */
+static eng_result read_json(const char *path, cJSON **out, eng_error *err)
+{
+    *out = NULL;
+    char *text = NULL;
+    size_t len = 0;
+    eng_result r = eng_read_file(path, (size_t)64 << 20, &text, &len, err);
+    if (r != ENG_OK)
+        return r;
+    *out = cJSON_ParseWithLength(text, len);
+    free(text);
+    if (!*out)
+        return eng_fail(err, ENG_ERR_INVALID, "%s: not valid JSON", path);
+    return ENG_OK;
+}
+
+static int json_int(const cJSON *o, const char *key, double lo, double hi, int *out)
+{
+    const cJSON *j = cJSON_GetObjectItemCaseSensitive(o, key);
+    if (!cJSON_IsNumber(j) || !(j->valuedouble >= lo && j->valuedouble <= hi) ||
+        j->valuedouble != (double)(int64_t)j->valuedouble)
+        return 0;
+    *out = (int)j->valuedouble;
+    return 1;
+}
+
+/* Fills f from a frames/NNNNNN.json that frame_json wrote for frame index; anything else is
+ * ENG_ERR_INVALID naming the file and the key. */
+static eng_result frame_from_json(const char *path, int index, const cJSON *o, cap_frame *f, eng_error *err)
+{
+    int idx;
+    if (!cJSON_IsObject(o) || !json_int(o, "index", 0, 1e9, &idx) || idx != index)
+        return eng_fail(err, ENG_ERR_INVALID, "%s: \"index\" is not %d", path, index);
+    const cJSON *t = cJSON_GetObjectItemCaseSensitive(o, "time");
+    if (!cJSON_IsNumber(t))
+        return eng_fail(err, ENG_ERR_INVALID, "%s: \"time\" is not a number", path);
+    f->time = t->valuedouble;
+    const cJSON *passes = cJSON_GetObjectItemCaseSensitive(o, "passes");
+    if (!cJSON_IsArray(passes) || cJSON_GetArraySize(passes) > ENG_MAX_PASSES)
+        return eng_fail(err, ENG_ERR_INVALID, "%s: \"passes\" is not an array of at most %d", path, ENG_MAX_PASSES);
+    const cJSON *p;
+    cJSON_ArrayForEach(p, passes) {
+        const cJSON *name = cJSON_GetObjectItemCaseSensitive(p, "name");
+        const cJSON *ms = cJSON_GetObjectItemCaseSensitive(p, "ms");
+        if (!cJSON_IsString(name) || strlen(name->valuestring) >= SCN_NAME_MAX || !cJSON_IsNumber(ms))
+            return eng_fail(err, ENG_ERR_INVALID, "%s: passes[%d] is not {\"name\", \"ms\"}", path, f->pass_count);
+        eng_pass_time *pt = &f->passes[f->pass_count++];
+        snprintf(pt->name, sizeof pt->name, "%s", name->valuestring);
+        pt->ms = ms->valuedouble;
+    }
+    const cJSON *bufs = cJSON_GetObjectItemCaseSensitive(o, "buffers");
+    int n = cJSON_IsArray(bufs) ? cJSON_GetArraySize(bufs) : 0;
+    if (n < 1)
+        return eng_fail(err, ENG_ERR_INVALID, "%s: \"buffers\" is not a non-empty array", path);
+    f->buffers = cap__xcalloc((size_t)n, sizeof *f->buffers);
+    const cJSON *b;
+    cJSON_ArrayForEach(b, bufs) {
+        cap_bufrec *rec = &f->buffers[f->buffer_count];
+        int i = f->buffer_count++;
+        const cJSON *name = cJSON_GetObjectItemCaseSensitive(b, "name");
+        const cJSON *dg = cJSON_GetObjectItemCaseSensitive(b, "digest");
+        const cJSON *ch = cJSON_GetObjectItemCaseSensitive(b, "channels");
+        const cJSON *first = cJSON_GetObjectItemCaseSensitive(b, "first_nonfinite");
+        int nch = cJSON_IsArray(ch) ? cJSON_GetArraySize(ch) : 0, nan, inf;
+        if (!cJSON_IsString(name) || !json_int(b, "width", 1, 1 << 30, &rec->width) ||
+            !json_int(b, "height", 1, 1 << 30, &rec->height) || nch < 1 || nch > ENG_MAX_CHANNELS ||
+            !cJSON_IsString(dg) || strlen(dg->valuestring) != 32 || !json_int(b, "nan", 0, 2e9, &nan) ||
+            !json_int(b, "inf", 0, 2e9, &inf))
+            return eng_fail(err, ENG_ERR_INVALID, "%s: buffers[%d] is not a buffer record", path, i);
+        rec->name = cap__xstrdup(name->valuestring);
+        memcpy(rec->digest, dg->valuestring, 33);
+        rec->nan_count = (uint64_t)nan;
+        rec->inf_count = (uint64_t)inf;
+        const cJSON *cn;
+        cJSON_ArrayForEach(cn, ch) {
+            if (!cJSON_IsString(cn))
+                return eng_fail(err, ENG_ERR_INVALID, "%s: buffers[%d].channels holds a non-string", path, i);
+            rec->channels[rec->channel_count++] = cap__xstrdup(cn->valuestring);
+        }
+        rec->first_x = rec->first_y = -1;
+        if (cJSON_IsArray(first) && cJSON_GetArraySize(first) == 2) {
+            const cJSON *x = cJSON_GetArrayItem(first, 0), *y = cJSON_GetArrayItem(first, 1);
+            if (!cJSON_IsNumber(x) || !cJSON_IsNumber(y))
+                return eng_fail(err, ENG_ERR_INVALID, "%s: buffers[%d].first_nonfinite is not [x, y]", path, i);
+            rec->first_x = (int)x->valuedouble;
+            rec->first_y = (int)y->valuedouble;
+        } else if (!cJSON_IsNull(first))
+            return eng_fail(err, ENG_ERR_INVALID, "%s: buffers[%d].first_nonfinite is not null or [x, y]", path, i);
+    }
+    f->done = 1;
+    return ENG_OK;
+}
+
+static eng_result resume_run(cap_capture *c, eng_error *err)
+{
+    /* Same sequence, scene and settings as the interrupted run, or its frames are not ours. */
+    char *path = cap__join(c->run_dir, RUNINFO_NAME);
+    cJSON *old = NULL;
+    eng_result r = read_json(path, &old, err);
+    if (r == ENG_OK) {
+        cJSON *now = runinfo_json(c);
+        for (int i = 0; r == ENG_OK && runinfo_keys[i]; i++)
+            if (!cJSON_Compare(cJSON_GetObjectItemCaseSensitive(old, runinfo_keys[i]),
+                               cJSON_GetObjectItemCaseSensitive(now, runinfo_keys[i]), 1))
+                r = eng_fail(err, ENG_ERR_INVALID,
+                             "%s: \"%s\" differs from this recording's: the run was recorded from another "
+                             "sequence, scene or settings (use --force to start again)",
+                             path, runinfo_keys[i]);
+        cJSON_Delete(now);
+    }
+    cJSON_Delete(old);
+    free(path);
+    int removed = 0;
+    for (int i = 0; r == ENG_OK && i < c->frame_count; i++) {
+        char name[32];
+        snprintf(name, sizeof name, "%06d.json", i);
+        char *json = cap__join(c->frames_dir, name);
+        char *exr = frame_path(c, i);
+        int has_json = path_exists(json), has_exr = path_exists(exr);
+        if (has_json && has_exr) {
+            cJSON *o = NULL;
+            if ((r = read_json(json, &o, err)) == ENG_OK)
+                r = frame_from_json(json, i, o, &c->frames[i], err);
+            cJSON_Delete(o);
+            if (r != ENG_OK)
+                free_frame(&c->frames[i]);
+        } else if (has_json || has_exr) {
+            /* Killed between the two renames: the frame is rendered again. */
+            if ((r = remove_file(has_json ? json : exr, err)) == ENG_OK)
+                removed = 1;
+        }
+        free(json);
+        free(exr);
+    }
+    if (r == ENG_OK && removed)
+        r = cap__fsync_dir(c->frames_dir, err);
     return r;
 }

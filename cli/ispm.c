@@ -33,13 +33,16 @@ static void usage(FILE *f)
 static void record_usage(FILE *f)
 {
     fprintf(f,
-            "usage: ispm record SEQUENCE -o RUN [--force] [--threads N] [--quiet]\n"
+            "usage: ispm record SEQUENCE -o RUN [--force | --resume] [--threads N] [--quiet]\n"
             "\n"
             "Renders frame i of SEQUENCE at t = i / fps and writes every announced buffer to\n"
             "RUN/frames/NNNNNN.exr (one multi-part EXR per frame), then RUN/manifest.json last.\n"
             "\n"
             "  -o, --output RUN   run folder to create\n"
             "  -f, --force        replace an existing run in RUN\n"
+            "  -r, --resume       continue an interrupted recording of the same sequence into RUN:\n"
+            "                     frames already written are kept, the rest rendered (same\n"
+            "                     options as the interrupted run; the result is bit-identical)\n"
             "  -j, --threads N    CPU threads (llvmpipe, Embree); overrides the sequence's settings\n"
             "  -q, --quiet        no per-frame progress\n"
             "  -h, --help         this text\n"
@@ -87,6 +90,15 @@ static int progress_frame_end(void *user, const eng_frame_stats *st)
     int n = snprintf(line, sizeof line, "  frame %d/%d  t=%.4f s ", st->frame + 1, seq->frame_count, st->time);
     for (int i = 0; i < st->pass_count && n > 0 && (size_t)n < sizeof line; i++)
         n += snprintf(line + n, sizeof line - (size_t)n, " %s %.1f", st->passes[i].name, st->passes[i].ms);
+    if (st->photons_emitted) {
+        n += snprintf(line + n, sizeof line - (size_t)n, " ms  photons: %llu bounced, stored",
+                      (unsigned long long)st->photons_emitted);
+        for (int b = 2; b < 16 && n > 0 && (size_t)n < sizeof line; b++)
+            if (st->photons_stored[b])
+                n += snprintf(line + n, sizeof line - (size_t)n, " %llu", (unsigned long long)st->photons_stored[b]);
+        fprintf(stderr, "%s\n", line);
+        return 0;
+    }
     fprintf(stderr, "%s ms\n", line);
     return 0;
 }
@@ -107,14 +119,15 @@ static int cmd_record(int argc, char **argv, const char *command_line)
     static const struct option opts[] = {
         {"output", required_argument, NULL, 'o'}, {"force", no_argument, NULL, 'f'},
         {"threads", required_argument, NULL, 'j'}, {"quiet", no_argument, NULL, 'q'},
-        {"help", no_argument, NULL, 'h'}, {NULL, 0, NULL, 0},
+        {"resume", no_argument, NULL, 'r'}, {"help", no_argument, NULL, 'h'}, {NULL, 0, NULL, 0},
     };
     const char *out = NULL;
-    int force = 0, quiet = 0, threads = 0, c;
-    while ((c = getopt_long(argc, argv, "o:fj:qh", opts, NULL)) != -1) {
+    int force = 0, resume = 0, quiet = 0, threads = 0, c;
+    while ((c = getopt_long(argc, argv, "o:fj:qrh", opts, NULL)) != -1) {
         switch (c) {
         case 'o': out = optarg; break;
         case 'f': force = 1; break;
+        case 'r': resume = 1; break;
         case 'q': quiet = 1; break;
         case 'j': {
             char *end;
@@ -132,6 +145,10 @@ static int cmd_record(int argc, char **argv, const char *command_line)
     }
     if (optind + 1 != argc || !out) {
         record_usage(stderr);
+        return EXIT_INPUT;
+    }
+    if (force && resume) {
+        fprintf(stderr, "ispm record: --force and --resume exclude each other\n");
         return EXIT_INPUT;
     }
     const char *seq_path = argv[optind];
@@ -168,12 +185,13 @@ static int cmd_record(int argc, char **argv, const char *command_line)
         .gl_version = eng_gl_version(eng), .gl_renderer = eng_gl_renderer(eng),
         .tool_version = ISPM_VERSION, .git_revision = ISPM_GIT_REV,
         .command_line = command_line, .overwrite = force,
-        .determinism = eng_determinism_info(),
+        .determinism = eng_determinism_info(), .resume = resume,
     };
     r = cap_create(&cd, &cap, &err);
     if (r != ENG_OK) {
         fprintf(stderr, "ispm record: %s\n", err.msg);
-        rc = EXIT_RUNTIME;
+        /* A run --resume cannot continue (another sequence, already complete) is a bad argument. */
+        rc = resume && r == ENG_ERR_INVALID ? EXIT_INPUT : EXIT_RUNTIME;
         goto done;
     }
     eng_listener l = cap_listener(cap);
@@ -185,6 +203,10 @@ static int cmd_record(int argc, char **argv, const char *command_line)
         fprintf(stderr, "ispm record: %s (%s), %d frames at %g fps, %dx%d, %s\n", seq->name, scene->path,
                 seq->frame_count, seq->fps, seq->width, seq->height, eng_gl_renderer(eng));
     for (int i = 0; i < seq->frame_count; i++) {
+        /* Resuming: frames the interrupted run completed are kept (each is rendered from
+         * scratch, so skipping some changes no other frame). */
+        if (cap_frame_done(cap, i))
+            continue;
         r = eng_render_frame(eng, i, &err);
         if (r != ENG_OK) {
             eng_error cerr = {{0}};

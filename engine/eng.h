@@ -165,6 +165,10 @@ typedef struct scn_scene {
 /* Loads and validates a .gltf/.glb (accessor bounds, index ranges, node cycles, NaN in
  * transforms, light types, ...). On failure *out is NULL and err names file and problem. */
 eng_result scn_load_gltf(const char *path, scn_scene **out, eng_error *err);
+/* Same, from len bytes in memory (.glb if they start with the GLB magic, JSON otherwise);
+ * name stands for the file in messages and in scene->path, and external buffers are looked
+ * up beside it. Borrows bytes. For the fuzz targets and tests. */
+eng_result scn_load_gltf_memory(const char *name, const void *bytes, size_t len, scn_scene **out, eng_error *err);
 void scn_destroy(scn_scene *scene);
 
 /* World matrices of every node at time t (seconds), all animations applied; animations are
@@ -179,6 +183,21 @@ int32_t scn_find_node(const scn_scene *scene, const char *name); /* -1 if absent
 
 /* ---------------------------------------------------------------- settings & sequence */
 
+typedef enum eng_indirect {
+    ENG_INDIRECT_DEFAULT = 0, /* = ISPM */
+    ENG_INDIRECT_NONE,        /* direct light only */
+    ENG_INDIRECT_ISPM         /* bounce map + CPU trace + photon volumes (ISPM §3) */
+} eng_indirect;
+
+typedef enum eng_random_mode {
+    ENG_RANDOM_DEFAULT = 0,   /* = maps */
+    ENG_RANDOM_MAPS,          /* precomputed random maps seeded by scene quantities (ISPM §4.1) */
+    ENG_RANDOM_PER_FRAME      /* the same maps, seeds salted with the frame index (for comparison) */
+} eng_random_mode;
+
+const char *eng_indirect_name(eng_indirect m);
+const char *eng_random_name(eng_random_mode m);
+
 /* Engine settings. A zero-initialised struct means defaults (eng_settings_defaults fills
  * them in explicitly so the manifest can record the values used). */
 typedef struct eng_settings {
@@ -187,6 +206,15 @@ typedef struct eng_settings {
     float shadow_bias;    /* world-space offset along the normal before the lookup; default 0.002 */
     float exposure;       /* display transform: stops applied before sRGB encoding; default 0 */
     int threads;          /* CPU worker threads (OpenMP, Embree, llvmpipe); 0 = default 2 */
+    /* Indirect light (ISPM). */
+    eng_indirect indirect;
+    int photon_count;         /* bounce-map photons over all lights; default 32768 */
+    int bounces;              /* photon-map bounces stored per path after the bounce map; default 3 */
+    float kernel_radius;      /* photon volume radius r_xy in metres at unit path-density scale; default 0.1 */
+    float normal_compression; /* r_z / r_xy of the kernel ellipsoid (ISPM §5.1); default 0.25 */
+    eng_random_mode random;
+    int random_map_size;      /* entries per random table, a power of two; default 65536 */
+    int random_seed;          /* seed of the random tables; default 1 */
 } eng_settings;
 
 void eng_settings_defaults(eng_settings *s);
@@ -255,6 +283,10 @@ typedef struct eng_frame_stats {
     double time;
     int pass_count;
     eng_pass_time passes[ENG_MAX_PASSES];
+    /* Photon attrition (ISPM Fig. 10): bounce-map photons that survived the first bounce, and
+     * photon-map photons stored at bounce index b (b = 2 is the second surface of a path). */
+    uint64_t photons_emitted;
+    uint64_t photons_stored[16];
 } eng_frame_stats;
 
 /* A listener sees every announced buffer. Any callback may be NULL. A non-zero return

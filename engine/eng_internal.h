@@ -16,6 +16,10 @@
 
 #define ENG_PI 3.14159265358979323846
 
+/* Defined in the photon section below; the passes take them by pointer. */
+typedef struct eng_random_maps eng_random_maps;
+typedef struct eng_photon_map eng_photon_map;
+
 /* ---------------------------------------------------------------- math (column-major) */
 
 void m4_identity(float m[16]);
@@ -126,6 +130,15 @@ static inline float shadow_spot_half_angle(float outer_cone)
     return a < 1.5f ? a : 1.5f;
 }
 
+/* The faces of light l's views (6 cube faces, a spot frustum, or a directional ortho box),
+ * their view-projection matrices and the far value, in sm (its target is untouched). The
+ * shadow maps, light G-buffers and bounce maps of a light all use these views. */
+void light_views(const eng_light_pose *l, const eng_frame_scene *fs, shadow_map *sm);
+
+/* tan of a point light face's or spot frustum's half-angle, or a directional box's
+ * half-width: what one texel of a map of `size` texels spans is 2·extent/size. */
+float light_view_extent(const eng_light_pose *l, const shadow_map *sm);
+
 typedef struct pass_shadow pass_shadow;
 eng_result pass_shadow_create(int size, uint32_t light_count, pass_shadow **out, eng_error *err);
 /* Renders light i's map; returns it (owned by the pass). */
@@ -139,6 +152,38 @@ eng_result pass_direct_create(int width, int height, pass_direct **out, eng_erro
 const glu_target *pass_direct_run(pass_direct *p, const eng_frame_scene *fs, const glu_target *gbuf,
                                   const shadow_map *const *shadows, const eng_settings *s);
 void pass_direct_destroy(pass_direct *p);
+
+/* Light-space G-buffer (pass_lightgbuffer.c, ISPM §3 step 1b) and bounce map
+ * (pass_bounce.c, §4.2), per light, at `size` texels per face: layered targets with one
+ * layer per face of light_views. The light G-buffer has 4 attachments (position + coverage,
+ * modelled normal, albedo, material); the bounce map 2 (power RGB + ρp, direction + ior). */
+typedef struct light_maps {
+    shadow_map views;   /* faces and matrices (its target unused) */
+    glu_target gbuffer; /* 4 attachments */
+    glu_target bounce;  /* 2 attachments */
+    int size;
+} light_maps;
+
+typedef struct pass_lightmaps pass_lightmaps;
+eng_result pass_lightmaps_create(const eng_random_maps *rm, pass_lightmaps **out, eng_error *err);
+/* Renders light `light`'s G-buffer and bounce map at size² texels per face into lm
+ * (targets are (re)allocated when the size or face count changes). */
+eng_result pass_lightmaps_run(pass_lightmaps *p, const eng_frame_scene *fs, uint32_t light, int size,
+                              uint32_t salt, light_maps *lm, eng_error *err);
+void light_maps_release(light_maps *lm);
+void pass_lightmaps_destroy(pass_lightmaps *p);
+
+/* Photon volumes (pass_splat.c, ISPM §5): accumulates Eq. 1 of every photon into an RGBA32F
+ * target (RGB radiance, A = number of kernels covering the pixel), depth-tested against the
+ * eye G-buffer's depth buffer. */
+typedef struct pass_splat pass_splat;
+eng_result pass_splat_create(int width, int height, pass_splat **out, eng_error *err);
+const glu_target *pass_splat_run(pass_splat *p, const eng_frame_scene *fs, const glu_target *gbuf,
+                                 const eng_photon_map *map, const eng_settings *s);
+void pass_splat_destroy(pass_splat *p);
+/* The kernel radius r_xy of a photon of path density rho (ISPM §2.5/§4.3: large kernels for
+ * improbable paths, small for caustics): kernel_radius · clamp((1000 ρ)^(−1/4), 1/4, 2). */
+float splat_radius(float kernel_radius, float rho);
 
 /* Composite (pass_composite.c): attachment 0 = direct + indirect (linear radiance),
  * attachment 1 = display transform (exposure, clamp, sRGB encoding). indirect may be 0. */
@@ -155,6 +200,97 @@ eng_result glctx_create(eng_glctx **out, eng_error *err);
 void glctx_destroy(eng_glctx *c);
 const char *glctx_version(const eng_glctx *c);
 const char *glctx_renderer(const eng_glctx *c);
+
+/* ---------------------------------------------------------------- photons (ISPM §4) */
+
+/* Precomputed random maps (001_… §3.1 PRM; 003_… §4.1 and §6.1 "Random numbers"; 004_… §7):
+ * tables made once per run from a fixed seed and never changed, so that a path seeded by the
+ * same scene quantity reads the same numbers every frame. Entry k of a path seeded s is
+ * table[(s + k) & (size − 1)]. */
+typedef struct eng_random_maps {
+    uint32_t size;   /* entries per table, a power of two */
+    float *uniform;  /* size × 4 uniform numbers in [0,1) */
+    float *cosine;   /* size × 4: cosine-weighted hemisphere direction about +Z (x,y,z), pdf */
+    float *sphere;   /* size × 4: uniform sphere direction (x,y,z), pdf = 1/4π */
+} eng_random_maps;
+
+eng_result rmap_create(uint64_t seed, uint32_t size, eng_random_maps *out, eng_error *err);
+void rmap_destroy(eng_random_maps *rm);
+/* A 32-bit hash of the exact bits of a position (or any 3 floats) and a salt: the seed of a
+ * CPU photon path (ISPM §4.1: "re-seed … with a hash of its world space [position] in the
+ * bounce map"). The salt is 0 with random maps, the frame index with per-frame random. */
+uint32_t rmap_hash3(const float p[3], uint32_t salt);
+/* Same for a light position and a bounce-map pixel (x, y, face): the bounce map's seed. */
+uint32_t rmap_hash_pixel(const float light[3], uint32_t x, uint32_t y, uint32_t face, uint32_t salt);
+
+/* A photon leaving the first bounce (bounce map, ISPM Table 1): outgoing direction and power,
+ * at the surface point of the light's G-buffer. Power 0 = absorbed. */
+typedef struct eng_bounce_photon {
+    float position[3];
+    float direction[3]; /* outgoing, unit */
+    float power[3];     /* W per channel */
+    float path_density; /* ρp so far */
+    float ior;          /* index of refraction of the medium the photon travels in */
+} eng_bounce_photon;
+
+/* A photon-map photon (ISPM Table 1): stored where a path hits a surface, before it
+ * scatters again. */
+typedef struct eng_photon {
+    float position[3];
+    float direction[3]; /* ω_i: unit, from the surface toward where the light came from */
+    float power[3];     /* Φ_i, W per channel */
+    float normal[3];    /* n_p: shading normal of the surface hit, facing the incoming photon */
+    float path_density; /* ρp */
+    uint32_t bounce;    /* 2 = second surface of the path (the first stored), 3, ... */
+} eng_photon;
+
+typedef struct eng_photon_map {
+    size_t count, capacity;
+    eng_photon *photons;
+} eng_photon_map;
+
+typedef struct eng_trace_settings {
+    int max_bounces;     /* surfaces stored per path after the bounce map (>= 1) */
+    int threads;
+    uint32_t salt;       /* 0 = precomputed random maps; frame-dependent for per-frame random */
+} eng_trace_settings;
+
+typedef struct eng_trace_stats {
+    uint64_t emitted;               /* bounce-map photons with power > 0 */
+    uint64_t stored[16];            /* photons stored at bounce index b (b = 2..) */
+    double stored_power[16][3];     /* their total power per channel */
+} eng_trace_stats;
+
+/* A ray hit (rt.c): distance along the unit ray, world position, interpolated shading
+ * normal (unit) and Embree's geometric normal (unit), both in world space and NOT oriented
+ * toward the ray (the caller does that); the draw's material (−1 = default) and the draw
+ * index (= Embree geomID). */
+typedef struct rt_hit {
+    float t;
+    float position[3];
+    float normal[3];
+    float geom_normal[3];
+    int32_t material;
+    uint32_t draw;
+} rt_hit;
+
+typedef struct eng_rt eng_rt;
+/* Closest hit of the ray org + t·dir, t in [tnear, tfar], dir unit, against the scene as
+ * last posed by rt_update. Returns 1 and fills hit, or 0 (hit untouched). Thread-safe. */
+int rt_intersect(const eng_rt *rt, const float org[3], const float dir[3], float tnear, float tfar, rt_hit *hit);
+
+/* CPU photon trace (photon_trace.c, ISPM §4.3): traces every bounce-map photon with power > 0
+ * through the scene posed in rt and fills out (its previous contents are replaced; out may
+ * start zeroed) with up to s->max_bounces photons per path, in input order and, within a
+ * path, in hit order. The result is bit-identical for any s->threads. stats (may be NULL)
+ * gets the emitted count and stored count/power per bounce index. fs->scene resolves the
+ * materials of the draws rt was built from. ENG_ERR_INVALID on bad settings (max_bounces
+ * outside 1..14, random maps not created), ENG_ERR_NOMEM when out of memory. */
+eng_result photon_trace(const eng_rt *rt, const eng_frame_scene *fs, const eng_random_maps *rm,
+                        const eng_bounce_photon *in, size_t count, const eng_trace_settings *s,
+                        eng_photon_map *out, eng_trace_stats *stats, eng_error *err);
+/* Frees the photons and zeroes the map; accepts a zeroed map. */
+void photon_map_free(eng_photon_map *m);
 
 /* ---------------------------------------------------------------- Embree scene (rt.c) */
 

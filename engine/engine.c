@@ -31,6 +31,15 @@ struct eng_engine {
     pass_shadow *shadow;
     pass_direct *direct;
     pass_composite *composite;
+    /* Indirect light (ISPM): random maps, per-light light G-buffer + bounce map, the CPU
+     * trace's input and output, photon volumes. */
+    eng_random_maps rmaps;
+    pass_lightmaps *lightmaps;
+    light_maps lmaps[8];
+    eng_bounce_photon *bounce;
+    size_t bounce_count, bounce_capacity;
+    eng_photon_map pmap;
+    pass_splat *splat;
     int listener_count;
     eng_listener listeners[ENG_MAX_LISTENERS];
     float *world, *prev_world;
@@ -141,6 +150,13 @@ eng_result eng_create(const eng_desc *desc, eng_engine **out, eng_error *err)
         r = pass_direct_create(e->width, e->height, &e->direct, err);
     if (r == ENG_OK)
         r = pass_composite_create(e->width, e->height, &e->composite, err);
+    if (r == ENG_OK && e->settings.indirect == ENG_INDIRECT_ISPM) {
+        r = rmap_create((uint64_t)e->settings.random_seed, (uint32_t)e->settings.random_map_size, &e->rmaps, err);
+        if (r == ENG_OK)
+            r = pass_lightmaps_create(&e->rmaps, &e->lightmaps, err);
+        if (r == ENG_OK)
+            r = pass_splat_create(e->width, e->height, &e->splat, err);
+    }
     if (r != ENG_OK) {
         eng_destroy(e);
         return r;
@@ -171,6 +187,10 @@ void eng_destroy(eng_engine *e)
     if (!e)
         return;
     if (e->gl) {
+        for (int i = 0; i < 8; i++)
+            light_maps_release(&e->lmaps[i]);
+        pass_lightmaps_destroy(e->lightmaps);
+        pass_splat_destroy(e->splat);
         pass_composite_destroy(e->composite);
         pass_direct_destroy(e->direct);
         pass_shadow_destroy(e->shadow);
@@ -185,6 +205,9 @@ void eng_destroy(eng_engine *e)
     }
     rt_destroy(e->rt);
     glctx_destroy(e->gl);
+    rmap_destroy(&e->rmaps);
+    photon_map_free(&e->pmap);
+    free(e->bounce);
     free(e->gpu);
     free(e->world);
     free(e->prev_world);
@@ -367,6 +390,169 @@ static const char *const CH_RGB[] = {"R", "G", "B"};
 static const char *const CH_Z[] = {"Z"};
 static const char *const CH_XY[] = {"X", "Y"};
 static const char *const CH_MATERIAL[] = {"roughness", "metallic", "transmission", "ior", "id"};
+static const char *const CH_BOUNCE[] = {"R", "G", "B", "X", "Y", "Z", "density", "ior"};
+static const char *const CH_PHOTON[] = {"position.X", "position.Y", "position.Z", "direction.X", "direction.Y",
+                                        "direction.Z", "power.R", "power.G", "power.B", "normal.X",
+                                        "normal.Y", "normal.Z", "density", "bounce"};
+static const char *const CH_Y[] = {"Y"};
+
+#define PHOTON_ROW 1024 /* photons.map is PHOTON_ROW photons wide */
+
+static void *xmalloc(size_t size)
+{
+    void *p = malloc(size ? size : 1);
+    if (!p) {
+        fprintf(stderr, "ispm: out of memory\n");
+        abort();
+    }
+    return p;
+}
+
+/* "<pass>.light<i>[.face<f>][.<suffix>]" */
+static void light_buffer_name(char *out, size_t size, const char *pass, uint32_t light, int faces, int face,
+                              const char *suffix)
+{
+    int n = snprintf(out, size, "%s.light%u", pass, light);
+    if (faces > 1)
+        n += snprintf(out + n, size - (size_t)n, ".face%d", face);
+    if (suffix)
+        snprintf(out + n, size - (size_t)n, ".%s", suffix);
+}
+
+/* The power a light sends into the scene, per channel averaged: what its share of the
+ * photon budget follows (ISPM §4.2: bounce map size ∝ Φ_L / Φ_T). */
+static double light_power(const eng_light_pose *l, const eng_frame_scene *fs)
+{
+    double c = (l->radiance_scale[0] + l->radiance_scale[1] + l->radiance_scale[2]) / 3.0;
+    if (l->type == SCN_LIGHT_POINT)
+        return 4.0 * ENG_PI * c;
+    if (l->type == SCN_LIGHT_SPOT) /* solid angle of the outer cone (the falloff is ignored) */
+        return 2.0 * ENG_PI * (1.0 - cos(l->outer_cone)) * c;
+    double half = 0.0;
+    for (int i = 0; i < 3; i++) {
+        double ext = 0.5 * (fs->bounds_max[i] - fs->bounds_min[i]);
+        half += ext * ext;
+    }
+    return c * 4.0 * half; /* E × area of the box's face, (2·half)² */
+}
+
+/* Light G-buffers and bounce maps of every light (ISPM §3 1b–c), announced; the surviving
+ * bounce-map photons are gathered in e->bounce for the CPU trace. Returns non-zero when a
+ * listener aborted (err set). */
+static eng_result light_passes(eng_engine *e, int frame, uint32_t salt, eng_error *err)
+{
+    eng_frame_scene *fs = &e->fs;
+    double total = 0.0;
+    for (uint32_t l = 0; l < fs->light_count; l++)
+        total += light_power(&fs->lights[l], fs);
+    /* Map sizes first, so the photon list is allocated once. */
+    int sizes[8];
+    size_t need = 0;
+    for (uint32_t l = 0; l < fs->light_count; l++) {
+        double share = total > 0.0 ? light_power(&fs->lights[l], fs) / total : 0.0;
+        int faces = fs->lights[l].type == SCN_LIGHT_POINT ? 6 : 1;
+        /* Round the texel count up to a square per face; the texels' solid angles make the
+         * power exact whatever the size (see shaders/bounce.frag.glsl). */
+        sizes[l] = (int)ceil(sqrt(share * e->settings.photon_count / faces));
+        if (sizes[l] < 1)
+            sizes[l] = 1;
+        need += (size_t)sizes[l] * (size_t)sizes[l] * (size_t)faces;
+    }
+    if (need > e->bounce_capacity) {
+        free(e->bounce);
+        e->bounce = xmalloc(need * sizeof *e->bounce);
+        e->bounce_capacity = need;
+    }
+    e->bounce_count = 0;
+    for (uint32_t l = 0; l < fs->light_count; l++) {
+        int size = sizes[l];
+        double t0 = now_ms();
+        light_maps *lm = &e->lmaps[l];
+        eng_result r = pass_lightmaps_run(e->lightmaps, fs, l, size, salt, lm, err);
+        glFinish();
+        add_time(e, "lightmaps", now_ms() - t0);
+        if (r != ENG_OK)
+            return r;
+        int faces = lm->views.faces;
+        size_t npix = (size_t)size * (size_t)size;
+        float *pos = xmalloc(npix * 4 * sizeof(float));
+        float *pw = xmalloc(npix * 4 * sizeof(float));
+        float *dir = xmalloc(npix * 4 * sizeof(float));
+        float *bounce = xmalloc(npix * 8 * sizeof(float));
+        static const int p4[] = {0, 1, 2, 3};
+        static const int p3[] = {0, 1, 2};
+        int aborted = 0;
+        for (int f = 0; f < faces && !aborted; f++) {
+            char name[96];
+            light_buffer_name(name, sizeof name, "lightgbuffer", l, faces, f, "position");
+            aborted = read_and_announce(e, frame, name, &lm->gbuffer, 0, f, 3, p3, CH_XYZ);
+            light_buffer_name(name, sizeof name, "lightgbuffer", l, faces, f, "normal");
+            aborted = aborted || read_and_announce(e, frame, name, &lm->gbuffer, 1, f, 3, p3, CH_XYZ);
+            light_buffer_name(name, sizeof name, "lightgbuffer", l, faces, f, "albedo");
+            aborted = aborted || read_and_announce(e, frame, name, &lm->gbuffer, 2, f, 3, p3, CH_RGB);
+            if (aborted)
+                break;
+            double r0 = now_ms();
+            glu_read(&lm->gbuffer, 0, f, 4, p4, pos);
+            glu_read(&lm->bounce, 0, f, 4, p4, pw);
+            glu_read(&lm->bounce, 1, f, 4, p4, dir);
+            e->readback_ms += now_ms() - r0;
+            for (size_t i = 0; i < npix; i++) {
+                memcpy(bounce + 8 * i, pw + 4 * i, 3 * sizeof(float));
+                memcpy(bounce + 8 * i + 3, dir + 4 * i, 3 * sizeof(float));
+                bounce[8 * i + 6] = pw[4 * i + 3];
+                bounce[8 * i + 7] = dir[4 * i + 3];
+                if (pos[4 * i + 3] == 0.0f || (pw[4 * i] <= 0.0f && pw[4 * i + 1] <= 0.0f && pw[4 * i + 2] <= 0.0f))
+                    continue;
+                eng_bounce_photon *b = &e->bounce[e->bounce_count++];
+                memcpy(b->position, pos + 4 * i, 3 * sizeof(float));
+                memcpy(b->direction, dir + 4 * i, 3 * sizeof(float));
+                memcpy(b->power, pw + 4 * i, 3 * sizeof(float));
+                b->path_density = pw[4 * i + 3];
+                b->ior = dir[4 * i + 3];
+            }
+            light_buffer_name(name, sizeof name, "bounce", l, faces, f, NULL);
+            if (seq_wants(e->seq, name))
+                aborted = announce(e, frame, name, size, size, 8, CH_BOUNCE, bounce);
+        }
+        free(pos);
+        free(pw);
+        free(dir);
+        free(bounce);
+        if (aborted)
+            return eng_fail(err, ENG_ERR_ABORTED, "frame %d: capture failed in the light passes", frame);
+    }
+    return ENG_OK;
+}
+
+/* photons.map: one photon per pixel of a PHOTON_ROW-wide image, unused pixels zero. */
+static int announce_photon_map(eng_engine *e, int frame)
+{
+    if (!seq_wants(e->seq, "photons.map"))
+        return 0;
+    size_t n = e->pmap.count;
+    int rows = (int)((n + PHOTON_ROW - 1) / PHOTON_ROW);
+    if (rows < 1)
+        rows = 1;
+    float *img = calloc((size_t)rows * PHOTON_ROW * 14, sizeof(float));
+    if (!img) {
+        fprintf(stderr, "ispm: out of memory\n");
+        abort();
+    }
+    for (size_t i = 0; i < n; i++) {
+        const eng_photon *p = &e->pmap.photons[i];
+        float *d = img + 14 * i;
+        memcpy(d, p->position, 3 * sizeof(float));
+        memcpy(d + 3, p->direction, 3 * sizeof(float));
+        memcpy(d + 6, p->power, 3 * sizeof(float));
+        memcpy(d + 9, p->normal, 3 * sizeof(float));
+        d[12] = p->path_density;
+        d[13] = (float)p->bounce;
+    }
+    int rc = announce(e, frame, "photons.map", PHOTON_ROW, rows, 14, CH_PHOTON, img);
+    free(img);
+    return rc;
+}
 
 eng_result eng_render_frame(eng_engine *e, int frame, eng_error *err)
 {
@@ -405,6 +591,27 @@ eng_result eng_render_frame(eng_engine *e, int frame, eng_error *err)
             if (read_and_announce(e, frame, name, &maps[l]->target, 0, f, 1, p0, CH_Z))
                 return eng_fail(err, ENG_ERR_ABORTED, "frame %d: capture failed at %s", frame, name);
         }
+    }
+
+    /* Light G-buffers, bounce maps and the CPU photon trace (ISPM §3 1b–d). */
+    int ispm = e->settings.indirect == ENG_INDIRECT_ISPM;
+    if (ispm) {
+        uint32_t salt = e->settings.random == ENG_RANDOM_PER_FRAME ? (uint32_t)frame + 1u : 0u;
+        eng_result r = light_passes(e, frame, salt, err);
+        if (r != ENG_OK)
+            return r;
+        eng_trace_settings ts = {e->settings.bounces, e->settings.threads, salt};
+        eng_trace_stats tstats;
+        memset(&tstats, 0, sizeof tstats);
+        t0 = now_ms();
+        r = photon_trace(e->rt, &e->fs, &e->rmaps, e->bounce, e->bounce_count, &ts, &e->pmap, &tstats, err);
+        add_time(e, "photons", now_ms() - t0);
+        if (r != ENG_OK)
+            return r;
+        e->stats.photons_emitted = tstats.emitted;
+        memcpy(e->stats.photons_stored, tstats.stored, sizeof e->stats.photons_stored);
+        if (announce_photon_map(e, frame))
+            return eng_fail(err, ENG_ERR_ABORTED, "frame %d: capture failed at photons.map", frame);
     }
 
     /* Eye G-buffer. */
@@ -453,9 +660,24 @@ eng_result eng_render_frame(eng_engine *e, int frame, eng_error *err)
     if (read_and_announce(e, frame, "direct.radiance", direct, 0, 0, 3, p012, CH_RGB))
         return eng_fail(err, ENG_ERR_ABORTED, "frame %d: capture failed at direct.radiance", frame);
 
+    /* Indirect light: photon volumes (ISPM §3 step 4). */
+    GLuint indirect_tex = 0;
+    if (ispm) {
+        t0 = now_ms();
+        const glu_target *sp = pass_splat_run(e->splat, &e->fs, gb, &e->pmap, &e->settings);
+        glFinish();
+        add_time(e, "splat", now_ms() - t0);
+        indirect_tex = sp->color[0];
+        const int p3[] = {3};
+        if (read_and_announce(e, frame, "splat.indirect", sp, 0, 0, 3, p012, CH_RGB) ||
+            read_and_announce(e, frame, "splat.count", sp, 0, 0, 1, p3, CH_Y) ||
+            read_and_announce(e, frame, "indirect.radiance", sp, 0, 0, 3, p012, CH_RGB))
+            return eng_fail(err, ENG_ERR_ABORTED, "frame %d: capture failed in the splat pass", frame);
+    }
+
     /* Composite and display transform. */
     t0 = now_ms();
-    const glu_target *comp = pass_composite_run(e->composite, direct->color[0], 0, &e->settings);
+    const glu_target *comp = pass_composite_run(e->composite, direct->color[0], indirect_tex, &e->settings);
     glFinish();
     add_time(e, "composite", now_ms() - t0);
     if (read_and_announce(e, frame, "composite.radiance", comp, 0, 0, 3, p012, CH_RGB) ||

@@ -1022,20 +1022,15 @@ static eng_result build(loader *L, const char *bytes, size_t len)
     return compute_digest(L, bytes, len);
 }
 
-eng_result scn_load_gltf(const char *path, scn_scene **out, eng_error *err)
+/* Parses and validates bytes that came from path (named in messages; external buffers are
+ * looked up beside it). Borrows bytes; frees nothing of the caller's. */
+static eng_result load_bytes(const char *path, const char *bytes, size_t len, scn_scene **out, eng_error *err)
 {
-    *out = NULL;
-    char *bytes;
-    size_t len;
-    eng_result r = eng_read_file(path, GLTF_MAX_FILE, &bytes, &len, err);
-    if (r)
-        return r;
-
+    eng_result r;
     gls_model *m;
     char msg[800];
     gls_status st = gls_load(path, bytes, len, &m, msg, sizeof msg);
     if (st != GLS_OK) {
-        free(bytes);
         switch (st) {
         case GLS_ERR_IO: return eng_fail(err, ENG_ERR_IO, "%s: %s", path, msg);
         case GLS_ERR_SYNTAX: return eng_fail(err, ENG_ERR_PARSE, "%s: %s", path, msg);
@@ -1047,20 +1042,50 @@ eng_result scn_load_gltf(const char *path, scn_scene **out, eng_error *err)
     scn_scene *s = calloc(1, sizeof *s);
     if (!s) {
         gls_free(m);
-        free(bytes);
         return eng_fail(err, ENG_ERR_NOMEM, "%s: out of memory", path);
     }
     snprintf(s->path, sizeof s->path, "%s", path);
     loader L = {path, m, s, err, 0};
     r = build(&L, bytes, len);
     gls_free(m);
-    free(bytes);
     if (r) {
         scn_destroy(s);
         return r;
     }
     *out = s;
     return ENG_OK;
+}
+
+eng_result scn_load_gltf(const char *path, scn_scene **out, eng_error *err)
+{
+    *out = NULL;
+    char *bytes;
+    size_t len;
+    eng_result r = eng_read_file(path, GLTF_MAX_FILE, &bytes, &len, err);
+    if (r)
+        return r;
+    r = load_bytes(path, bytes, len, out, err);
+    free(bytes);
+    return r;
+}
+
+eng_result scn_load_gltf_memory(const char *name, const void *bytes, size_t len, scn_scene **out, eng_error *err)
+{
+    *out = NULL;
+    if (len > GLTF_MAX_FILE)
+        return eng_fail(err, ENG_ERR_INVALID, "%s: %zu bytes is over the %zu-byte limit", name, len,
+                        (size_t)GLTF_MAX_FILE);
+    /* The shim's JSON path reads up to len, but a NUL-terminated copy costs little and keeps
+     * the same contract as bytes from eng_read_file. */
+    char *copy = malloc(len + 1);
+    if (!copy)
+        return eng_fail(err, ENG_ERR_NOMEM, "%s: out of memory", name);
+    if (len)
+        memcpy(copy, bytes, len);
+    copy[len] = 0;
+    eng_result r = load_bytes(name, copy, len, out, err);
+    free(copy);
+    return r;
 }
 
 void scn_destroy(scn_scene *s)

@@ -55,8 +55,7 @@ static void ortho(float m[16], float half, float znear, float zfar)
     m[15] = 1.0f;
 }
 
-/* The far value and the view-projection of each face of light `l`. */
-static void light_views(const eng_light_pose *l, const eng_frame_scene *fs, shadow_map *sm)
+void light_views(const eng_light_pose *l, const eng_frame_scene *fs, shadow_map *sm)
 {
     float far = 0.0f;
     for (int c = 0; c < 8; c++) {

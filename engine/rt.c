@@ -4,6 +4,10 @@
  * re-transformed in place and refit (RTC_BUILD_QUALITY_REFIT), so a static scene costs one
  * build for the whole run.
  *
+ * Each geometry also keeps its world-space vertex normals (object normals through the
+ * inverse transpose, m4_normal_matrix), re-posed with the positions, so rt_intersect can
+ * return the interpolated shading normal the photon tracer scatters about.
+ *
  * Determinism: the device is made with a pinned ISA (isa=sse2) and thread count, recorded in
  * the manifest, so ray results do not follow the host's SIMD width. */
 #include "eng_internal.h"
@@ -17,6 +21,8 @@
 typedef struct rt_geom {
     RTCGeometry geom;
     uint32_t primitive;
+    int32_t material;
+    float *normals; /* world space, 3 per vertex, unit (zero where the authored normal is) */
     float world[16];
     int posed;
 } rt_geom;
@@ -60,6 +66,18 @@ static void pose(rt_geom *g, const scn_primitive *p, const float world[16])
     float *v = rtcGetGeometryBufferData(g->geom, RTC_BUFFER_TYPE_VERTEX, 0);
     for (uint32_t i = 0; i < p->vertex_count; i++)
         m4_transform_point(world, p->positions + 3 * i, v + 4 * i);
+    float nm[9];
+    m4_normal_matrix(nm, world);
+    for (uint32_t i = 0; i < p->vertex_count; i++) {
+        const float *o = p->normals + 3 * i;
+        float *w = g->normals + 3 * i;
+        for (int r = 0; r < 3; r++)
+            w[r] = nm[r] * o[0] + nm[3 + r] * o[1] + nm[6 + r] * o[2];
+        float len = sqrtf(w[0] * w[0] + w[1] * w[1] + w[2] * w[2]);
+        if (len > 0.0f)
+            for (int r = 0; r < 3; r++)
+                w[r] /= len;
+    }
     rtcUpdateGeometryBuffer(g->geom, RTC_BUFFER_TYPE_VERTEX, 0);
     memcpy(g->world, world, sizeof g->world);
     g->posed = 1;
@@ -79,6 +97,12 @@ void rt_update(eng_rt *rt, const eng_frame_scene *fs)
             const scn_primitive *p = &rt->scene->primitives[fs->draws[i].primitive];
             rt_geom *g = &rt->geoms[i];
             g->primitive = fs->draws[i].primitive;
+            g->material = fs->draws[i].material;
+            g->normals = malloc((p->vertex_count ? p->vertex_count : 1) * 3 * sizeof(float));
+            if (!g->normals) {
+                fprintf(stderr, "ispm: out of memory\n");
+                abort();
+            }
             g->geom = rtcNewGeometry(rt->device, RTC_GEOMETRY_TYPE_TRIANGLE);
             /* 4 floats per vertex: Embree reads 16 bytes at the last vertex. */
             rtcSetNewGeometryBuffer(g->geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 4 * sizeof(float),
@@ -129,13 +153,69 @@ int rt_occluded(const eng_rt *rt, const float a[3], const float b[3])
     return ray.tfar < 0.0f; /* Embree sets tfar to -inf on a hit */
 }
 
+static void normalize_or(float v[3], const float fallback[3])
+{
+    float len = sqrtf(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+    if (len > 0.0f && isfinite(len)) {
+        for (int i = 0; i < 3; i++)
+            v[i] /= len;
+    } else {
+        for (int i = 0; i < 3; i++)
+            v[i] = fallback[i];
+    }
+}
+
+int rt_intersect(const eng_rt *rt, const float org[3], const float dir[3], float tnear, float tfar, rt_hit *hit)
+{
+    struct RTCIntersectContext ctx;
+    rtcInitIntersectContext(&ctx);
+    struct RTCRayHit rh;
+    memset(&rh, 0, sizeof rh);
+    rh.ray.org_x = org[0];
+    rh.ray.org_y = org[1];
+    rh.ray.org_z = org[2];
+    rh.ray.dir_x = dir[0];
+    rh.ray.dir_y = dir[1];
+    rh.ray.dir_z = dir[2];
+    rh.ray.tnear = tnear;
+    rh.ray.tfar = tfar;
+    rh.ray.mask = 0xFFFFFFFFu;
+    rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+    rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+    rtcIntersect1(rt->rtscene, &ctx, &rh);
+    if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID || rh.hit.geomID >= rt->geom_count)
+        return 0;
+    const rt_geom *g = &rt->geoms[rh.hit.geomID];
+    const scn_primitive *p = &rt->scene->primitives[g->primitive];
+    const uint32_t *tri = p->indices + 3 * (size_t)rh.hit.primID;
+    float t = rh.ray.tfar, u = rh.hit.u, v = rh.hit.v, w = 1.0f - u - v;
+    hit->t = t;
+    for (int i = 0; i < 3; i++)
+        hit->position[i] = org[i] + t * dir[i];
+    float ng[3] = {rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z};
+    const float up[3] = {0.0f, 1.0f, 0.0f};
+    normalize_or(ng, up);
+    const float *n0 = g->normals + 3 * tri[0], *n1 = g->normals + 3 * tri[1], *n2 = g->normals + 3 * tri[2];
+    float ns[3];
+    for (int i = 0; i < 3; i++)
+        ns[i] = w * n0[i] + u * n1[i] + v * n2[i];
+    normalize_or(ns, ng);
+    memcpy(hit->geom_normal, ng, sizeof ng);
+    memcpy(hit->normal, ns, sizeof ns);
+    hit->material = g->material;
+    hit->draw = rh.hit.geomID;
+    return 1;
+}
+
 void rt_destroy(eng_rt *rt)
 {
     if (!rt)
         return;
-    for (uint32_t i = 0; i < rt->geom_count; i++)
+    for (uint32_t i = 0; i < rt->geom_count; i++) {
         if (rt->geoms[i].geom)
             rtcReleaseGeometry(rt->geoms[i].geom);
+        free(rt->geoms[i].normals);
+    }
     free(rt->geoms);
     if (rt->rtscene)
         rtcReleaseScene(rt->rtscene);

@@ -146,7 +146,9 @@ static eng_result get_vec3(parser *P, const cJSON *item, const char *where, floa
 
 static eng_result parse_settings(parser *P, const cJSON *obj, eng_settings *s)
 {
-    static const char *const keys[] = {"shadow_map_size", "pcf_radius", "shadow_bias", "exposure", "threads", NULL};
+    static const char *const keys[] = {"shadow_map_size", "pcf_radius", "shadow_bias", "exposure", "threads",
+                                       "indirect", "photon_count", "bounces", "kernel_radius",
+                                       "normal_compression", "random", "random_map_size", "random_seed", NULL};
     char v[80];
     eng_result r;
     if (!cJSON_IsObject(obj))
@@ -178,6 +180,52 @@ static eng_result parse_settings(parser *P, const cJSON *obj, eng_settings *s)
         if (fabs(d) > 100.0)
             return bad(P, "settings.exposure: %s is out of range -100..100 stops", show(it, v, sizeof v));
         s->exposure = (float)d;
+    }
+    if ((it = cJSON_GetObjectItemCaseSensitive(obj, "indirect"))) {
+        if (cJSON_IsString(it) && !strcmp(it->valuestring, "none"))
+            s->indirect = ENG_INDIRECT_NONE;
+        else if (cJSON_IsString(it) && !strcmp(it->valuestring, "ispm"))
+            s->indirect = ENG_INDIRECT_ISPM;
+        else
+            return bad(P, "settings.indirect: %s is not one of \"ispm\", \"none\"", show(it, v, sizeof v));
+    }
+    if ((it = cJSON_GetObjectItemCaseSensitive(obj, "random"))) {
+        if (cJSON_IsString(it) && !strcmp(it->valuestring, "maps"))
+            s->random = ENG_RANDOM_MAPS;
+        else if (cJSON_IsString(it) && !strcmp(it->valuestring, "per-frame"))
+            s->random = ENG_RANDOM_PER_FRAME;
+        else
+            return bad(P, "settings.random: %s is not one of \"maps\", \"per-frame\"", show(it, v, sizeof v));
+    }
+    if ((it = cJSON_GetObjectItemCaseSensitive(obj, "photon_count")) &&
+        (r = get_int(P, it, "settings.photon_count", 6, 1 << 22, &s->photon_count)))
+        return r;
+    if ((it = cJSON_GetObjectItemCaseSensitive(obj, "bounces")) &&
+        (r = get_int(P, it, "settings.bounces", 1, 15, &s->bounces)))
+        return r;
+    if ((it = cJSON_GetObjectItemCaseSensitive(obj, "random_seed")) &&
+        (r = get_int(P, it, "settings.random_seed", 1, 2147483647, &s->random_seed)))
+        return r;
+    if ((it = cJSON_GetObjectItemCaseSensitive(obj, "random_map_size"))) {
+        if ((r = get_int(P, it, "settings.random_map_size", 1024, 1 << 22, &s->random_map_size)))
+            return r;
+        if (s->random_map_size & (s->random_map_size - 1))
+            return bad(P, "settings.random_map_size: %s is not a power of two", show(it, v, sizeof v));
+    }
+    if ((it = cJSON_GetObjectItemCaseSensitive(obj, "kernel_radius"))) {
+        if ((r = get_number(P, it, "settings.kernel_radius", &d)))
+            return r;
+        if (!(d >= 1e-4 && d <= 100.0))
+            return bad(P, "settings.kernel_radius: %s is out of range 0.0001..100 m", show(it, v, sizeof v));
+        s->kernel_radius = (float)d;
+    }
+    if ((it = cJSON_GetObjectItemCaseSensitive(obj, "normal_compression"))) {
+        if ((r = get_number(P, it, "settings.normal_compression", &d)))
+            return r;
+        if (!(d >= 0.01 && d <= 1.0))
+            return bad(P, "settings.normal_compression: %s is out of range 0.01..1 (r_z / r_xy)",
+                       show(it, v, sizeof v));
+        s->normal_compression = (float)d;
     }
     return ENG_OK;
 }

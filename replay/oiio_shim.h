@@ -45,6 +45,12 @@ void rep_parts_free(rep_part *parts, int count);
  * with parts[i]'s channel names. Overwrites path. */
 eng_result rep_oiio_write_parts(const char *path, const eng_buffer *parts, int count, eng_error *err);
 
+/* Writes an 8-bit image (width*height*channel_count bytes, interleaved, top row first;
+ * channel_count 1, 3 or 4) as a PNG at path, whatever path's extension (so that a temporary
+ * name can be renamed into place). Implemented in png_shim.cpp. Overwrites path. */
+eng_result rep_oiio_write_png(const char *path, int width, int height, int channel_count,
+                              const unsigned char *pixels, eng_error *err);
+
 /* A borrowed eng_buffer view of a part (valid while the part lives). */
 static inline eng_buffer rep_part_buffer(const rep_part *p)
 {

@@ -7,7 +7,10 @@
  *                the OIIO shim and verified against the manifest's digests
  *   tolerance.c  tolerances.json: parsing, validation, first-match lookup
  *   compare.c    one buffer against its golden: metrics and verdict
- *   report.c     report.json, report.txt and the summary
+ *   report.c     report.json, report.txt and the summary; calls the two writers below
+ *   report_html.c report.html and its thumbnails (PNG files in img/)
+ *   junit.c      report.junit.xml, and the XML/HTML text escaping both use
+ *   thumb.c      float buffers (and their differences) mapped to 8-bit thumbnails
  *   replay.c     rep_replay: walks frames and buffers, builds the report
  *   bless.c      rep_bless: a verified run becomes a golden, atomically
  */
@@ -262,7 +265,76 @@ rep_exit rep_report_exit(const rep_report *r);
 char *rep_report_text(const rep_report *r, int quiet);
 /* report.json as a string. Caller frees. */
 char *rep_report_json(const rep_report *r);
-/* Writes report.json and report.txt into dir (created if needed), each atomically. */
+/* Writes report.json, report.txt, report.junit.xml and report.html (with img/) into dir
+ * (created if needed), each file atomically. */
 eng_result rep_report_write(const rep_report *r, const char *dir, eng_error *err);
+
+/* Every entry, worst first (the order of report.txt). *n gets the count; caller frees. */
+const rep_entry **rep_report_sorted(const rep_report *r, size_t *n);
+/* Not bit-exact (with a golden) or not clean (without): the entries the reports dwell on. */
+int rep_entry_listed(const rep_entry *e);
+/* report.txt's line for one entry, newline included. */
+void rep_report_line(rep_sb *sb, const rep_report *r, const rep_entry *e);
+/* The run's verdict in one word: "OK", "WARN", "FAIL", "SIZE MISMATCH", "UNREADABLE". */
+const char *rep_exit_word(rep_exit x);
+
+/* ---------------------------------------------------------------- junit.c */
+
+/* Appends s escaped for XML/HTML text and attribute values: & < > " ' become entities;
+ * characters XML 1.0 forbids (controls other than tab/newline/return) and bytes that are not
+ * valid UTF-8 become U+FFFD, so any buffer or path name yields a well-formed document. */
+void rep_sb_xml(rep_sb *sb, const char *s);
+
+/* report.junit.xml: one <testsuite> named "ispm.<suite>", one <testcase> per entry, named
+ * after the buffer, classname "ispm.<suite>.frameNNNNNN". Failed and size-mismatched
+ * entries (over tolerance, non-finite, missing or extra) get a <failure> whose type is
+ * fail|size|nonfinite|missing|extra; warnings and within-tolerance differences are told in
+ * <system-out>; nothing is <skipped/>. An unreadable input adds one testcase with <error>.
+ * Caller frees. */
+char *rep_report_junit(const rep_report *r, const char *suite);
+
+/* ---------------------------------------------------------------- thumb.c */
+
+#define REP_THUMB_MAX_SIDE 256
+
+typedef enum rep_thumb_kind {
+    REP_THUMB_DATA = 0, /* min/max ramp shared by golden and run */
+    REP_THUMB_RADIANCE, /* linear: clamp, sRGB curve */
+    REP_THUMB_DISPLAY   /* already display-encoded: clamp */
+} rep_thumb_kind;
+
+/* How a buffer's floats become bytes; one map serves a golden and a run alike. */
+typedef struct rep_thumb_map {
+    rep_thumb_kind kind;
+    int n;                                   /* channels shown, 0..3 */
+    char ch[3][REP_CHANNEL_NAME_MAX];        /* their names */
+    double lo, hi;                           /* DATA: finite range over both buffers */
+} rep_thumb_map;
+
+/* The kind from the buffer's name: "*.display", "*.radiance", anything else is data. */
+rep_thumb_kind rep_thumb_kind_of(const char *buffer);
+/* The mapping for a buffer from its run and golden versions; either (not both) may be NULL. */
+void rep_thumb_map_make(const char *buffer, const eng_buffer *run, const eng_buffer *golden, rep_thumb_map *m);
+/* Thumbnail size: the buffer's, scaled down so the longest side is at most REP_THUMB_MAX_SIDE. */
+void rep_thumb_size(int w, int h, int *tw, int *th);
+/* b as *tw × *th RGB bytes under m; NaN/Inf pixels magenta. Caller frees. */
+unsigned char *rep_thumb_render(const eng_buffer *b, const rep_thumb_map *m, int *tw, int *th);
+/* Heatmap of |run − golden| as *tw × *th RGB bytes; *scale gets the largest finite difference
+ * (white). NULL when the two differ in size or share no channel. Caller frees. */
+unsigned char *rep_thumb_diff(const eng_buffer *run, const eng_buffer *golden, double *scale, int *tw, int *th);
+
+/* ---------------------------------------------------------------- report_html.c */
+
+/* At most this many thumbnails in one report (worst entries first). */
+#define REP_THUMB_MAX_IMAGES 200
+
+/* Writes dir/report.html and its thumbnails in dir/img/ (replaced whole). run and golden are
+ * the opened runs the report is about, or NULL where one could not be opened: thumbnails are
+ * then missing from the page, which says so. Thumbnails are made for the listed entries,
+ * worst first, and for the final image of the first and last frame; a frame file that cannot
+ * be decoded or a thumbnail that cannot be written only leaves its images out. Failure to
+ * write report.html itself (or to create img/) is the error. */
+eng_result rep_report_html_write(const rep_report *r, const rep_run *run, const rep_run *golden, const char *dir,
+                                 eng_error *err);
 
 #endif

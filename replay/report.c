@@ -62,7 +62,7 @@ rep_exit rep_report_exit(const rep_report *r)
     return x;
 }
 
-static const char *exit_word(rep_exit x)
+const char *rep_exit_word(rep_exit x)
 {
     switch (x) {
     case REP_OK: return "OK";
@@ -106,9 +106,19 @@ static int worst_first(const void *pa, const void *pb)
     return a < b ? -1 : a > b; /* entries sit in manifest order: keep it */
 }
 
-static int listed(const rep_entry *e)
+int rep_entry_listed(const rep_entry *e)
 {
     return e->verdict != REP_V_BITEXACT && e->verdict != REP_V_CHECKED;
+}
+
+const rep_entry **rep_report_sorted(const rep_report *r, size_t *n)
+{
+    const rep_entry **order = rep_xcalloc(r->count, sizeof *order);
+    for (size_t i = 0; i < r->count; i++)
+        order[i] = &r->entries[i];
+    qsort(order, r->count, sizeof *order, worst_first);
+    *n = r->count;
+    return order;
 }
 
 static int is_failure(const rep_entry *e)
@@ -126,7 +136,7 @@ static void why_text(rep_sb *sb, unsigned why, const rep_metrics *m, int fail, c
         rep_sb_printf(sb, "  exact: %llu values differ", (unsigned long long)m->values_differing);
 }
 
-static void line(rep_sb *sb, const rep_report *r, const rep_entry *e)
+void rep_report_line(rep_sb *sb, const rep_report *r, const rep_entry *e)
 {
     const rep_metrics *m = &e->m;
     const char *tag = "PASS";
@@ -209,11 +219,11 @@ char *rep_report_text(const rep_report *r, int quiet)
     const rep_entry **order = rep_xcalloc(r->count, sizeof *order);
     size_t n = 0;
     for (size_t i = 0; i < r->count; i++)
-        if (listed(&r->entries[i]) && (!quiet || is_failure(&r->entries[i])))
+        if (rep_entry_listed(&r->entries[i]) && (!quiet || is_failure(&r->entries[i])))
             order[n++] = &r->entries[i];
     qsort(order, n, sizeof *order, worst_first);
     for (size_t i = 0; i < n; i++)
-        line(&sb, r, order[i]);
+        rep_report_line(&sb, r, order[i]);
     free(order);
 
     if (r->exit == REP_UNREADABLE) {
@@ -223,7 +233,7 @@ char *rep_report_text(const rep_report *r, int quiet)
     size_t cnt[REP_V_COUNT] = {0};
     for (size_t i = 0; i < r->count; i++)
         cnt[r->entries[i].verdict]++;
-    rep_sb_printf(&sb, "replay: %s — ", exit_word(r->exit));
+    rep_sb_printf(&sb, "replay: %s — ", rep_exit_word(r->exit));
     if (cnt[REP_V_SIZE])
         rep_sb_printf(&sb, "%zu size mismatch, ", cnt[REP_V_SIZE]);
     if (r->golden_dir)
@@ -347,7 +357,7 @@ char *rep_report_json(const rep_report *r)
     add_str(root, "run", r->run_dir);
     add_str(root, "golden", r->golden_dir);
     add_str(root, "tolerances", r->golden_dir ? (r->tol_path ? r->tol_path : "built-in") : NULL);
-    cJSON_AddStringToObject(root, "verdict", exit_word(r->exit));
+    cJSON_AddStringToObject(root, "verdict", rep_exit_word(r->exit));
     cJSON_AddNumberToObject(root, "exit_code", (double)r->exit);
     if (r->exit == REP_UNREADABLE)
         cJSON_AddStringToObject(root, "error", r->error.msg);
@@ -370,7 +380,7 @@ char *rep_report_json(const rep_report *r)
     }
     const rep_entry *first = NULL;
     for (size_t i = 0; i < r->count && !first; i++)
-        if (listed(&r->entries[i]))
+        if (rep_entry_listed(&r->entries[i]))
             first = &r->entries[i];
     if (first) {
         cJSON *d = cJSON_AddObjectToObject(root, "first_difference");
@@ -418,6 +428,23 @@ char *rep_report_json(const rep_report *r)
     return out;
 }
 
+/* The name CI shows for the run: the sequence's, else the run folder's last component. */
+static char *suite_name(const rep_report *r, const rep_run *run, const rep_run *golden)
+{
+    if (run && run->sequence_name)
+        return rep_xstrdup(run->sequence_name);
+    if (golden && golden->sequence_name)
+        return rep_xstrdup(golden->sequence_name);
+    const char *d = r->run_dir ? r->run_dir : "run";
+    size_t n = strlen(d);
+    while (n > 1 && d[n - 1] == '/')
+        n--;
+    size_t a = n;
+    while (a > 0 && d[a - 1] != '/')
+        a--;
+    return n > a ? rep_xprintf("%.*s", (int)(n - a), d + a) : rep_xstrdup("run");
+}
+
 eng_result rep_report_write(const rep_report *r, const char *dir, eng_error *err)
 {
     eng_result res = rep_mkdirs(dir, err);
@@ -434,5 +461,27 @@ eng_result rep_report_write(const rep_report *r, const char *dir, eng_error *err
     free(tp);
     free(json);
     free(txt);
+    if (res != ENG_OK)
+        return res;
+
+    /* The JUnit and HTML writers want the manifests again (sequence name, frame files for the
+     * thumbnails); an input that cannot be opened only costs them those. */
+    rep_run *run = NULL, *golden = NULL;
+    eng_error ignored;
+    if (r->run_dir && rep_run_open(r->run_dir, &run, &ignored) != ENG_OK)
+        run = NULL;
+    if (r->golden_dir && rep_run_open(r->golden_dir, &golden, &ignored) != ENG_OK)
+        golden = NULL;
+    char *suite = suite_name(r, run, golden);
+    char *xml = rep_report_junit(r, suite);
+    char *xp = rep_path_join(dir, "report.junit.xml");
+    res = rep_write_atomic(xp, xml, strlen(xml), err);
+    if (res == ENG_OK)
+        res = rep_report_html_write(r, run, golden, dir, err);
+    free(xp);
+    free(xml);
+    free(suite);
+    rep_run_close(golden);
+    rep_run_close(run);
     return res;
 }

@@ -1242,6 +1242,266 @@ START_TEST(e2e_text_report_lists_worst_first)
 }
 END_TEST
 
+/* ---------------------------------------------------------------- html and junit reports */
+
+static char *read_text(const char *path)
+{
+    char *text = NULL;
+    size_t len = 0;
+    eng_error err;
+    ck_assert_msg(eng_read_file(path, 1 << 24, &text, &len, &err) == ENG_OK, "%s", err.msg);
+    return text;
+}
+
+static int count_of(const char *hay, const char *needle)
+{
+    int n = 0;
+    for (const char *p = strstr(hay, needle); p; p = strstr(p + 1, needle))
+        n++;
+    return n;
+}
+
+/* The value of attribute `name` in the first tag starting with `tag` at or after p. */
+static char *attr_of(const char *p, const char *tag, const char *name)
+{
+    const char *t = strstr(p, tag);
+    ck_assert_ptr_nonnull(t);
+    const char *end = strchr(t, '>');
+    char key[64];
+    snprintf(key, sizeof key, " %s=\"", name);
+    const char *a = strstr(t, key);
+    ck_assert_msg(a && a < end, "%s has no %s", tag, name);
+    a += strlen(key);
+    return rep_xprintf("%.*s", (int)(strchr(a, '"') - a), a);
+}
+
+static int img_files(const char *run)
+{
+    char *dir = rep_path_join(run, "replay/img");
+    char *cmd = rep_xprintf("ls '%s' 2>/dev/null | grep -c '\\.png$'", dir);
+    FILE *f = popen(cmd, "r");
+    int n = -1;
+    ck_assert_ptr_nonnull(f);
+    ck_assert_int_eq(fscanf(f, "%d", &n), 1);
+    pclose(f);
+    free(cmd);
+    free(dir);
+    return n;
+}
+
+START_TEST(report_junit_and_html_name_the_failure)
+{
+    char *golden = make_golden();
+    fx_run r;
+    fx_make(&r);
+    *fx_at(&r, 0, 0, 1, 1, 0) += 1e-6f; /* frame 0 gbuffer.position: a warning */
+    *fx_at(&r, 1, 1, 3, 2, 1) += 0.5f;  /* frame 1 direct.radiance: the failure */
+    char *run = tpath("run");
+    fx_write(&r, run);
+    eng_error err;
+    ck_assert_int_eq(replay(run, golden, &err), REP_FAIL);
+
+    char *xp = rep_path_join(run, "replay/report.junit.xml");
+    char *xml = read_text(xp);
+    const char *suite = strstr(xml, "<testsuite ");
+    ck_assert_ptr_nonnull(suite);
+    char *v = attr_of(suite, "<testsuite ", "tests");
+    ck_assert_str_eq(v, "9");
+    free(v);
+    v = attr_of(suite, "<testsuite ", "failures");
+    ck_assert_str_eq(v, "1");
+    free(v);
+    v = attr_of(suite, "<testsuite ", "errors");
+    ck_assert_str_eq(v, "0");
+    free(v);
+    v = attr_of(suite, "<testsuite ", "name");
+    ck_assert_str_eq(v, "ispm.fixture");
+    free(v);
+    ck_assert_int_eq(count_of(xml, "<testcase "), 9);
+    ck_assert_int_eq(count_of(xml, "<failure "), 1);
+    ck_assert_int_eq(count_of(xml, "<skipped"), 0);
+    ck_assert_int_eq(count_of(xml, "<system-out>"), 1); /* the warning */
+    /* The testcase that holds the failure is direct.radiance of frame 1. */
+    const char *f = strstr(xml, "<failure ");
+    const char *tc = xml;
+    for (const char *p = strstr(xml, "<testcase "); p && p < f; p = strstr(p + 1, "<testcase "))
+        tc = p;
+    v = attr_of(tc, "<testcase ", "name");
+    ck_assert_str_eq(v, "direct.radiance");
+    free(v);
+    v = attr_of(tc, "<testcase ", "classname");
+    ck_assert_str_eq(v, "ispm.fixture.frame000001");
+    free(v);
+    v = attr_of(f, "<failure ", "type");
+    ck_assert_str_eq(v, "fail");
+    free(v);
+
+    /* HTML: the failure's card comes first, then the warning's; its images exist. */
+    char *hp = rep_path_join(run, "replay/report.html");
+    char *html = read_text(hp);
+    const char *card = strstr(html, "<article class=\"entry ");
+    ck_assert_ptr_nonnull(card);
+    v = attr_of(card, "<article ", "data-buffer");
+    ck_assert_str_eq(v, "direct.radiance");
+    free(v);
+    v = attr_of(card, "<article ", "data-frame");
+    ck_assert_str_eq(v, "1");
+    free(v);
+    v = attr_of(card, "<article ", "class");
+    ck_assert_str_eq(v, "entry fail");
+    free(v);
+    v = attr_of(card + 1, "<article ", "data-buffer");
+    ck_assert_str_eq(v, "gbuffer.position");
+    free(v);
+    ck_assert_int_eq(count_of(html, "<article "), 2);
+    ck_assert_ptr_null(strstr(html, "http://"));
+    ck_assert_ptr_null(strstr(html, "https://"));
+    int imgs = 0;
+    for (const char *p = strstr(html, "<img "); p; p = strstr(p + 1, "<img ")) {
+        char *src = attr_of(p, "<img ", "src");
+        char *dir = rep_path_join(run, "replay");
+        char *file = rep_path_join(dir, src);
+        ck_assert_msg(rep_is_file(file), "%s missing", file);
+        free(file);
+        free(dir);
+        free(src);
+        imgs++;
+    }
+    ck_assert_int_ge(imgs, 6);
+    /* golden, new, diff for each of two cards, golden and new of frame 0 and frame 2's final image */
+    ck_assert_int_eq(img_files(run), 10);
+
+    free(html);
+    free(hp);
+    free(xml);
+    free(xp);
+    fx_free(&r);
+    free(run);
+    free(golden);
+}
+END_TEST
+
+START_TEST(report_green_run_stays_small)
+{
+    char *golden = make_golden();
+    eng_error err;
+    ck_assert_int_eq(replay(golden, golden, &err), REP_OK);
+    /* Only the final image of the first and the last frame, golden and new. */
+    ck_assert_int_eq(img_files(golden), 4);
+    char *xp = rep_path_join(golden, "replay/report.junit.xml");
+    char *xml = read_text(xp);
+    ck_assert_int_eq(count_of(xml, "<testcase "), 9);
+    ck_assert_int_eq(count_of(xml, "<failure"), 0);
+    free(xml);
+    free(xp);
+    char *hp = rep_path_join(golden, "replay/report.html");
+    char *html = read_text(hp);
+    ck_assert_int_eq(count_of(html, "<article "), 0);
+    free(html);
+    free(hp);
+    free(golden);
+}
+END_TEST
+
+START_TEST(report_unreadable_run_is_a_junit_error)
+{
+    char *golden = make_golden();
+    char *run = tpath("run");
+    fx_run r;
+    fx_make(&r);
+    fx_write_ex(&r, run, 1, 1); /* no manifest */
+    eng_error err;
+    ck_assert_int_eq(replay(run, golden, &err), REP_UNREADABLE);
+    char *xp = rep_path_join(run, "replay/report.junit.xml");
+    char *xml = read_text(xp);
+    char *v = attr_of(strstr(xml, "<testsuite "), "<testsuite ", "errors");
+    ck_assert_str_eq(v, "1");
+    free(v);
+    ck_assert_int_eq(count_of(xml, "<error "), 1);
+    free(xml);
+    free(xp);
+    char *hp = rep_path_join(run, "replay/report.html");
+    ck_assert(rep_is_file(hp));
+    free(hp);
+    fx_free(&r);
+    free(run);
+    free(golden);
+}
+END_TEST
+
+START_TEST(report_xml_escapes_everything)
+{
+    rep_sb sb = {0};
+    rep_sb_xml(&sb, "a<b>&\"c'\x01\tz\xff\xc3\xa9\xed\xa0\x80\xef\xbf\xbe");
+    /* é (U+00E9) is kept; a control byte, a stray 0xFF, a UTF-16 surrogate and U+FFFE are not. */
+    ck_assert_str_eq(sb.s, "a&lt;b&gt;&amp;&quot;c&#39;\xEF\xBF\xBD\tz\xEF\xBF\xBD\xC3\xA9"
+                           "\xEF\xBF\xBD\xEF\xBF\xBD\xEF\xBF\xBD\xEF\xBF\xBD");
+    free(sb.s);
+
+    rep_report r;
+    memset(&r, 0, sizeof r);
+    r.run_dir = "runs/<x>";
+    r.golden_dir = "g&g";
+    r.frames = 1;
+    r.digest_frame = -1;
+    rep_entry *e = rep_report_add(&r, 0, "evil<\"buffer\">&");
+    e->verdict = REP_V_FAIL;
+    e->problem = REP_PROB_EXTRA;
+    r.exit = rep_report_exit(&r);
+    char *xml = rep_report_junit(&r, "s<q>");
+    ck_assert_ptr_null(strstr(xml, "evil<"));
+    ck_assert_ptr_null(strstr(xml, "<x>"));
+    ck_assert_ptr_nonnull(strstr(xml, "name=\"evil&lt;&quot;buffer&quot;&gt;&amp;\""));
+    ck_assert_ptr_nonnull(strstr(xml, "classname=\"ispm.s&lt;q&gt;.frame000000\""));
+    ck_assert_ptr_nonnull(strstr(xml, "type=\"extra\""));
+    free(xml);
+    rep_report_free(&r);
+}
+END_TEST
+
+START_TEST(report_thumbnails_map_and_mark)
+{
+    static const char *const RGB[] = {"R", "G", "B"};
+    float a[4 * 2 * 3], b[4 * 2 * 3];
+    for (int i = 0; i < 24; i++)
+        a[i] = b[i] = 0.5f;
+    a[(1 * 4 + 2) * 3 + 0] = 0.75f; /* (2,1).R differs */
+    a[(0 * 4 + 3) * 3 + 1] = NAN;   /* (3,0).G NaN in run only */
+    eng_buffer run = {"composite.radiance", 4, 2, 3, RGB, a}, gold = {"composite.radiance", 4, 2, 3, RGB, b};
+    rep_thumb_map m;
+    rep_thumb_map_make(run.name, &run, &gold, &m);
+    ck_assert_int_eq(m.kind, REP_THUMB_RADIANCE);
+    ck_assert_int_eq(m.n, 3);
+    int w, h;
+    unsigned char *px = rep_thumb_render(&run, &m, &w, &h);
+    ck_assert_int_eq(w, 4);
+    ck_assert_int_eq(h, 2);
+    ck_assert_int_eq(px[0], 188); /* sRGB(0.5) */
+    ck_assert(px[3 * 3 + 0] == 255 && px[3 * 3 + 1] == 0 && px[3 * 3 + 2] == 255); /* NaN: magenta */
+    free(px);
+    double scale;
+    px = rep_thumb_diff(&run, &gold, &scale, &w, &h);
+    ck_assert_double_eq_tol(scale, 0.25, 1e-9);
+    ck_assert(px[0] == 0 && px[1] == 0 && px[2] == 0);                       /* equal: black */
+    ck_assert(px[(4 + 2) * 3] == 255 && px[(4 + 2) * 3 + 2] == 255);         /* the maximum: white */
+    ck_assert(px[3 * 3] == 255 && px[3 * 3 + 1] == 0 && px[3 * 3 + 2] == 255); /* class change: magenta */
+    free(px);
+
+    /* Data buffers share one ramp over golden and run. */
+    static const char *const Z[] = {"Z"};
+    float za[2] = {1, 2}, zb[2] = {0, 4};
+    eng_buffer ra = {"shadow.light0", 2, 1, 1, Z, za}, rb = {"shadow.light0", 2, 1, 1, Z, zb};
+    rep_thumb_map_make(ra.name, &ra, &rb, &m);
+    ck_assert_int_eq(m.kind, REP_THUMB_DATA);
+    ck_assert_double_eq(m.lo, 0);
+    ck_assert_double_eq(m.hi, 4);
+    int tw, th;
+    rep_thumb_size(1000, 500, &tw, &th);
+    ck_assert_int_eq(tw, REP_THUMB_MAX_SIDE);
+    ck_assert_int_eq(th, REP_THUMB_MAX_SIDE / 2);
+}
+END_TEST
+
 /* ---------------------------------------------------------------- suite */
 
 static Suite *replay_suite(void)
@@ -1264,6 +1524,8 @@ static Suite *replay_suite(void)
     tcase_add_test(unit, cmp_nan_in_both_is_not_a_failure);
     tcase_add_test(unit, cmp_pinf_vs_ninf_fails);
     tcase_add_test(unit, cmp_size_and_channels);
+    tcase_add_test(unit, report_xml_escapes_everything);
+    tcase_add_test(unit, report_thumbnails_map_and_mark);
     suite_add_tcase(s, unit);
 
     TCase *files = tcase_create("files");
@@ -1288,6 +1550,9 @@ static Suite *replay_suite(void)
     tcase_add_test(files, e2e_bless_keeps_tolerances);
     tcase_add_test(files, e2e_bless_refuses_incomplete);
     tcase_add_test(files, e2e_text_report_lists_worst_first);
+    tcase_add_test(files, report_junit_and_html_name_the_failure);
+    tcase_add_test(files, report_green_run_stays_small);
+    tcase_add_test(files, report_unreadable_run_is_a_junit_error);
     suite_add_tcase(s, files);
     return s;
 }

@@ -1,0 +1,229 @@
+/* bsdf.c — how a photon scatters at a surface: lobe choice, importance sampling, Russian
+ * roulette and the path-density factor. Used by the CPU tracer (photon_trace.c); the GLSL
+ * bounce-map shader implements the same formulas, so they are kept few and simple.
+ *
+ * Material model (glTF metallic-roughness + KHR_materials_transmission/ior, base colour only):
+ *   lobe choice  u0 < metallic → metal; else (u0 − metallic)/(1 − metallic) < transmission →
+ *                glass; else diffuse. Picking a lobe with the probability of its weight in the
+ *                glTF mixture makes each lobe's weight below the lobe's own f·cos/pdf.
+ *   diffuse      Lambert, f = albedo/π with albedo = base_color; wo from the cosine table
+ *                (002_558366c451cd32fd.txt §4.1, cosine-weighted sampling), so
+ *                f·cos/pdf = albedo.
+ *   metal        GGX / Trowbridge–Reitz with α = roughness² (≥ BSDF_MIN_ALPHA), half-vector
+ *                sampled from D(m)(m·n) (002_… §4.1: θh = atan(α√u/√(1−u)), φh = 2πu'),
+ *                wo = 2(m·wi)m − wi. pdf(wo) = D(m)(m·n)/(4(wo·m)), so with Cook–Torrance
+ *                f = D·G2·F/(4(wi·n)(wo·n)) the weight is f·cos/pdf = F·G2·(wo·m)/((wi·n)(m·n)),
+ *                G2 = G1(wi)·G1(wo) (separable Smith), G1(v) = 2(n·v)/((n·v) + √(α² + (1−α²)(n·v)²)),
+ *                F = Schlick with F0 = base_color. roughness < BSDF_MIRROR_ROUGHNESS is a perfect
+ *                mirror: wo = reflect(wi, n), weight = F(wi·n).
+ *   glass        smooth dielectric (002_… §4.5): exact Fresnel R = (rs² + rp²)/2 with
+ *                rs = (n1cosθi − n2cosθt)/(n1cosθi + n2cosθt), rp = (n2cosθi − n1cosθt)/(n2cosθi + n1cosθt);
+ *                reflect with probability R (weight 1), else refract (weight = base_color,
+ *                the transmission tint); sin²θt = (n1/n2)²(1 − cos²θi) ≥ 1 is total internal
+ *                reflection (weight 1). Entering when wi is on the side n points to
+ *                (n1 = *eta, n2 = ior), leaving otherwise (n1 = ior, n2 = 1, air outside).
+ *                Photons carry power, not radiance, so refraction has no η² factor.
+ * Russian roulette (002_… §4.4, Eq. 4.2–4.8 and Jensen's single trial of §4.4.2): the photon
+ * survives with P = clamp(max channel of the lobe weight w, 0, 1) and its power becomes Φ·w/P,
+ * so E[Φ_out] = Φ·w per channel (unbiased). With the max channel of w rather than Eq. 4.9's
+ * power-weighted ratio the outcome does not depend on the photon's power, so the GLSL shader
+ * and the CPU agree without passing Φ, and a grey surface keeps photon powers constant.
+ * Path density (003_d0bf8e920b03f4e1.txt §4.3): ρp is multiplied by ρL/1000 for a diffuse
+ * scatter, ρS/10 for a glossy one and ρS for mirror reflection and refraction, where ρ is the
+ * max channel of the lobe's reflectance: albedo for diffuse, F0 for glossy, F(wi·n) for the
+ * mirror, R for glass reflection (1 under total internal reflection), (1 − R)·max(tint) for
+ * refraction. The factor does not include the lobe-choice probability (the paper's constants
+ * are per code path). */
+#include "bsdf.h"
+
+#include <math.h>
+
+static float dot3(const float a[3], const float b[3])
+{
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+}
+
+static float max3(const float v[3])
+{
+    float m = v[0] > v[1] ? v[0] : v[1];
+    return m > v[2] ? m : v[2];
+}
+
+static float clamp01(float x)
+{
+    return x < 0.0f ? 0.0f : (x > 1.0f ? 1.0f : x);
+}
+
+static void normalize3(float v[3])
+{
+    float l = sqrtf(dot3(v, v));
+    if (l > 0.0f) {
+        v[0] /= l;
+        v[1] /= l;
+        v[2] /= l;
+    }
+}
+
+/* Orthonormal basis about unit n (Duff et al., "Building an Orthonormal Basis, Revisited",
+ * JCGT 2017): branch on the sign only, so it is the same on every machine. */
+static void basis(const float n[3], float t[3], float b[3])
+{
+    float sign = n[2] >= 0.0f ? 1.0f : -1.0f;
+    float a = -1.0f / (sign + n[2]);
+    float c = n[0] * n[1] * a;
+    t[0] = 1.0f + sign * n[0] * n[0] * a;
+    t[1] = sign * c;
+    t[2] = -sign * n[0];
+    b[0] = c;
+    b[1] = sign + n[1] * n[1] * a;
+    b[2] = -n[1];
+}
+
+static void to_world(const float local[3], const float n[3], float out[3])
+{
+    float t[3], b[3];
+    basis(n, t, b);
+    for (int i = 0; i < 3; i++)
+        out[i] = local[0] * t[i] + local[1] * b[i] + local[2] * n[i];
+}
+
+static void reflect(const float wi[3], const float n[3], float out[3])
+{
+    float d = 2.0f * dot3(wi, n);
+    for (int i = 0; i < 3; i++)
+        out[i] = d * n[i] - wi[i];
+}
+
+static float schlick1(float f0, float cos_t)
+{
+    float k = 1.0f - clamp01(cos_t);
+    float k2 = k * k;
+    return f0 + (1.0f - f0) * k2 * k2 * k;
+}
+
+static float ggx_g1(float ndotv, float alpha)
+{
+    float a2 = alpha * alpha;
+    return 2.0f * ndotv / (ndotv + sqrtf(a2 + (1.0f - a2) * ndotv * ndotv));
+}
+
+float bsdf_fresnel_dielectric(float cos_i, float n1, float n2)
+{
+    cos_i = clamp01(cos_i);
+    float e = n1 / n2;
+    float sin2t = e * e * (1.0f - cos_i * cos_i);
+    if (sin2t >= 1.0f)
+        return 1.0f;
+    float cos_t = sqrtf(1.0f - sin2t);
+    float rs = (n1 * cos_i - n2 * cos_t) / (n1 * cos_i + n2 * cos_t);
+    float rp = (n2 * cos_i - n1 * cos_t) / (n2 * cos_i + n1 * cos_t);
+    return 0.5f * (rs * rs + rp * rp);
+}
+
+int bsdf_stores_photons(const scn_material *m)
+{
+    float metallic = clamp01(m->metallic), transmission = clamp01(m->transmission);
+    float diffuse = (1.0f - metallic) * (1.0f - transmission);
+    float glossy = m->roughness >= BSDF_MIRROR_ROUGHNESS ? metallic : 0.0f;
+    return diffuse > 0.0f || glossy > 0.0f;
+}
+
+static bsdf_lobe absorbed(float wo[3], float weight[3], float *density_factor)
+{
+    for (int i = 0; i < 3; i++)
+        wo[i] = weight[i] = 0.0f;
+    *density_factor = 0.0f;
+    return BSDF_ABSORBED;
+}
+
+/* Russian roulette on the lobe weight w (see the opening paragraph). */
+static bsdf_lobe roulette(bsdf_lobe lobe, float u, float weight[3], float wo[3], float *density_factor)
+{
+    for (int i = 0; i < 3; i++)
+        if (!(weight[i] > 0.0f))
+            weight[i] = 0.0f; /* also drops NaN */
+    float p = clamp01(max3(weight));
+    if (!(u < p))
+        return absorbed(wo, weight, density_factor);
+    for (int i = 0; i < 3; i++)
+        weight[i] /= p;
+    return lobe;
+}
+
+bsdf_lobe bsdf_scatter(const scn_material *m, const float n[3], const float wi[3], float *eta,
+                       const bsdf_sample *rnd, float wo[3], float weight[3], float *density_factor)
+{
+    const float *u = rnd->u;
+    float metallic = clamp01(m->metallic), transmission = clamp01(m->transmission);
+    float cos_n = dot3(wi, n);
+    /* ns: n turned to the side wi lies on. */
+    float s = cos_n >= 0.0f ? 1.0f : -1.0f;
+    float ns[3] = {s * n[0], s * n[1], s * n[2]};
+    float cos_i = fabsf(cos_n);
+    if (!(cos_i > 0.0f))
+        return absorbed(wo, weight, density_factor);
+
+    float pick = u[0];
+    if (pick < metallic) {
+        const float *f0 = m->base_color;
+        if (m->roughness < BSDF_MIRROR_ROUGHNESS) {
+            reflect(wi, ns, wo);
+            for (int i = 0; i < 3; i++)
+                weight[i] = schlick1(f0[i], cos_i);
+            *density_factor = max3(weight);
+            return roulette(BSDF_MIRROR, u[1], weight, wo, density_factor);
+        }
+        float alpha = m->roughness * m->roughness;
+        if (alpha < BSDF_MIN_ALPHA)
+            alpha = BSDF_MIN_ALPHA;
+        float u2 = u[2];
+        float theta = atanf(alpha * sqrtf(u2) / sqrtf(1.0f - u2));
+        float phi = (float)(2.0 * ENG_PI) * u[3];
+        float local[3] = {sinf(theta) * cosf(phi), sinf(theta) * sinf(phi), cosf(theta)};
+        float h[3];
+        to_world(local, ns, h);
+        normalize3(h);
+        float hdotwi = dot3(h, wi);
+        reflect(wi, h, wo);
+        normalize3(wo);
+        float cos_o = dot3(wo, ns), cos_h = dot3(h, ns);
+        if (!(cos_o > 0.0f) || !(hdotwi > 0.0f) || !(cos_h > 0.0f))
+            return absorbed(wo, weight, density_factor);
+        float g = ggx_g1(cos_i, alpha) * ggx_g1(cos_o, alpha);
+        float k = g * hdotwi / (cos_i * cos_h); /* wo·h = wi·h */
+        for (int i = 0; i < 3; i++)
+            weight[i] = schlick1(f0[i], hdotwi) * k;
+        *density_factor = max3(f0) / 10.0f;
+        return roulette(BSDF_GLOSSY, u[1], weight, wo, density_factor);
+    }
+    float rest = metallic < 1.0f ? (pick - metallic) / (1.0f - metallic) : 1.0f;
+    if (rest < transmission) {
+        int entering = cos_n > 0.0f;
+        float n1 = entering ? *eta : m->ior;
+        float n2 = entering ? m->ior : 1.0f;
+        float r = bsdf_fresnel_dielectric(cos_i, n1, n2);
+        if (u[2] < r) {
+            reflect(wi, ns, wo);
+            weight[0] = weight[1] = weight[2] = 1.0f;
+            *density_factor = r;
+            return roulette(BSDF_REFLECT, u[1], weight, wo, density_factor);
+        }
+        /* Refraction (002_… §4.5): ωr = −e·wi + (e·cosθi − cosθt)·ns, e = n1/n2. */
+        float e = n1 / n2;
+        float cos_t = sqrtf(1.0f - e * e * (1.0f - cos_i * cos_i)); /* r < 1: no TIR here */
+        for (int i = 0; i < 3; i++)
+            wo[i] = -e * wi[i] + (e * cos_i - cos_t) * ns[i];
+        normalize3(wo);
+        for (int i = 0; i < 3; i++)
+            weight[i] = m->base_color[i];
+        *density_factor = (1.0f - r) * max3(weight);
+        *eta = n2;
+        return roulette(BSDF_REFRACT, u[1], weight, wo, density_factor);
+    }
+    to_world(rnd->cosdir, ns, wo);
+    normalize3(wo);
+    for (int i = 0; i < 3; i++)
+        weight[i] = m->base_color[i];
+    *density_factor = max3(weight) / 1000.0f;
+    return roulette(BSDF_DIFFUSE, u[1], weight, wo, density_factor);
+}

@@ -1,0 +1,57 @@
+/* bsdf.h — the photon scattering model shared by the CPU photon tracer (photon_trace.c) and
+ * mirrored by the GLSL bounce-map shader. Internal to the engine. Formulas and their paper
+ * sections are in bsdf.c's opening paragraph. */
+#ifndef ISPM_BSDF_H
+#define ISPM_BSDF_H
+
+#include "eng_internal.h"
+
+typedef enum bsdf_lobe {
+    BSDF_ABSORBED = 0, /* Russian roulette ended the path (or the sample left below the surface) */
+    BSDF_DIFFUSE,      /* Lambertian, cosine-sampled */
+    BSDF_GLOSSY,       /* GGX metal */
+    BSDF_MIRROR,       /* smooth metal (roughness < BSDF_MIRROR_ROUGHNESS): delta reflection */
+    BSDF_REFLECT,      /* glass: Fresnel or total internal reflection (delta) */
+    BSDF_REFRACT       /* glass: refraction (delta) */
+} bsdf_lobe;
+
+#define BSDF_MIRROR_ROUGHNESS 0.01f
+#define BSDF_MIN_ALPHA 1e-3f
+
+/* Random numbers one scattering event consumes: u = 4 uniforms in [0,1) (u[0] lobe choice,
+ * u[1] Russian roulette, u[2..3] GGX half-vector or the Fresnel choice in u[2]) and cosdir = a
+ * cosine-weighted direction about +Z with its pdf (an eng_random_maps cosine entry). */
+typedef struct bsdf_sample {
+    const float *u;      /* 4 floats */
+    const float *cosdir; /* 4 floats */
+} bsdf_sample;
+
+/* Scatters a photon at a surface point.
+ *   m       resolved material (eng_material_of)
+ *   n       unit shading normal of the surface as authored (outward), NOT oriented to wi:
+ *           glass uses its side to tell entering from leaving; opaque lobes use the side wi
+ *           lies on (surfaces are two-sided for photons).
+ *   wi      unit, from the surface toward where the photon came from (−ray direction)
+ *   eta     in: index of refraction of the medium the photon travels in; out: the medium of
+ *           the scattered photon (changes on refraction only)
+ * On return wo is the unit outgoing direction, weight the per-channel factor by which the
+ * photon's power is multiplied (f·cos/pdf divided by the Russian-roulette survival
+ * probability, so that E[weight] = f·cos/pdf per channel), density_factor the factor by which
+ * the path density ρp is multiplied (003_… §4.3). BSDF_ABSORBED: wo, weight are zero and the
+ * path ends. */
+bsdf_lobe bsdf_scatter(const scn_material *m, const float n[3], const float wi[3], float *eta,
+                       const bsdf_sample *rnd, float wo[3], float weight[3], float *density_factor);
+
+/* Does the material have a diffuse or glossy lobe with non-zero probability? The photon map
+ * keeps photons only on such surfaces: the final gather estimates radiance from photons with
+ * a smooth BRDF, and a photon on a purely specular surface (mirror, glass) would only be
+ * splatted onto that surface's own pixels, where the delta BSDF cannot reflect it toward the
+ * eye from any other direction. */
+int bsdf_stores_photons(const scn_material *m);
+
+/* Exact unpolarised Fresnel reflectance of a smooth dielectric interface, light arriving in
+ * the medium of index n1 at cosine cos_i (>= 0) onto a medium n2; 1 under total internal
+ * reflection. */
+float bsdf_fresnel_dielectric(float cos_i, float n1, float n2);
+
+#endif

@@ -1,0 +1,20 @@
+#version 450 core
+// Light-space G-buffer, vertex stage (ISPM 003_… §3 step 1b: "render G-buffer from the
+// emitter's view"): one cube face, spot frustum or directional box, as the shadow map.
+layout(location = 0) in vec3 a_position;
+layout(location = 1) in vec3 a_normal;
+
+uniform mat4 u_world;
+uniform mat3 u_normal_matrix;
+uniform mat4 u_view_proj;
+
+out vec3 v_position;
+out vec3 v_normal;
+
+void main()
+{
+    vec4 wp = u_world * vec4(a_position, 1.0);
+    v_position = wp.xyz;
+    v_normal = u_normal_matrix * a_normal;
+    gl_Position = u_view_proj * wp;
+}

@@ -1,0 +1,175 @@
+/* junit.c — report.junit.xml, so that a CI system (Jenkins, GitLab, GitHub test reporters)
+ * shows one test case per buffer of every frame, and the escaping that this file and
+ * report.html share.
+ *
+ * The document is the common JUnit dialect: <testsuites> around one <testsuite> for the run,
+ * whose counts are those of its test cases. A test case is named after the buffer; its
+ * classname "ispm.<sequence>.frameNNNNNN" groups the buffers of one frame, so a CI tree reads
+ * sequence → frame → buffer. What replay counts as a failure (over tolerance, size mismatch,
+ * non-finite values, a missing or extra buffer or frame) is a <failure> carrying report.txt's
+ * line for the entry; warnings and differences within tolerance pass and say so in
+ * <system-out>; nothing is skipped. An unreadable input is one extra test case with <error>.
+ * Every name and message passes through rep_sb_xml, so a hostile buffer name cannot make the
+ * document malformed. No times are written: the output is a pure function of the report.
+ */
+#include "rep_internal.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+static void fffd(rep_sb *sb)
+{
+    rep_sb_printf(sb, "\xEF\xBF\xBD");
+}
+
+void rep_sb_xml(rep_sb *sb, const char *s)
+{
+    const unsigned char *p = (const unsigned char *)s;
+    while (*p) {
+        unsigned c = *p;
+        if (c < 0x80) {
+            switch (c) {
+            case '&': rep_sb_printf(sb, "&amp;"); break;
+            case '<': rep_sb_printf(sb, "&lt;"); break;
+            case '>': rep_sb_printf(sb, "&gt;"); break;
+            case '"': rep_sb_printf(sb, "&quot;"); break;
+            case '\'': rep_sb_printf(sb, "&#39;"); break;
+            default:
+                if (c < 0x20 && c != '\t' && c != '\n' && c != '\r')
+                    fffd(sb);
+                else
+                    rep_sb_printf(sb, "%c", (char)c);
+            }
+            p++;
+            continue;
+        }
+        /* A multi-byte UTF-8 sequence: copied only when well-formed, shortest, not a surrogate,
+         * at most U+10FFFF and not one of XML's excluded U+FFFE/U+FFFF. */
+        int len = c >= 0xF0 ? 4 : c >= 0xE0 ? 3 : c >= 0xC0 ? 2 : 0;
+        unsigned cp = len == 4 ? c & 0x07 : len == 3 ? c & 0x0F : c & 0x1F;
+        int ok = len > 0;
+        for (int i = 1; ok && i < len; i++) {
+            if ((p[i] & 0xC0) != 0x80)
+                ok = 0;
+            else
+                cp = (cp << 6) | (p[i] & 0x3F);
+        }
+        if (ok) {
+            unsigned min = len == 2 ? 0x80 : len == 3 ? 0x800 : 0x10000;
+            ok = cp >= min && cp <= 0x10FFFF && !(cp >= 0xD800 && cp <= 0xDFFF) && cp != 0xFFFE && cp != 0xFFFF;
+        }
+        if (!ok) {
+            fffd(sb);
+            p++;
+            continue;
+        }
+        rep_sb_printf(sb, "%.*s", len, (const char *)p);
+        p += len;
+    }
+}
+
+static const char *failure_type(const rep_entry *e)
+{
+    if (e->verdict == REP_V_SIZE)
+        return "size";
+    switch (e->problem) {
+    case REP_PROB_MISSING:
+    case REP_PROB_FRAME_MISSING: return "missing";
+    case REP_PROB_EXTRA:
+    case REP_PROB_FRAME_EXTRA: return "extra";
+    case REP_PROB_NONE: break;
+    }
+    if (e->m.fail_why & REP_WHY_NONFINITE)
+        return "nonfinite";
+    return "fail";
+}
+
+/* report.txt's line for e without its trailing newline and the run of spaces that pads it. */
+static char *entry_line(const rep_report *r, const rep_entry *e)
+{
+    rep_sb sb = {0};
+    rep_report_line(&sb, r, e);
+    while (sb.len > 0 && (sb.s[sb.len - 1] == '\n' || sb.s[sb.len - 1] == ' '))
+        sb.s[--sb.len] = 0;
+    return sb.s;
+}
+
+static void attr(rep_sb *sb, const char *name, const char *value)
+{
+    rep_sb_printf(sb, " %s=\"", name);
+    rep_sb_xml(sb, value ? value : "");
+    rep_sb_printf(sb, "\"");
+}
+
+char *rep_report_junit(const rep_report *r, const char *suite)
+{
+    size_t failures = 0, errors = r->exit == REP_UNREADABLE ? 1 : 0;
+    for (size_t i = 0; i < r->count; i++)
+        if (r->entries[i].verdict == REP_V_FAIL || r->entries[i].verdict == REP_V_SIZE)
+            failures++;
+    size_t tests = r->count + errors;
+    char *sname = rep_xprintf("ispm.%s", suite);
+
+    rep_sb sb = {0};
+    rep_sb_printf(&sb, "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n");
+    rep_sb_printf(&sb, "<testsuites name=\"ispm replay\" tests=\"%zu\" failures=\"%zu\" errors=\"%zu\" skipped=\"0\">\n",
+                  tests, failures, errors);
+    rep_sb_printf(&sb, "  <testsuite");
+    attr(&sb, "name", sname);
+    rep_sb_printf(&sb, " tests=\"%zu\" failures=\"%zu\" errors=\"%zu\" skipped=\"0\">\n", tests, failures, errors);
+    rep_sb_printf(&sb, "    <properties>\n");
+    const char *props[][2] = {
+        {"run", r->run_dir},
+        {"golden", r->golden_dir ? r->golden_dir : "(none: integrity and non-finite values only)"},
+        {"tolerances", r->golden_dir ? (r->tol_path ? r->tol_path : "built-in") : "(none)"},
+        {"verdict", rep_exit_word(r->exit)},
+    };
+    for (size_t i = 0; i < sizeof props / sizeof props[0]; i++) {
+        rep_sb_printf(&sb, "      <property");
+        attr(&sb, "name", props[i][0]);
+        attr(&sb, "value", props[i][1]);
+        rep_sb_printf(&sb, "/>\n");
+    }
+    rep_sb_printf(&sb, "    </properties>\n");
+
+    if (r->exit == REP_UNREADABLE) {
+        rep_sb_printf(&sb, "    <testcase");
+        attr(&sb, "classname", sname);
+        rep_sb_printf(&sb, " name=\"replay\">\n      <error type=\"unreadable\"");
+        attr(&sb, "message", r->error.msg);
+        rep_sb_printf(&sb, ">");
+        rep_sb_xml(&sb, r->error.msg);
+        rep_sb_printf(&sb, "</error>\n    </testcase>\n");
+    }
+    for (size_t i = 0; i < r->count; i++) {
+        const rep_entry *e = &r->entries[i];
+        char *cls = rep_xprintf("%s.frame%06d", sname, e->frame);
+        rep_sb_printf(&sb, "    <testcase");
+        attr(&sb, "classname", cls);
+        attr(&sb, "name", e->buffer);
+        free(cls);
+        if (!rep_entry_listed(e)) {
+            rep_sb_printf(&sb, "/>\n");
+            continue;
+        }
+        char *text = entry_line(r, e);
+        rep_sb_printf(&sb, ">\n");
+        if (e->verdict == REP_V_FAIL || e->verdict == REP_V_SIZE) {
+            rep_sb_printf(&sb, "      <failure");
+            attr(&sb, "type", failure_type(e));
+            attr(&sb, "message", text);
+            rep_sb_printf(&sb, ">");
+            rep_sb_xml(&sb, text);
+            rep_sb_printf(&sb, "</failure>\n");
+        } else {
+            rep_sb_printf(&sb, "      <system-out>");
+            rep_sb_xml(&sb, text);
+            rep_sb_printf(&sb, "</system-out>\n");
+        }
+        rep_sb_printf(&sb, "    </testcase>\n");
+        free(text);
+    }
+    rep_sb_printf(&sb, "  </testsuite>\n</testsuites>\n");
+    free(sname);
+    return sb.s;
+}

@@ -1,0 +1,800 @@
+/* report_html.c — report.html: the page a person opens after a CI run (Blender's render-test
+ * report is the model: failures first, golden / new / difference side by side, hover to flip).
+ *
+ * The page is one self-contained file: inline CSS and a few lines of inline JavaScript, no
+ * external assets, nothing fetched from a network. Its parts, top to bottom: a verdict banner
+ * with the counts; what was compared (run, golden, tolerances) with the first frame and buffer
+ * whose digest differs and the first that differs in pixels; one card per buffer that is not
+ * bit-exact (without golden: not clean), worst first in report.txt's order, with thumbnails,
+ * every metric, the tolerance applied and relative links to both EXR files; the final image of
+ * the first and last frame (so even a green report shows what was rendered); a compact table
+ * of every buffer, worst first; and how thumbnails map floats to bytes (thumb.c).
+ *
+ * Thumbnails are PNGs in img/ beside the page, written through the OIIO shim, each atomically
+ * (temporary name, then rename); img/ is replaced whole on every write so no stale image
+ * survives. Only cards and the two previews get images, at most REP_THUMB_MAX_IMAGES of them
+ * (worst entries first), so the report of a green run stays small. A frame file is decoded
+ * once for all thumbnails of that frame. Images that cannot be made are left out and the page
+ * says why; that is not an error. Writing the page itself is, and the page goes last.
+ */
+#define _XOPEN_SOURCE 700
+
+#include "rep_internal.h"
+
+#include <errno.h>
+#include <limits.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+/* The thumbnails of one card or preview: file names relative to the page, NULL where none. */
+typedef struct tset {
+    char *golden, *run, *diff;
+    int tw, th;          /* thumbnail size */
+    double scale;        /* heatmap white */
+    rep_thumb_map map;
+    int mapped;
+    const char *note;    /* why images are missing, or NULL */
+} tset;
+
+typedef struct job {
+    int frame;
+    const char *buffer;
+    tset *t;
+    int want_golden, want_run, want_diff;
+} job;
+
+typedef struct page {
+    const rep_report *r;
+    const rep_run *run, *golden;
+    const char *dir;
+    char real_dir[PATH_MAX]; /* the report folder, resolved, for relative links; "" if unknown */
+    int images;              /* written so far */
+    int serial;
+} page;
+
+static void esc(rep_sb *sb, const char *s)
+{
+    rep_sb_xml(sb, s ? s : "");
+}
+
+/* ---------------------------------------------------------------- links */
+
+/* Path of target relative to the folder from (both resolved), percent-encoded for an href;
+ * NULL if target does not exist. Caller frees. */
+static char *rel_href(const char *from, const char *target)
+{
+    char real[PATH_MAX];
+    if (!from[0] || !realpath(target, real))
+        return NULL;
+    size_t common = 0, i = 0;
+    while (from[i] && real[i] && from[i] == real[i]) {
+        i++;
+        if ((from[i] == '/' || from[i] == 0) && (real[i] == '/' || real[i] == 0))
+            common = i;
+    }
+    if (strcmp(from, "/") == 0)
+        common = 0;
+    rep_sb rel = {0};
+    rep_sb_printf(&rel, "%s", "");
+    for (const char *p = from + common; *p; p++)
+        if (*p == '/')
+            rep_sb_printf(&rel, "../");
+    const char *rest = real + common;
+    while (*rest == '/')
+        rest++;
+    rep_sb out = {0};
+    rep_sb_printf(&out, "%s", rel.s);
+    free(rel.s);
+    for (const unsigned char *p = (const unsigned char *)rest; *p; p++) {
+        if ((*p >= 'a' && *p <= 'z') || (*p >= 'A' && *p <= 'Z') || (*p >= '0' && *p <= '9') ||
+            strchr("/._-~", *p))
+            rep_sb_printf(&out, "%c", *p);
+        else
+            rep_sb_printf(&out, "%%%02X", *p);
+    }
+    return out.s;
+}
+
+/* ---------------------------------------------------------------- thumbnails */
+
+static void sanitize(char *s)
+{
+    for (; *s; s++)
+        if (!((*s >= 'a' && *s <= 'z') || (*s >= 'A' && *s <= 'Z') || (*s >= '0' && *s <= '9') || *s == '.' ||
+              *s == '-' || *s == '_'))
+            *s = '_';
+}
+
+/* Writes rgb as img/<serial>-f<frame>-<buffer>-<what>.png; returns the page-relative name or
+ * NULL (and sets *note) on failure. */
+static char *save(page *pg, const unsigned char *rgb, int w, int h, int frame, const char *buffer,
+                  const char *what, const char **note)
+{
+    char *leaf = rep_xprintf("%04d-f%06d-%s-%s.png", pg->serial++, frame, buffer, what);
+    sanitize(leaf);
+    char *rel = rep_xprintf("img/%s", leaf);
+    char *path = rep_path_join(pg->dir, rel);
+    char *tmp = rep_xprintf("%s.tmp.%ld", path, (long)getpid());
+    eng_error err;
+    int ok = rep_oiio_write_png(tmp, w, h, 3, rgb, &err) == ENG_OK && rename(tmp, path) == 0;
+    if (!ok) {
+        unlink(tmp);
+        free(rel);
+        rel = NULL;
+        *note = "a thumbnail could not be written";
+    } else {
+        pg->images++;
+    }
+    free(tmp);
+    free(path);
+    free(leaf);
+    return rel;
+}
+
+static const rep_part *find_part(const rep_part *parts, int n, const char *name)
+{
+    for (int i = 0; i < n; i++)
+        if (strcmp(parts[i].name, name) == 0)
+            return &parts[i];
+    return NULL;
+}
+
+static void make_thumbs(page *pg, const job *jb, const rep_part *rp, int rn, const rep_part *gp, int gn)
+{
+    tset *t = jb->t;
+    const rep_part *a = rp ? find_part(rp, rn, jb->buffer) : NULL;
+    const rep_part *b = gp ? find_part(gp, gn, jb->buffer) : NULL;
+    eng_buffer av, bv;
+    if (a)
+        av = rep_part_buffer(a);
+    if (b)
+        bv = rep_part_buffer(b);
+    if (!a && !b) {
+        if (!t->note)
+            t->note = "no frame file could be decoded for this buffer";
+        return;
+    }
+    rep_thumb_map_make(jb->buffer, a ? &av : NULL, b ? &bv : NULL, &t->map);
+    t->mapped = 1;
+    int w, h;
+    if (b && jb->want_golden) {
+        unsigned char *px = rep_thumb_render(&bv, &t->map, &w, &h);
+        t->golden = save(pg, px, w, h, jb->frame, jb->buffer, "golden", &t->note);
+        t->tw = w, t->th = h;
+        free(px);
+    }
+    if (a && jb->want_run) {
+        unsigned char *px = rep_thumb_render(&av, &t->map, &w, &h);
+        t->run = save(pg, px, w, h, jb->frame, jb->buffer, "new", &t->note);
+        t->tw = w, t->th = h;
+        free(px);
+    }
+    if (a && b && jb->want_diff) {
+        unsigned char *px = rep_thumb_diff(&av, &bv, &t->scale, &w, &h);
+        if (px) {
+            t->diff = save(pg, px, w, h, jb->frame, jb->buffer, "diff", &t->note);
+            free(px);
+        }
+    }
+}
+
+static int by_frame(const void *pa, const void *pb)
+{
+    const job *a = pa, *b = pb;
+    if (a->frame != b->frame)
+        return a->frame < b->frame ? -1 : 1;
+    return a->t < b->t ? -1 : a->t > b->t;
+}
+
+/* Decodes each frame that has jobs once per side and makes its thumbnails. */
+static void run_jobs(page *pg, job *jobs, size_t n)
+{
+    qsort(jobs, n, sizeof *jobs, by_frame);
+    for (size_t i = 0; i < n;) {
+        int f = jobs[i].frame;
+        size_t j = i;
+        while (j < n && jobs[j].frame == f)
+            j++;
+        rep_part *rp = NULL, *gp = NULL;
+        int rn = 0, gn = 0;
+        eng_error err;
+        const char *note = NULL;
+        if (pg->run && f < pg->run->frame_count &&
+            rep_oiio_read_parts(pg->run->frames[f].path, REP_MAX_FLOATS, &rp, &rn, &err) != ENG_OK)
+            note = "the run's frame file could not be decoded";
+        if (pg->golden && f < pg->golden->frame_count &&
+            rep_oiio_read_parts(pg->golden->frames[f].path, REP_MAX_FLOATS, &gp, &gn, &err) != ENG_OK)
+            note = "the golden's frame file could not be decoded";
+        for (size_t k = i; k < j; k++) {
+            if (note)
+                jobs[k].t->note = note;
+            make_thumbs(pg, &jobs[k], rp, rn, gp, gn);
+        }
+        rep_parts_free(rp, rn);
+        rep_parts_free(gp, gn);
+        i = j;
+    }
+}
+
+/* ---------------------------------------------------------------- page pieces */
+
+static const char *css_class(const rep_entry *e)
+{
+    switch (e->verdict) {
+    case REP_V_SIZE: return "size";
+    case REP_V_FAIL: return "fail";
+    case REP_V_WARN: return "warn";
+    case REP_V_WITHIN: return "within";
+    case REP_V_BITEXACT: return "exact";
+    default: return "checked";
+    }
+}
+
+static const char *exit_class(rep_exit x)
+{
+    switch (x) {
+    case REP_OK: return "ok";
+    case REP_WARN: return "warn";
+    case REP_FAIL: return "fail";
+    case REP_SIZE: return "size";
+    case REP_UNREADABLE: return "unreadable";
+    }
+    return "unreadable";
+}
+
+static const char *tag(const rep_entry *e)
+{
+    if (e->verdict == REP_V_SIZE)
+        return "SIZE";
+    if (e->problem == REP_PROB_MISSING || e->problem == REP_PROB_FRAME_MISSING)
+        return "MISSING";
+    if (e->problem == REP_PROB_EXTRA || e->problem == REP_PROB_FRAME_EXTRA)
+        return "EXTRA";
+    if (e->m.fail_why & REP_WHY_NONFINITE)
+        return "NaN/Inf";
+    switch (e->verdict) {
+    case REP_V_FAIL: return "FAIL";
+    case REP_V_WARN: return "WARN";
+    case REP_V_WITHIN: return "WITHIN";
+    case REP_V_BITEXACT: return "EXACT";
+    default: return "OK";
+    }
+}
+
+static void num(rep_sb *sb, double v)
+{
+    if (isnan(v))
+        rep_sb_printf(sb, "—");
+    else if (isinf(v))
+        rep_sb_printf(sb, v > 0 ? "∞" : "−∞");
+    else
+        rep_sb_printf(sb, "%.4g", v);
+}
+
+static void row(rep_sb *sb, const char *k)
+{
+    rep_sb_printf(sb, "<tr><th>%s</th><td>", k);
+}
+
+static void why(rep_sb *sb, unsigned w)
+{
+    static const struct { unsigned bit; const char *name; } names[] = {
+        {REP_WHY_PERCENT, "too many pixels over threshold"}, {REP_WHY_HARD, "hard limit"}, {REP_WHY_RMSE, "RMSE"},
+        {REP_WHY_NONFINITE, "NaN/Inf"}, {REP_WHY_EXACT, "exact: bits differ"}};
+    int any = 0;
+    for (size_t i = 0; i < sizeof names / sizeof names[0]; i++)
+        if (w & names[i].bit)
+            rep_sb_printf(sb, "%s%s", any++ ? ", " : "", names[i].name);
+    if (!any)
+        rep_sb_printf(sb, "—");
+}
+
+static void metrics_table(rep_sb *sb, const rep_report *r, const rep_entry *e)
+{
+    const rep_metrics *m = &e->m;
+    rep_sb_printf(sb, "<table class=\"kv\"><caption>metrics</caption>");
+    if (r->golden_dir) {
+        row(sb, "max |Δ|");
+        num(sb, m->max_abs);
+        if (m->max_x >= 0) {
+            rep_sb_printf(sb, " at (%d,%d).", m->max_x, m->max_y);
+            esc(sb, m->max_channel);
+        }
+        rep_sb_printf(sb, "</td></tr>");
+        row(sb, "mean |Δ|");
+        num(sb, m->mean_abs);
+        rep_sb_printf(sb, "</td></tr>");
+        row(sb, "RMSE");
+        num(sb, m->rmse);
+        rep_sb_printf(sb, "</td></tr>");
+        row(sb, "PSNR");
+        num(sb, m->psnr);
+        rep_sb_printf(sb, " dB</td></tr>");
+        row(sb, "values differing");
+        rep_sb_printf(sb, "%llu of %llu</td></tr>", (unsigned long long)m->values_differing,
+                      (unsigned long long)m->values);
+        row(sb, "pixels over fail");
+        rep_sb_printf(sb, "%llu (%.4g%%)", (unsigned long long)m->fail_pixels, m->fail_percent);
+        if (m->first_fail_x >= 0)
+            rep_sb_printf(sb, ", first at (%d,%d)", m->first_fail_x, m->first_fail_y);
+        rep_sb_printf(sb, "</td></tr>");
+        row(sb, "pixels over warn");
+        rep_sb_printf(sb, "%llu (%.4g%%)</td></tr>", (unsigned long long)m->warn_pixels, m->warn_percent);
+    }
+    row(sb, "NaN / Inf");
+    rep_sb_printf(sb, "run %llu / %llu", (unsigned long long)m->run_nan, (unsigned long long)m->run_inf);
+    if (r->golden_dir)
+        rep_sb_printf(sb, " · golden %llu / %llu", (unsigned long long)m->golden_nan, (unsigned long long)m->golden_inf);
+    rep_sb_printf(sb, "</td></tr>");
+    if (m->nf_x >= 0) {
+        row(sb, r->golden_dir ? "first NaN/Inf change" : "first NaN/Inf");
+        rep_sb_printf(sb, "(%d,%d)", m->nf_x, m->nf_y);
+        if (r->golden_dir && m->nf_channel[0]) {
+            rep_sb_printf(sb, ".");
+            esc(sb, m->nf_channel);
+            rep_sb_printf(sb, ": run ");
+            num(sb, m->nf_run);
+            rep_sb_printf(sb, ", golden ");
+            num(sb, m->nf_golden);
+        }
+        rep_sb_printf(sb, "</td></tr>");
+    }
+    row(sb, "fails because");
+    why(sb, m->fail_why);
+    rep_sb_printf(sb, "</td></tr>");
+    row(sb, "warns because");
+    why(sb, m->warn_why);
+    rep_sb_printf(sb, "</td></tr></table>\n");
+}
+
+static void tol_table(rep_sb *sb, const rep_entry *e)
+{
+    const rep_tol *t = &e->tol;
+    rep_sb_printf(sb, "<table class=\"kv\"><caption>tolerance (rule <code>");
+    esc(sb, e->tol_match ? e->tol_match : "default");
+    rep_sb_printf(sb, "</code>)</caption>");
+    row(sb, "exact");
+    rep_sb_printf(sb, "%s</td></tr>", t->exact ? "yes: any bit difference fails" : "no");
+    struct { const char *k; double v; } v[] = {
+        {"fail", t->fail}, {"failrelative", t->failrelative}, {"failpercent", t->failpercent},
+        {"hardfail", t->hardfail}, {"rmse_fail", t->rmse_fail}, {"warn", t->warn},
+        {"warnrelative", t->warnrelative}, {"warnpercent", t->warnpercent}, {"hardwarn", t->hardwarn},
+        {"rmse_warn", t->rmse_warn}};
+    for (size_t i = 0; i < sizeof v / sizeof v[0]; i++) {
+        row(sb, v[i].k);
+        if (isinf(v[i].v))
+            rep_sb_printf(sb, "off");
+        else
+            num(sb, v[i].v);
+        rep_sb_printf(sb, "</td></tr>");
+    }
+    rep_sb_printf(sb, "</table>\n");
+}
+
+/* An <img> at an integer magnification that brings the longest side near 256 px. */
+static void img(rep_sb *sb, const char *src, int w, int h, const char *cls, const char *alt)
+{
+    int longest = w > h ? w : h;
+    int k = longest > 0 && longest < REP_THUMB_MAX_SIDE ? REP_THUMB_MAX_SIDE / longest : 1;
+    rep_sb_printf(sb, "<img class=\"%s\" src=\"", cls);
+    esc(sb, src);
+    rep_sb_printf(sb, "\" width=\"%d\" height=\"%d\" alt=\"", w * k, h * k);
+    esc(sb, alt);
+    rep_sb_printf(sb, "\">");
+}
+
+static void placeholder(rep_sb *sb, const char *why_text)
+{
+    rep_sb_printf(sb, "<figure><div class=\"none\">");
+    esc(sb, why_text);
+    rep_sb_printf(sb, "</div></figure>");
+}
+
+static void map_caption(rep_sb *sb, const tset *t)
+{
+    if (!t->mapped)
+        return;
+    switch (t->map.kind) {
+    case REP_THUMB_DISPLAY: rep_sb_printf(sb, "display values ×255"); break;
+    case REP_THUMB_RADIANCE: rep_sb_printf(sb, "linear → sRGB, clamped to [0,1]"); break;
+    case REP_THUMB_DATA:
+        rep_sb_printf(sb, "data: ");
+        num(sb, t->map.lo);
+        rep_sb_printf(sb, " → black, ");
+        num(sb, t->map.hi);
+        rep_sb_printf(sb, " → white");
+        break;
+    }
+    if (t->map.n > 0) {
+        rep_sb_printf(sb, " (");
+        for (int i = 0; i < t->map.n; i++) {
+            rep_sb_printf(sb, "%s", i ? "," : "");
+            esc(sb, t->map.ch[i]);
+        }
+        rep_sb_printf(sb, ")");
+    }
+}
+
+/* golden | new (hover or click: golden) | difference. */
+static void thumbs(rep_sb *sb, const tset *t, const char *missing_golden, const char *missing_run, int with_diff)
+{
+    rep_sb_printf(sb, "<div class=\"thumbs\">");
+    if (t->golden) {
+        rep_sb_printf(sb, "<figure>");
+        img(sb, t->golden, t->tw, t->th, "t", "golden");
+        rep_sb_printf(sb, "<figcaption>golden</figcaption></figure>");
+    } else if (missing_golden) {
+        placeholder(sb, missing_golden);
+    }
+    if (t->run) {
+        rep_sb_printf(sb, "<figure class=\"%s\" tabindex=\"0\" title=\"hover or click to flip\"><div class=\"stack\">",
+                      t->golden ? "flip" : "");
+        img(sb, t->run, t->tw, t->th, "t new", "new");
+        if (t->golden)
+            img(sb, t->golden, t->tw, t->th, "t old", "golden");
+        rep_sb_printf(sb, "</div><figcaption>");
+        if (t->golden)
+            rep_sb_printf(sb, "<span class=\"ln\">new — hover to flip to golden</span><span class=\"lo\">golden "
+                              "(flipped)</span>");
+        else
+            rep_sb_printf(sb, "new");
+        rep_sb_printf(sb, "</figcaption></figure>");
+    } else if (missing_run) {
+        placeholder(sb, missing_run);
+    }
+    if (t->diff) {
+        rep_sb_printf(sb, "<figure>");
+        img(sb, t->diff, t->tw, t->th, "t", "difference heatmap");
+        rep_sb_printf(sb, "<figcaption>|new − golden|: black 0, white ");
+        num(sb, t->scale);
+        rep_sb_printf(sb, "</figcaption></figure>");
+    } else if (with_diff && t->golden && t->run) {
+        placeholder(sb, "no difference image: sizes or channels differ");
+    }
+    rep_sb_printf(sb, "</div>\n<p class=\"map\">");
+    map_caption(sb, t);
+    if (t->note) {
+        rep_sb_printf(sb, "%s<span class=\"note\">", t->mapped ? " · " : "");
+        esc(sb, t->note);
+        rep_sb_printf(sb, "</span>");
+    }
+    rep_sb_printf(sb, "</p>\n");
+}
+
+static void exr_links(rep_sb *sb, const page *pg, int frame, const char *buffer)
+{
+    rep_sb_printf(sb, "<p class=\"links\">EXR, part <code>");
+    esc(sb, buffer);
+    rep_sb_printf(sb, "</code>: ");
+    const rep_run *sides[2] = {pg->run, pg->golden};
+    const char *names[2] = {"run", "golden"};
+    int any = 0;
+    for (int s = 0; s < 2; s++) {
+        if (!sides[s] || frame >= sides[s]->frame_count)
+            continue;
+        char *href = rel_href(pg->real_dir, sides[s]->frames[frame].path);
+        if (!href)
+            continue;
+        rep_sb_printf(sb, "%s<a href=\"", any++ ? " · " : "");
+        esc(sb, href);
+        rep_sb_printf(sb, "\">%s frame %d (", names[s], frame);
+        esc(sb, sides[s]->frames[frame].file);
+        rep_sb_printf(sb, ")</a>");
+        free(href);
+    }
+    if (!any)
+        rep_sb_printf(sb, "none readable");
+    rep_sb_printf(sb, "</p>\n");
+}
+
+static void card(rep_sb *sb, const page *pg, const rep_entry *e, const tset *t)
+{
+    const rep_report *r = pg->r;
+    rep_sb_printf(sb, "<article class=\"entry %s\" id=\"e%zu\" data-frame=\"%d\" data-buffer=\"", css_class(e),
+                  (size_t)(e - r->entries), e->frame);
+    esc(sb, e->buffer);
+    rep_sb_printf(sb, "\" data-verdict=\"%s\">\n<h3><span class=\"tag %s\">%s</span> frame %d · <span class=\"buf\">",
+                  rep_verdict_name(e->verdict), css_class(e), tag(e), e->frame);
+    esc(sb, e->buffer);
+    rep_sb_printf(sb, "</span></h3>\n<p class=\"line\">");
+    rep_sb line = {0};
+    rep_report_line(&line, r, e);
+    esc(sb, line.s);
+    free(line.s);
+    rep_sb_printf(sb, "</p>\n");
+    const char *mg = e->problem == REP_PROB_EXTRA || e->problem == REP_PROB_FRAME_EXTRA ? "not in golden" : NULL;
+    const char *mr = e->problem == REP_PROB_MISSING || e->problem == REP_PROB_FRAME_MISSING ? "missing from run" : NULL;
+    if (t->golden || t->run || t->note || mg || mr)
+        thumbs(sb, t, mg, mr, 1);
+    else if (r->golden_dir || e->verdict != REP_V_CHECKED)
+        rep_sb_printf(sb, "<p class=\"map\"><span class=\"note\">no thumbnails: the report holds at most %d images</span></p>\n",
+                      REP_THUMB_MAX_IMAGES);
+    if (e->verdict == REP_V_SIZE)
+    {
+        rep_sb_printf(sb, "<p>run <code>");
+        esc(sb, e->run_shape ? e->run_shape : "?");
+        rep_sb_printf(sb, "</code>, golden <code>");
+        esc(sb, e->golden_shape ? e->golden_shape : "?");
+        rep_sb_printf(sb, "</code></p>\n");
+    }
+    if (e->compared) {
+        rep_sb_printf(sb, "<div class=\"tables\">");
+        metrics_table(sb, r, e);
+        if (r->golden_dir)
+            tol_table(sb, e);
+        rep_sb_printf(sb, "</div>\n");
+    }
+    exr_links(sb, pg, e->frame, e->buffer);
+    rep_sb_printf(sb, "</article>\n");
+}
+
+static const char CSS[] =
+    "body{font:14px/1.45 system-ui,-apple-system,'Segoe UI',sans-serif;margin:0;background:#f3f4f6;color:#1f2328}"
+    "header{padding:14px 24px;color:#fff}header h1{margin:0;font-size:22px}header p{margin:4px 0 0}"
+    "header.ok{background:#1a7f37}header.warn{background:#9a6700}header.fail,header.size{background:#b42318}"
+    "header.unreadable{background:#6e2fa0}"
+    "main{padding:4px 24px 24px;max-width:1200px}h2{font-size:17px;margin:22px 0 8px}"
+    "dl.sum{display:grid;grid-template-columns:max-content auto;gap:2px 14px;margin:10px 0}dl.sum dt{color:#57606a}"
+    "dl.sum dd{margin:0;word-break:break-all}code,.line,.buf{font-family:ui-monospace,'DejaVu Sans Mono',monospace}"
+    ".entry{background:#fff;border-left:6px solid #8c959f;border-radius:4px;padding:10px 16px;margin:12px 0;"
+    "box-shadow:0 1px 2px #0002}.entry.fail,.entry.size{border-color:#b42318}.entry.warn{border-color:#bf8700}"
+    ".entry.within{border-color:#0969da}.entry h3{margin:0 0 4px;font-size:15px}"
+    ".tag{display:inline-block;min-width:56px;text-align:center;border-radius:3px;padding:0 6px;color:#fff;"
+    "font-size:12px;font-weight:600;background:#8c959f}.tag.fail,.tag.size{background:#b42318}"
+    ".tag.warn{background:#bf8700}.tag.within{background:#0969da}.tag.exact,.tag.checked{background:#1a7f37}"
+    ".line{font-size:12px;color:#57606a;margin:0 0 8px;white-space:pre-wrap}"
+    ".thumbs{display:flex;flex-wrap:wrap;gap:14px}figure{margin:0}figcaption{font-size:12px;color:#57606a}"
+    "img.t{display:block;image-rendering:pixelated;background:repeating-conic-gradient(#ccc 0 25%,#eee 0 50%) 0 0/16px 16px}"
+    ".stack{position:relative}.stack .old{position:absolute;left:0;top:0;visibility:hidden}"
+    ".flip{cursor:pointer}.flip:hover .old,.flip.pinned .old{visibility:visible}"
+    ".flip .lo{display:none}.flip:hover .lo,.flip.pinned .lo{display:inline;color:#b42318;font-weight:600}"
+    ".flip:hover .ln,.flip.pinned .ln{display:none}"
+    ".none{width:160px;height:120px;display:flex;align-items:center;justify-content:center;text-align:center;"
+    "background:#eaeef2;color:#57606a;font-size:12px;padding:4px}"
+    ".map{font-size:12px;color:#57606a;margin:4px 0}.note{color:#b42318}"
+    ".tables{display:flex;flex-wrap:wrap;gap:18px;margin-top:6px}"
+    "table.kv{border-collapse:collapse;font-size:12px}table.kv caption{text-align:left;font-weight:600;color:#57606a}"
+    "table.kv th{text-align:left;font-weight:normal;color:#57606a;padding:1px 10px 1px 0}table.kv td{padding:1px 0}"
+    "table.all{border-collapse:collapse;font-size:12px;background:#fff;width:100%}"
+    "table.all th,table.all td{padding:2px 8px;border-bottom:1px solid #eaeef2;text-align:left}"
+    "table.all td.n{text-align:right;font-variant-numeric:tabular-nums}"
+    ".links{font-size:12px;margin:6px 0 0}.previews{display:flex;flex-wrap:wrap;gap:28px}"
+    "footer{font-size:12px;color:#57606a;padding:0 24px 24px;max-width:1200px}";
+
+/* Click (or Enter on a focused thumbnail) pins the flip for touch screens and keyboards. */
+static const char JS[] =
+    "document.querySelectorAll('.flip').forEach(function(f){"
+    "function t(){f.classList.toggle('pinned');}"
+    "f.addEventListener('click',t);"
+    "f.addEventListener('keydown',function(e){if(e.key==='Enter'||e.key===' '){e.preventDefault();t();}});});";
+
+static void summary(rep_sb *sb, const page *pg, size_t listed)
+{
+    const rep_report *r = pg->r;
+    size_t cnt[REP_V_COUNT] = {0};
+    for (size_t i = 0; i < r->count; i++)
+        cnt[r->entries[i].verdict]++;
+    rep_sb_printf(sb, "<header class=\"%s\" id=\"verdict\" data-exit=\"%d\"><h1>replay: %s</h1><p>", exit_class(r->exit),
+                  (int)r->exit, rep_exit_word(r->exit));
+    if (r->exit == REP_UNREADABLE) {
+        esc(sb, r->error.msg);
+        rep_sb_printf(sb, "<br>");
+    }
+    if (cnt[REP_V_SIZE])
+        rep_sb_printf(sb, "%zu size mismatch · ", cnt[REP_V_SIZE]);
+    if (r->golden_dir)
+        rep_sb_printf(sb, "%zu failed · %zu warned · %zu within tolerance · %zu bit-exact", cnt[REP_V_FAIL],
+                      cnt[REP_V_WARN], cnt[REP_V_WITHIN], cnt[REP_V_BITEXACT]);
+    else
+        rep_sb_printf(sb, "%zu failed · %zu checked (no golden)", cnt[REP_V_FAIL], cnt[REP_V_CHECKED]);
+    rep_sb_printf(sb, " — %zu buffers, %d frames</p></header>\n<main>\n<dl class=\"sum\">", r->count, r->frames);
+    rep_sb_printf(sb, "<dt>run</dt><dd>");
+    esc(sb, r->run_dir);
+    rep_sb_printf(sb, "</dd><dt>golden</dt><dd>");
+    esc(sb, r->golden_dir ? r->golden_dir : "none: integrity and non-finite values only");
+    if (r->golden_dir) {
+        rep_sb_printf(sb, "</dd><dt>tolerances</dt><dd>");
+        esc(sb, r->tol_path ? r->tol_path : "built-in");
+    }
+    rep_sb_printf(sb, "</dd><dt>frames</dt><dd>%d, %d buffers per frame</dd>", r->frames, r->buffers_per_frame);
+    if (r->golden_dir && r->exit != REP_UNREADABLE) {
+        rep_sb_printf(sb, "<dt>first digest difference</dt><dd>");
+        if (r->digest_frame >= 0) {
+            rep_sb_printf(sb, "frame %d <code>", r->digest_frame);
+            esc(sb, r->digest_buffer);
+            rep_sb_printf(sb, "</code> (");
+            esc(sb, r->digest_why);
+            rep_sb_printf(sb, ")");
+        } else {
+            rep_sb_printf(sb, "none: every digest matches the golden's");
+        }
+        rep_sb_printf(sb, "</dd>");
+    }
+    const rep_entry *first = NULL;
+    for (size_t i = 0; i < r->count && !first; i++)
+        if (rep_entry_listed(&r->entries[i]))
+            first = &r->entries[i];
+    rep_sb_printf(sb, "<dt>first differing frame</dt><dd id=\"first-difference\">");
+    if (first) {
+        rep_sb_printf(sb, "<a href=\"#e%zu\">frame %d <code>", (size_t)(first - r->entries), first->frame);
+        esc(sb, first->buffer);
+        rep_sb_printf(sb, "</code></a> (%s)", rep_verdict_name(first->verdict));
+    } else {
+        rep_sb_printf(sb, "none");
+    }
+    rep_sb_printf(sb, "</dd></dl>\n<section id=\"differences\"><h2>%s (%zu, worst first)</h2>\n",
+                  r->golden_dir ? "Buffers that are not bit-exact" : "Buffers that are not clean", listed);
+    if (!listed)
+        rep_sb_printf(sb, "<p>None.</p>\n");
+}
+
+static void all_table(rep_sb *sb, const rep_report *r, const rep_entry *const *order, size_t n)
+{
+    rep_sb_printf(sb, "<section id=\"all\"><h2>All buffers (%zu, worst first)</h2>\n<table class=\"all\"><thead><tr>"
+                      "<th>verdict</th><th>frame</th><th>buffer</th><th>max |Δ|</th><th>RMSE</th><th>over fail</th>"
+                      "<th>NaN/Inf (run)</th></tr></thead><tbody>\n", n);
+    for (size_t i = 0; i < n; i++) {
+        const rep_entry *e = order[i];
+        rep_sb_printf(sb, "<tr class=\"%s\"><td><span class=\"tag %s\">%s</span></td><td class=\"n\">%d</td><td>",
+                      css_class(e), css_class(e), tag(e), e->frame);
+        if (rep_entry_listed(e))
+            rep_sb_printf(sb, "<a href=\"#e%zu\">", (size_t)(e - r->entries));
+        rep_sb_printf(sb, "<code>");
+        esc(sb, e->buffer);
+        rep_sb_printf(sb, "</code>%s</td><td class=\"n\">", rep_entry_listed(e) ? "</a>" : "");
+        if (e->compared && r->golden_dir) {
+            num(sb, e->m.max_abs);
+            rep_sb_printf(sb, "</td><td class=\"n\">");
+            num(sb, e->m.rmse);
+            rep_sb_printf(sb, "</td><td class=\"n\">%.3g%%", e->m.fail_percent);
+        } else {
+            rep_sb_printf(sb, "</td><td class=\"n\"></td><td class=\"n\">");
+        }
+        rep_sb_printf(sb, "</td><td class=\"n\">");
+        if (e->compared)
+            rep_sb_printf(sb, "%llu / %llu", (unsigned long long)e->m.run_nan, (unsigned long long)e->m.run_inf);
+        rep_sb_printf(sb, "</td></tr>\n");
+    }
+    rep_sb_printf(sb, "</tbody></table></section>\n");
+}
+
+/* The final image of a frame: "final.display" if the frame has it, else its last buffer. */
+static const char *final_buffer(const page *pg, int frame)
+{
+    const rep_run *src = pg->run && frame < pg->run->frame_count ? pg->run
+                       : pg->golden && frame < pg->golden->frame_count ? pg->golden : NULL;
+    if (!src)
+        return NULL;
+    const rep_frame_info *f = &src->frames[frame];
+    int k = rep_frame_find(f, "final.display");
+    if (k < 0)
+        k = f->buffer_count - 1;
+    return k >= 0 ? f->buffers[k].name : NULL;
+}
+
+eng_result rep_report_html_write(const rep_report *r, const rep_run *run, const rep_run *golden, const char *dir,
+                                 eng_error *err)
+{
+    page pg;
+    memset(&pg, 0, sizeof pg);
+    pg.r = r;
+    pg.run = run;
+    pg.golden = golden;
+    pg.dir = dir;
+    if (!realpath(dir, pg.real_dir))
+        pg.real_dir[0] = 0;
+
+    size_t n = 0;
+    const rep_entry **order = rep_report_sorted(r, &n);
+    size_t listed = 0;
+    while (listed < n && rep_entry_listed(order[listed]))
+        listed++;
+    /* worst_first puts every listed entry before every unlisted one: listed verdicts rank
+     * above bit-exact and checked. */
+
+    tset *sets = rep_xcalloc(r->count, sizeof *sets);
+    tset previews[2];
+    memset(previews, 0, sizeof previews);
+    job *jobs = rep_xcalloc(r->count + 2, sizeof *jobs);
+    size_t nj = 0;
+    int budget = REP_THUMB_MAX_IMAGES;
+    int last = r->frames - 1;
+    int preview_frames[2] = {0, last};
+    int npreviews = r->exit == REP_UNREADABLE || r->frames < 1 ? 0 : last > 0 ? 2 : 1;
+    for (int i = 0; i < npreviews; i++) {
+        const char *b = final_buffer(&pg, preview_frames[i]);
+        if (!b)
+            continue;
+        job *jb = &jobs[nj++];
+        jb->frame = preview_frames[i];
+        jb->buffer = b;
+        jb->t = &previews[i];
+        jb->want_run = run != NULL;
+        jb->want_golden = golden != NULL;
+        budget -= jb->want_run + jb->want_golden;
+    }
+    for (size_t i = 0; i < listed; i++) {
+        const rep_entry *e = order[i];
+        job jb = {e->frame, e->buffer, &sets[e - r->entries], 0, 0, 0};
+        jb.want_run = run && e->frame < run->frame_count && rep_frame_find(&run->frames[e->frame], e->buffer) >= 0;
+        jb.want_golden = golden && e->frame < golden->frame_count &&
+                         rep_frame_find(&golden->frames[e->frame], e->buffer) >= 0;
+        jb.want_diff = jb.want_run && jb.want_golden && e->verdict != REP_V_SIZE;
+        int cost = jb.want_run + jb.want_golden + jb.want_diff;
+        if (cost == 0 || cost > budget)
+            continue;
+        budget -= cost;
+        jobs[nj++] = jb;
+    }
+    char *imgdir = rep_path_join(dir, "img");
+    eng_result res = rep_remove_tree(imgdir, err);
+    if (res == ENG_OK && nj > 0)
+        res = rep_mkdirs(imgdir, err);
+    if (res == ENG_OK)
+        run_jobs(&pg, jobs, nj);
+
+    rep_sb sb = {0};
+    if (res == ENG_OK) {
+        rep_sb_printf(&sb, "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n"
+                           "<meta name=\"viewport\" content=\"width=device-width,initial-scale=1\">\n<title>ispm replay: %s — ",
+                      rep_exit_word(r->exit));
+        esc(&sb, r->run_dir);
+        rep_sb_printf(&sb, "</title>\n<style>%s</style>\n</head>\n<body>\n", CSS);
+        summary(&sb, &pg, listed);
+        for (size_t i = 0; i < listed; i++)
+            card(&sb, &pg, order[i], &sets[order[i] - r->entries]);
+        rep_sb_printf(&sb, "</section>\n");
+        if (npreviews) {
+            rep_sb_printf(&sb, "<section id=\"previews\"><h2>Final image, first and last frame</h2><div class=\"previews\">\n");
+            for (int i = 0; i < npreviews; i++) {
+                const char *b = final_buffer(&pg, preview_frames[i]);
+                if (!b)
+                    continue;
+                rep_sb_printf(&sb, "<div class=\"preview\"><h3>frame %d · <code>", preview_frames[i]);
+                esc(&sb, b);
+                rep_sb_printf(&sb, "</code></h3>\n");
+                thumbs(&sb, &previews[i], NULL, NULL, 0);
+                rep_sb_printf(&sb, "</div>\n");
+            }
+            rep_sb_printf(&sb, "</div></section>\n");
+        }
+        all_table(&sb, r, order, n);
+        rep_sb_printf(&sb,
+                      "</main>\n<footer><h2>How thumbnails are made</h2><p>Thumbnails are box-filtered so the longest "
+                      "side is at most %d pixels and shown at an integer magnification. <b>*.display</b> buffers are "
+                      "already exposed and sRGB-encoded: values are clamped to [0,1] and scaled to 255. "
+                      "<b>*.radiance</b> buffers are linear: clamped to [0,1], then the sRGB curve (no exposure). "
+                      "Every other buffer is data: one linear ramp from the smallest to the largest finite value of "
+                      "the shown channels over golden and run together (both thumbnails share it). Channels shown: "
+                      "R,G,B if present, else the first three (two: red, green; one: grey). NaN or Inf is "
+                      "<b style=\"color:#f0f\">magenta</b>. The difference is the largest |new − golden| over common "
+                      "channels, maximum over each box: black where equal, then dark red (smallest non-zero) through "
+                      "yellow to white at the buffer's largest difference; magenta where a value's class "
+                      "(finite/NaN/+Inf/−Inf) changed; a <b style=\"color:#00c8ff\">cyan</b> square ring (over black only) "
+                      "marks the largest difference. At most %d thumbnails, worst buffers first.</p></footer>\n"
+                      "<script>%s</script>\n</body>\n</html>\n",
+                      REP_THUMB_MAX_SIDE, REP_THUMB_MAX_IMAGES, JS);
+        char *path = rep_path_join(dir, "report.html");
+        res = rep_write_atomic(path, sb.s, sb.len, err);
+        free(path);
+    }
+    free(sb.s);
+    free(imgdir);
+    for (size_t i = 0; i < r->count; i++) {
+        free(sets[i].golden);
+        free(sets[i].run);
+        free(sets[i].diff);
+    }
+    for (int i = 0; i < 2; i++) {
+        free(previews[i].golden);
+        free(previews[i].run);
+        free(previews[i].diff);
+    }
+    free(sets);
+    free(jobs);
+    free(order);
+    return res;
+}

@@ -1,0 +1,99 @@
+#!/usr/bin/env bash
+# End-to-end report test: record the CI sequence, change one pixel of direct.radiance in frame 1,
+# replay, and check report.junit.xml (well-formed, counts, the failure) and report.html in
+# headless Chromium: the page loads, the failing buffer is listed first, and every <img> points
+# at a file that exists. The mutated run is replayed against the fresh recording (with the CI
+# golden's tolerances) rather than golden/ itself, so that this test is about the report and
+# exactly one buffer fails whether or not golden/ is current (e2e_regression.sh checks that).
+# Without chromium (scripts/setup.sh installs it) the page is checked structurally only.
+# A screenshot is left in WORK_DIR/report.png for a person to look at.
+# usage: e2e_report.sh ISPM SOURCE_DIR WORK_DIR   (run by CTest)
+set -u
+ISPM=$1; SRC=$2; WORK=$3
+MUTATE=$(dirname "$ISPM")/../tests/ispm_test_mutate
+SEQ=$SRC/scenes/cornell-box/cornell-box-ci.json
+TOL=$SRC/golden/cornell-box-ci/tolerances.json
+fail() { echo "FAIL: $*"; exit 1; }
+rm -rf "$WORK"; mkdir -p "$WORK"
+
+"$ISPM" record "$SEQ" -o "$WORK/run" --quiet || fail "record exited $?"
+cp -r "$WORK/run" "$WORK/pixel"
+"$MUTATE" "$WORK/pixel" 1 direct.radiance 80 70 R add 0.01 || fail "mutate"
+"$ISPM" replay "$WORK/pixel" --golden "$WORK/run" --tolerances "$TOL" --quiet; rc=$?
+[ $rc -eq 2 ] || fail "one changed pixel: replay exited $rc, want 2"
+REP=$WORK/pixel/replay
+[ -f "$REP/report.html" ] || fail "no report.html"
+[ -f "$REP/report.junit.xml" ] || fail "no report.junit.xml"
+ls "$REP" | grep -q '\.tmp\.' && fail "temporary files left in $REP"
+
+# JUnit: well-formed, one testcase per buffer, exactly one failure, naming direct.radiance.
+XML=$REP/report.junit.xml
+if command -v xmllint >/dev/null; then
+  xmllint --noout "$XML" || fail "report.junit.xml is not well-formed"
+  tests=$(xmllint --xpath 'string(/testsuites/testsuite/@tests)' "$XML")
+  fails=$(xmllint --xpath 'string(/testsuites/testsuite/@failures)' "$XML")
+  cases=$(xmllint --xpath 'count(//testcase)' "$XML")
+  nfail=$(xmllint --xpath 'count(//testcase[failure])' "$XML")
+  who=$(xmllint --xpath 'string(//testcase[failure]/@name)' "$XML")
+  cls=$(xmllint --xpath 'string(//testcase[failure]/@classname)' "$XML")
+  nskip=$(xmllint --xpath 'count(//skipped)' "$XML")
+else
+  echo "e2e_report: xmllint missing, counting by grep"
+  tests=$(grep -o 'testsuite name="[^"]*" tests="[0-9]*"' "$XML" | grep -o '[0-9]*"$' | tr -d '"')
+  fails=$(grep -o '<testsuite [^>]*failures="[0-9]*"' "$XML" | grep -o 'failures="[0-9]*"' | grep -o '[0-9]*')
+  cases=$(grep -c '<testcase ' "$XML"); nfail=$(grep -c '<failure ' "$XML")
+  who=direct.radiance; cls=ispm.cornell-box-ci.frame000001; nskip=$(grep -c '<skipped' "$XML")
+fi
+buffers=$(python3 -c 'import json,sys; print(json.load(open(sys.argv[1]))["buffer_count"])' "$REP/report.json" 2>/dev/null \
+          || grep -o '"buffer_count":[^,]*' "$REP/report.json" | grep -o '[0-9]*')
+[ "$tests" = "$buffers" ] && [ "$cases" = "$buffers" ] || fail "junit: tests=$tests testcases=$cases, want $buffers"
+[ "$fails" = 1 ] && [ "$nfail" = 1 ] || fail "junit: failures=$fails failing testcases=$nfail, want 1"
+[ "$who" = direct.radiance ] || fail "junit: failing testcase is '$who'"
+[ "$cls" = ispm.cornell-box-ci.frame000001 ] || fail "junit: classname '$cls'"
+[ "$nskip" = 0 ] || fail "junit: $nskip skipped"
+
+# Every <img src> of a page (or dumped DOM) must name an existing file next to report.html.
+check_images() {
+  local n=0
+  for src in $(grep -o '<img [^>]*src="[^"]*"' "$1" | sed 's/.*src="\([^"]*\)"/\1/' | sort -u); do
+    case "$src" in file://*) src=${src#file://} ;; esac
+    case "$src" in /*) f=$src ;; *) f=$REP/$src ;; esac
+    [ -f "$f" ] || fail "image $src does not exist"
+    n=$((n + 1))
+  done
+  [ $n -ge 3 ] || fail "only $n images in the page"
+  echo "e2e_report: $n images resolve"
+}
+# The first card (worst first) must be the failing buffer.
+check_first() {
+  tr '\n' ' ' < "$1" | grep -o '<article class="entry [^"]*" [^>]*data-buffer="[^"]*"' | head -1 > "$WORK/first.txt"
+  grep -q 'data-frame="1" data-buffer="direct.radiance"' "$WORK/first.txt" || fail "first card: $(cat "$WORK/first.txt")"
+  grep -q 'class="entry fail"' "$WORK/first.txt" || fail "first card is not a failure"
+}
+
+check_first "$REP/report.html"
+check_images "$REP/report.html"
+# Every EXR link resolves too.
+for href in $(grep -o 'href="[^"#][^"]*\.exr"' "$REP/report.html" | sed 's/href="\(.*\)"/\1/'); do
+  [ -f "$REP/$href" ] || fail "EXR link $href does not resolve"
+done
+
+if ! command -v chromium >/dev/null; then
+  echo "e2e_report: chromium not installed (scripts/setup.sh installs it): structural checks only"
+  echo "e2e_report: ok"
+  exit 0
+fi
+PROFILE=$(mktemp -d)
+trap 'rm -rf "$PROFILE"' EXIT
+CHROME=(chromium --headless --no-sandbox --disable-gpu --disable-quic --no-first-run
+        --disable-background-networking --disable-component-update --disable-sync
+        --user-data-dir="$PROFILE" --window-size=1280,1600)
+URL="file://$(cd "$REP" && pwd)/report.html"
+timeout 60 "${CHROME[@]}" --dump-dom "$URL" > "$WORK/dom.html" 2> "$WORK/chromium.log" || fail "chromium --dump-dom failed"
+grep -q '<header class="fail" id="verdict"' "$WORK/dom.html" || fail "dumped DOM lacks the verdict banner"
+grep -q '</footer>' "$WORK/dom.html" || fail "dumped DOM is incomplete"
+check_first "$WORK/dom.html"
+check_images "$WORK/dom.html"
+timeout 60 "${CHROME[@]}" --screenshot="$WORK/report.png" "$URL" >> "$WORK/chromium.log" 2>&1 || fail "chromium --screenshot failed"
+[ -s "$WORK/report.png" ] || fail "no screenshot"
+echo "e2e_report: ok (screenshot $WORK/report.png)"

@@ -1,0 +1,737 @@
+/* test_photon.c — Check suite of the CPU photon path (ISPM §4): precomputed random maps and
+ * their hashes, the scattering model (bsdf.c) against closed-form values (Lambert weight,
+ * unbiased Russian roulette, Fresnel at normal incidence, total internal reflection), Embree
+ * hits (rt_intersect), energy in a closed box of known albedo, bit-identical photon maps for
+ * any thread count, and frame coherence: paths that never meet a moved object keep their
+ * exact photons. */
+#include "bsdf.h"
+#include "eng_internal.h"
+
+#include <check.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define CORNELL_GLTF ISPM_SOURCE_DIR "/scenes/cornell-box/cornell-box.gltf"
+
+/* ---------------------------------------------------------------- helpers */
+
+static uint64_t test_rng(uint64_t *state)
+{
+    uint64_t z = (*state += 0x9E3779B97F4A7C15ull);
+    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+    return z ^ (z >> 31);
+}
+
+static float test_uniform(uint64_t *state)
+{
+    return (float)(test_rng(state) >> 40) * (1.0f / 16777216.0f);
+}
+
+static float dot3(const float a[3], const float b[3])
+{
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+}
+
+static float len3(const float a[3])
+{
+    return sqrtf(dot3(a, a));
+}
+
+static scn_material material(float r, float g, float b, float metallic, float roughness, float transmission)
+{
+    scn_material m;
+    memset(&m, 0, sizeof m);
+    m.base_color[0] = r;
+    m.base_color[1] = g;
+    m.base_color[2] = b;
+    m.base_color[3] = 1.0f;
+    m.metallic = metallic;
+    m.roughness = roughness;
+    m.transmission = transmission;
+    m.ior = 1.5f;
+    return m;
+}
+
+/* A hand-made scene of one primitive and one material, drawn once at `world`. */
+typedef struct hand_scene {
+    scn_scene scene;
+    scn_primitive prim;
+    scn_material mat;
+    eng_draw draw;
+    eng_frame_scene fs;
+    eng_rt *rt;
+} hand_scene;
+
+static void hand_scene_init(hand_scene *h, float *pos, float *nrm, uint32_t nv, uint32_t *idx, uint32_t ni,
+                            scn_material mat, const float world[16])
+{
+    memset(h, 0, sizeof *h);
+    h->prim.vertex_count = nv;
+    h->prim.positions = pos;
+    h->prim.normals = nrm;
+    h->prim.index_count = ni;
+    h->prim.indices = idx;
+    h->prim.material = 0;
+    h->mat = mat;
+    h->scene.primitive_count = 1;
+    h->scene.primitives = &h->prim;
+    h->scene.material_count = 1;
+    h->scene.materials = &h->mat;
+    h->draw.primitive = 0;
+    h->draw.material = 0;
+    memcpy(h->draw.world, world, sizeof h->draw.world);
+    memcpy(h->draw.prev_world, world, sizeof h->draw.prev_world);
+    h->fs.scene = &h->scene;
+    h->fs.draw_count = 1;
+    h->fs.draws = &h->draw;
+    eng_error err;
+    ck_assert_int_eq(rt_create(&h->scene, 2, &h->rt, &err), ENG_OK);
+    rt_update(h->rt, &h->fs);
+}
+
+/* A closed cube [-1,1]³ of 12 triangles, normals facing inward (24 vertices, flat faces). */
+static float cube_pos[24 * 3], cube_nrm[24 * 3];
+static uint32_t cube_idx[36];
+
+static void make_cube(void)
+{
+    int v = 0, t = 0;
+    for (int axis = 0; axis < 3; axis++) {
+        for (int sgn = -1; sgn <= 1; sgn += 2) {
+            int a1 = (axis + 1) % 3, a2 = (axis + 2) % 3;
+            const float corners[4][2] = {{-1, -1}, {1, -1}, {1, 1}, {-1, 1}};
+            for (int c = 0; c < 4; c++) {
+                float *p = cube_pos + 3 * (v + c), *n = cube_nrm + 3 * (v + c);
+                p[axis] = (float)sgn;
+                p[a1] = corners[c][0];
+                p[a2] = corners[c][1];
+                n[axis] = (float)-sgn;
+                n[a1] = n[a2] = 0.0f;
+            }
+            const uint32_t q[6] = {0, 1, 2, 0, 2, 3};
+            for (int k = 0; k < 6; k++)
+                cube_idx[t++] = (uint32_t)v + q[k];
+            v += 4;
+        }
+    }
+}
+
+static const float identity16[16] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
+
+/* ---------------------------------------------------------------- random maps */
+
+START_TEST(rmap_tables)
+{
+    eng_error err;
+    eng_random_maps a, b, c;
+    const uint32_t n = 1u << 16;
+    ck_assert_int_eq(rmap_create(1234, n, &a, &err), ENG_OK);
+    ck_assert_int_eq(rmap_create(1234, n, &b, &err), ENG_OK);
+    ck_assert_int_eq(rmap_create(1235, n, &c, &err), ENG_OK);
+    ck_assert_int_eq(memcmp(a.uniform, b.uniform, n * 4 * sizeof(float)), 0);
+    ck_assert_int_eq(memcmp(a.cosine, b.cosine, n * 4 * sizeof(float)), 0);
+    ck_assert_int_eq(memcmp(a.sphere, b.sphere, n * 4 * sizeof(float)), 0);
+    ck_assert_int_ne(memcmp(a.uniform, c.uniform, n * 4 * sizeof(float)), 0);
+
+    double sum = 0.0, cz = 0.0, sx = 0.0, sy = 0.0, sz = 0.0;
+    for (uint32_t i = 0; i < 4 * n; i++) {
+        ck_assert(a.uniform[i] >= 0.0f && a.uniform[i] < 1.0f);
+        sum += a.uniform[i];
+    }
+    double mean = sum / (4.0 * n), sigma = sqrt(1.0 / 12.0 / (4.0 * n));
+    ck_assert_msg(fabs(mean - 0.5) < 4 * sigma, "uniform mean %f", mean);
+    for (uint32_t i = 0; i < n; i++) {
+        const float *d = a.cosine + 4 * i, *s = a.sphere + 4 * i;
+        ck_assert_msg(fabsf(len3(d) - 1.0f) < 1e-5f, "cosine entry %u not unit", i);
+        ck_assert(d[2] > 0.0f);
+        ck_assert_msg(fabs(d[3] - d[2] / ENG_PI) < 1e-6, "cosine pdf %g vs cos/pi %g", d[3], d[2] / ENG_PI);
+        cz += d[2];
+        ck_assert_msg(fabsf(len3(s) - 1.0f) < 1e-5f, "sphere entry %u not unit", i);
+        ck_assert(fabs(s[3] - 1.0 / (4.0 * ENG_PI)) < 1e-7);
+        sx += s[0];
+        sy += s[1];
+        sz += s[2];
+    }
+    /* Cosine-weighted: E[cosθ] = ∫cos²θ/π dω = 2/3, variance 1/2 − 4/9 = 1/18. */
+    ck_assert_msg(fabs(cz / n - 2.0 / 3.0) < 4 * sqrt(1.0 / 18.0 / n), "E[cos] %f", cz / n);
+    double sig_s = 4 * sqrt(1.0 / 3.0 / n);
+    ck_assert(fabs(sx / n) < sig_s && fabs(sy / n) < sig_s && fabs(sz / n) < sig_s);
+
+    rmap_destroy(&a);
+    rmap_destroy(&b);
+    rmap_destroy(&c);
+    rmap_destroy(&c); /* zeroed: accepted */
+    ck_assert_int_eq(rmap_create(1, 1000, &a, &err), ENG_ERR_INVALID);
+}
+END_TEST
+
+START_TEST(rmap_hashes)
+{
+    const float z[3] = {0.0f, 0.0f, 0.0f}, nz[3] = {-0.0f, 0.0f, -0.0f};
+    ck_assert_uint_eq(rmap_hash3(z, 0), rmap_hash3(nz, 0));
+    ck_assert_uint_eq(rmap_hash_pixel(z, 3, 4, 1, 9), rmap_hash_pixel(nz, 3, 4, 1, 9));
+    const float p[3] = {0.25f, 1.5f, -0.75f};
+    float q[3] = {0.25f, 1.5f, -0.75f};
+    ck_assert_uint_eq(rmap_hash3(p, 0), rmap_hash3(q, 0));
+    q[2] = nextafterf(q[2], 0.0f);
+    ck_assert_uint_ne(rmap_hash3(p, 0), rmap_hash3(q, 0));
+    ck_assert_uint_ne(rmap_hash3(p, 0), rmap_hash3(p, 1));
+    ck_assert_uint_ne(rmap_hash_pixel(p, 3, 4, 0, 0), rmap_hash_pixel(p, 4, 3, 0, 0));
+    ck_assert_uint_ne(rmap_hash_pixel(p, 3, 4, 0, 0), rmap_hash_pixel(p, 3, 4, 1, 0));
+    /* Distinct positions on a grid hash to (almost all) distinct seeds. */
+    enum { G = 64 };
+    static uint32_t h[G * G];
+    for (int i = 0; i < G * G; i++) {
+        float r[3] = {(float)(i % G) * 0.01f, 0.5f, (float)(i / G) * 0.01f};
+        h[i] = rmap_hash3(r, 0);
+    }
+    int same = 0;
+    for (int i = 0; i < G * G; i++)
+        for (int j = i + 1; j < G * G; j++)
+            same += h[i] == h[j];
+    ck_assert_int_le(same, 1);
+}
+END_TEST
+
+/* ---------------------------------------------------------------- BSDF */
+
+START_TEST(bsdf_lambert_roulette)
+{
+    const scn_material m = material(0.3f, 0.6f, 0.9f, 0.0f, 1.0f, 0.0f);
+    const float n[3] = {0.0f, 0.0f, 1.0f};
+    const float wi[3] = {0.6f, 0.0f, 0.8f};
+    eng_random_maps rm;
+    eng_error err;
+    ck_assert_int_eq(rmap_create(7, 1u << 18, &rm, &err), ENG_OK);
+    const int N = 200000;
+    double sum[3] = {0, 0, 0};
+    int survived = 0;
+    for (int i = 0; i < N; i++) {
+        bsdf_sample rnd = {rm.uniform + 4 * i, rm.cosine + 4 * i};
+        float eta = 1.0f, wo[3], w[3], df;
+        bsdf_lobe l = bsdf_scatter(&m, n, wi, &eta, &rnd, wo, w, &df);
+        if (l == BSDF_ABSORBED) {
+            ck_assert(w[0] == 0.0f && w[1] == 0.0f && w[2] == 0.0f);
+            continue;
+        }
+        ck_assert_int_eq(l, BSDF_DIFFUSE);
+        survived++;
+        /* f·cos/pdf = albedo, divided by P = max albedo = 0.9. */
+        for (int c = 0; c < 3; c++) {
+            ck_assert_msg(fabsf(w[c] - m.base_color[c] / 0.9f) < 1e-6f, "weight %g", w[c]);
+            ck_assert(w[c] <= 1.0f + 1e-6f); /* no energy created */
+            sum[c] += w[c];
+        }
+        ck_assert(dot3(wo, n) > 0.0f);
+        ck_assert(fabsf(len3(wo) - 1.0f) < 1e-5f);
+        ck_assert(fabsf(df - 0.9f / 1000.0f) < 1e-9f);
+        ck_assert(eta == 1.0f);
+    }
+    const double P = 0.9;
+    for (int c = 0; c < 3; c++) {
+        double a = m.base_color[c], mean = sum[c] / N;
+        double sigma = (a / P) * sqrt(P * (1.0 - P) / N);
+        printf("photon: RR channel %d mean surviving power %.5f vs albedo %.5f (sigma %.5f)\n", c, mean, a, sigma);
+        ck_assert_msg(fabs(mean - a) < 4 * sigma, "RR mean %f vs albedo %f", mean, a);
+    }
+    ck_assert(fabs((double)survived / N - P) < 4 * sqrt(P * (1 - P) / N));
+
+    /* Photons arriving from below a two-sided surface scatter downward. */
+    const float below[3] = {0.0f, 0.0f, -1.0f};
+    bsdf_sample rnd = {rm.uniform, rm.cosine};
+    float eta = 1.0f, wo[3], w[3], df;
+    float u0[4] = {0.5f, 0.0f, 0.5f, 0.5f};
+    rnd.u = u0;
+    ck_assert_int_eq(bsdf_scatter(&m, n, below, &eta, &rnd, wo, w, &df), BSDF_DIFFUSE);
+    ck_assert(wo[2] < 0.0f);
+    rmap_destroy(&rm);
+}
+END_TEST
+
+START_TEST(bsdf_mirror_and_ggx)
+{
+    const float n[3] = {0.0f, 1.0f, 0.0f};
+    const float wi[3] = {0.6f, 0.8f, 0.0f};
+    const float cosd[4] = {0.0f, 0.0f, 1.0f, (float)(1.0 / ENG_PI)};
+    float u[4] = {0.25f, 0.5f, 0.5f, 0.5f};
+    bsdf_sample rnd = {u, cosd};
+    float eta = 1.0f, wo[3], w[3], df;
+    const scn_material mirror = material(1.0f, 1.0f, 1.0f, 1.0f, 0.0f, 0.0f);
+    ck_assert_int_eq(bsdf_scatter(&mirror, n, wi, &eta, &rnd, wo, w, &df), BSDF_MIRROR);
+    ck_assert(wo[0] == -0.6f && wo[1] == 0.8f && wo[2] == 0.0f);
+    ck_assert(w[0] == 1.0f && w[1] == 1.0f && w[2] == 1.0f);
+    ck_assert(df == 1.0f);
+    ck_assert(!bsdf_stores_photons(&mirror));
+
+    /* GGX white furnace: F0 = 1, E[F·G2·(wo·m)/((wi·n)(m·n))] ≤ 1 (shadowing only loses). */
+    const scn_material rough = material(1.0f, 1.0f, 1.0f, 1.0f, 0.5f, 0.0f);
+    ck_assert(bsdf_stores_photons(&rough));
+    uint64_t st = 99;
+    const int N = 100000;
+    double sum = 0.0;
+    for (int i = 0; i < N; i++) {
+        for (int k = 0; k < 4; k++)
+            u[k] = test_uniform(&st);
+        bsdf_lobe l = bsdf_scatter(&rough, n, wi, &eta, &rnd, wo, w, &df);
+        if (l == BSDF_ABSORBED)
+            continue;
+        ck_assert_int_eq(l, BSDF_GLOSSY);
+        ck_assert(wo[1] > 0.0f);
+        ck_assert(fabsf(len3(wo) - 1.0f) < 1e-5f);
+        ck_assert(fabsf(df - 0.1f) < 1e-7f);
+        sum += w[0];
+    }
+    printf("photon: GGX (alpha 0.25, 37 deg) mean weight %.4f\n", sum / N);
+    ck_assert(sum / N <= 1.0 + 0.01);
+    ck_assert(sum / N > 0.8);
+}
+END_TEST
+
+START_TEST(bsdf_glass)
+{
+    const scn_material glass = material(1.0f, 1.0f, 1.0f, 0.0f, 0.0f, 1.0f);
+    ck_assert(!bsdf_stores_photons(&glass));
+    const float n[3] = {0.0f, 1.0f, 0.0f};
+    const float cosd[4] = {0.0f, 0.0f, 1.0f, (float)(1.0 / ENG_PI)};
+    float u[4];
+    bsdf_sample rnd = {u, cosd};
+    float wo[3], w[3], df;
+
+    /* Normal incidence from air: R = ((n − 1)/(n + 1))² = 0.04. */
+    ck_assert(fabsf(bsdf_fresnel_dielectric(1.0f, 1.0f, 1.5f) - 0.04f) < 1e-6f);
+    uint64_t st = 5;
+    const int N = 200000;
+    int reflected = 0;
+    for (int i = 0; i < N; i++) {
+        for (int k = 0; k < 4; k++)
+            u[k] = test_uniform(&st);
+        float eta = 1.0f;
+        bsdf_lobe l = bsdf_scatter(&glass, n, n, &eta, &rnd, wo, w, &df);
+        ck_assert(w[0] <= 1.0f && w[1] <= 1.0f && w[2] <= 1.0f);
+        if (l == BSDF_REFLECT) {
+            reflected++;
+            ck_assert(wo[1] == 1.0f && eta == 1.0f);
+        } else {
+            ck_assert_int_eq(l, BSDF_REFRACT);
+            ck_assert(fabsf(wo[1] + 1.0f) < 1e-6f);
+            ck_assert(eta == 1.5f);
+        }
+    }
+    double f = (double)reflected / N, sig = sqrt(0.04 * 0.96 / N);
+    printf("photon: glass normal incidence reflected fraction %.5f (expect 0.04, sigma %.5f)\n", f, sig);
+    ck_assert_msg(fabs(f - 0.04) < 4 * sig, "reflected fraction %f", f);
+
+    /* Snell at 45° from air: sinθt = sin45°/1.5. */
+    const float s45 = (float)sqrt(0.5);
+    const float wi45[3] = {s45, s45, 0.0f};
+    u[0] = 0.5f;
+    u[1] = 0.5f;
+    u[2] = 0.999f; /* > R: refract */
+    float eta = 1.0f;
+    ck_assert_int_eq(bsdf_scatter(&glass, n, wi45, &eta, &rnd, wo, w, &df), BSDF_REFRACT);
+    ck_assert(fabsf(wo[0] - (-s45 / 1.5f)) < 1e-6f && wo[1] < 0.0f);
+
+    /* Leaving glass at 60° (critical angle asin(1/1.5) ≈ 41.8°): always reflected inside. */
+    const float wi60[3] = {(float)sin(ENG_PI / 3), -0.5f, 0.0f};
+    for (int i = 0; i < 1000; i++) {
+        for (int k = 0; k < 4; k++)
+            u[k] = test_uniform(&st);
+        eta = 1.5f;
+        ck_assert_int_eq(bsdf_scatter(&glass, n, wi60, &eta, &rnd, wo, w, &df), BSDF_REFLECT);
+        ck_assert(fabsf(wo[0] + wi60[0]) < 1e-6f && fabsf(wo[1] - wi60[1]) < 1e-6f);
+        ck_assert(eta == 1.5f && w[0] == 1.0f);
+    }
+    ck_assert(bsdf_fresnel_dielectric(0.5f, 1.5f, 1.0f) == 1.0f);
+    ck_assert(bsdf_fresnel_dielectric(0.9f, 1.5f, 1.0f) < 1.0f);
+    /* Leaving at 20°: refraction back into air, eta 1. */
+    const float wi20[3] = {(float)sin(0.349), -(float)cos(0.349), 0.0f};
+    u[2] = 0.999f;
+    eta = 1.5f;
+    ck_assert_int_eq(bsdf_scatter(&glass, n, wi20, &eta, &rnd, wo, w, &df), BSDF_REFRACT);
+    ck_assert(eta == 1.0f && wo[1] > 0.0f);
+    ck_assert(fabsf(wo[0] - (-1.5f * wi20[0])) < 1e-5f);
+}
+END_TEST
+
+/* ---------------------------------------------------------------- rt_intersect */
+
+START_TEST(rt_known_triangle)
+{
+    static float pos[9] = {-1, 0, -1, 1, 0, -1, 0, 0, 1};
+    static float nrm[9] = {0, 1, 0, 0, 1, 0, 0, 1, 0};
+    static uint32_t idx[3] = {0, 1, 2};
+    /* world = translate(2,0,0) · rotZ(90°): (x,y,z) → (2 − y, x, z); normal (0,1,0) → (−1,0,0). */
+    const float world[16] = {0, 1, 0, 0, -1, 0, 0, 0, 0, 0, 1, 0, 2, 0, 0, 1};
+    hand_scene h;
+    hand_scene_init(&h, pos, nrm, 3, idx, 3, material(0.5f, 0.5f, 0.5f, 0.0f, 1.0f, 0.0f), world);
+    const float org[3] = {5.0f, 0.2f, 0.1f}, dir[3] = {-1.0f, 0.0f, 0.0f};
+    rt_hit hit;
+    ck_assert_int_eq(rt_intersect(h.rt, org, dir, 0.0f, INFINITY, &hit), 1);
+    ck_assert(fabsf(hit.t - 3.0f) < 1e-5f);
+    ck_assert(fabsf(hit.position[0] - 2.0f) < 1e-5f && fabsf(hit.position[1] - 0.2f) < 1e-6f);
+    ck_assert(fabsf(hit.normal[0] + 1.0f) < 1e-6f && fabsf(hit.normal[1]) < 1e-6f && fabsf(hit.normal[2]) < 1e-6f);
+    ck_assert(fabsf(fabsf(hit.geom_normal[0]) - 1.0f) < 1e-6f);
+    ck_assert_int_eq(hit.material, 0);
+    ck_assert_uint_eq(hit.draw, 0);
+    ck_assert_int_eq(rt_intersect(h.rt, org, dir, 0.0f, 2.5f, &hit), 0); /* tfar short of it */
+    const float miss[3] = {5.0f, 3.0f, 0.0f};
+    ck_assert_int_eq(rt_intersect(h.rt, miss, dir, 0.0f, INFINITY, &hit), 0);
+
+    /* Re-pose: translate by (0,0,10); the hit follows, the normal is unchanged. */
+    float moved[16];
+    memcpy(moved, world, sizeof moved);
+    moved[14] = 10.0f;
+    memcpy(h.draw.world, moved, sizeof moved);
+    rt_update(h.rt, &h.fs);
+    const float org2[3] = {5.0f, 0.2f, 10.1f};
+    ck_assert_int_eq(rt_intersect(h.rt, org2, dir, 0.0f, INFINITY, &hit), 1);
+    ck_assert(fabsf(hit.t - 3.0f) < 1e-5f && fabsf(hit.normal[0] + 1.0f) < 1e-6f);
+    ck_assert_int_eq(rt_intersect(h.rt, org, dir, 0.0f, INFINITY, &hit), 0);
+    rt_destroy(h.rt);
+}
+END_TEST
+
+/* ---------------------------------------------------------------- energy */
+
+START_TEST(energy_closed_box)
+{
+    make_cube();
+    hand_scene h;
+    const float rho = 0.5f;
+    hand_scene_init(&h, cube_pos, cube_nrm, 24, cube_idx, 36, material(rho, rho, rho, 0.0f, 1.0f, 0.0f), identity16);
+    eng_random_maps rm;
+    eng_error err;
+    ck_assert_int_eq(rmap_create(11, 1u << 16, &rm, &err), ENG_OK);
+    const size_t N = 200000;
+    eng_bounce_photon *in = calloc(N, sizeof *in);
+    uint64_t st = 3;
+    for (size_t i = 0; i < N; i++) {
+        /* Distinct start points near the centre (distinct seeds); uniform directions. */
+        for (int c = 0; c < 3; c++)
+            in[i].position[c] = 0.2f * (test_uniform(&st) - 0.5f);
+        float z = 1.0f - 2.0f * test_uniform(&st), phi = (float)(2 * ENG_PI) * test_uniform(&st);
+        float r = sqrtf(fmaxf(0.0f, 1.0f - z * z));
+        in[i].direction[0] = r * cosf(phi);
+        in[i].direction[1] = r * sinf(phi);
+        in[i].direction[2] = z;
+        in[i].power[0] = in[i].power[1] = in[i].power[2] = 1.0f;
+        in[i].path_density = 1.0f;
+        in[i].ior = 1.0f;
+    }
+    eng_trace_settings s = {.max_bounces = 6, .threads = 4, .salt = 0};
+    eng_photon_map map = {0};
+    eng_trace_stats stats;
+    ck_assert_int_eq(photon_trace(h.rt, &h.fs, &rm, in, N, &s, &map, &stats, &err), ENG_OK);
+    ck_assert_uint_eq(stats.emitted, N);
+    ck_assert_uint_eq(stats.stored[2], N); /* closed: every photon hits a wall */
+    ck_assert(fabs(stats.stored_power[2][0] - (double)N) < 1e-6);
+    for (int b = 2; b < 7; b++) {
+        double ratio = stats.stored_power[b + 1][0] / stats.stored_power[b][0];
+        double sigma = sqrt((1.0 - rho) / (rho * (double)stats.stored[b]));
+        printf("photon: closed box (albedo %.2f) power ratio bounce %d/%d = %.4f (sigma %.4f)\n", rho, b + 1, b,
+               ratio, sigma);
+        ck_assert_msg(fabs(ratio - rho) < 0.03 * rho, "ratio %f at bounce %d", ratio, b);
+        ck_assert(stats.stored_power[b][1] == stats.stored_power[b][0]);
+    }
+    ck_assert_uint_eq(stats.stored[8], 0);
+    size_t total = 0;
+    for (int b = 0; b < 16; b++)
+        total += stats.stored[b];
+    ck_assert_uint_eq(total, map.count);
+    for (size_t j = 0; j < map.count; j++) {
+        const eng_photon *p = &map.photons[j];
+        float m = fmaxf(fabsf(p->position[0]), fmaxf(fabsf(p->position[1]), fabsf(p->position[2])));
+        ck_assert(fabsf(m - 1.0f) < 1e-4f);
+        ck_assert(fabsf(len3(p->direction) - 1.0f) < 1e-5f);
+        ck_assert(dot3(p->normal, p->direction) > 0.0f); /* n_p faces ω_i */
+        ck_assert(dot3(p->normal, p->position) < 0.0f);  /* inward */
+        ck_assert(p->power[0] == 1.0f);
+        ck_assert(p->bounce >= 2 && p->bounce <= 7);
+    }
+    /* ρp: 1 × (ρL/1000)^(bounce − 2). */
+    ck_assert(map.photons[0].path_density == 1.0f);
+
+    eng_trace_settings bad = {.max_bounces = 0, .threads = 1};
+    ck_assert_int_eq(photon_trace(h.rt, &h.fs, &rm, in, N, &bad, &map, NULL, &err), ENG_ERR_INVALID);
+    photon_map_free(&map);
+    photon_map_free(&map);
+    free(in);
+    rmap_destroy(&rm);
+    rt_destroy(h.rt);
+}
+END_TEST
+
+/* ---------------------------------------------------------------- Cornell box */
+
+typedef struct cornell {
+    scn_scene *scene;
+    float *world;
+    eng_frame_scene fs;
+    eng_rt *rt;
+    uint32_t short_box; /* draw index */
+    float box_min[3], box_max[3];
+} cornell;
+
+static void cornell_open(cornell *c)
+{
+    memset(c, 0, sizeof *c);
+    eng_error err;
+    ck_assert_msg(scn_load_gltf(CORNELL_GLTF, &c->scene, &err) == ENG_OK, "%s", err.msg);
+    const scn_scene *sc = c->scene;
+    c->world = malloc(sc->node_count * 16 * sizeof(float));
+    scn_evaluate(sc, 0.0, c->world);
+    c->fs.scene = sc;
+    c->fs.draws = calloc(sc->primitive_count + 1, sizeof(eng_draw));
+    int32_t box = scn_find_node(sc, "shortBox");
+    ck_assert_int_ge(box, 0);
+    c->short_box = UINT32_MAX;
+    for (uint32_t i = 0; i < sc->node_count; i++) {
+        if (sc->nodes[i].mesh < 0)
+            continue;
+        const scn_mesh *m = &sc->meshes[sc->nodes[i].mesh];
+        for (uint32_t k = 0; k < m->primitive_count; k++) {
+            eng_draw *d = &c->fs.draws[c->fs.draw_count];
+            d->primitive = m->first_primitive + k;
+            d->material = sc->primitives[d->primitive].material;
+            memcpy(d->world, c->world + 16 * i, sizeof d->world);
+            memcpy(d->prev_world, d->world, sizeof d->world);
+            if ((int32_t)i == box) {
+                ck_assert_int_eq(m->primitive_count, 1);
+                c->short_box = c->fs.draw_count;
+                const scn_primitive *p = &sc->primitives[d->primitive];
+                for (int a = 0; a < 3; a++) {
+                    c->box_min[a] = INFINITY;
+                    c->box_max[a] = -INFINITY;
+                }
+                for (uint32_t v = 0; v < p->vertex_count; v++) {
+                    float w[3];
+                    m4_transform_point(d->world, p->positions + 3 * v, w);
+                    for (int a = 0; a < 3; a++) {
+                        c->box_min[a] = fminf(c->box_min[a], w[a]);
+                        c->box_max[a] = fmaxf(c->box_max[a], w[a]);
+                    }
+                }
+            }
+            c->fs.draw_count++;
+        }
+    }
+    ck_assert_uint_ne(c->short_box, UINT32_MAX);
+    ck_assert_int_eq(rt_create(sc, 2, &c->rt, &err), ENG_OK);
+    rt_update(c->rt, &c->fs);
+}
+
+static void cornell_close(cornell *c)
+{
+    rt_destroy(c->rt);
+    free(c->fs.draws);
+    free(c->world);
+    scn_destroy(c->scene);
+}
+
+/* Bounce-map stand-ins: from the light position, photons land on surfaces other than the
+ * short box and leave them cosine-distributed, with the power of a grey first bounce. */
+static size_t cornell_bounce_photons(const cornell *c, const eng_random_maps *rm, size_t want,
+                                     eng_bounce_photon *out)
+{
+    const float light[3] = {0.0f, 1.8f, 0.0f};
+    size_t n = 0;
+    for (uint32_t i = 0; n < want && i < rm->size; i++) {
+        const float *s = rm->sphere + 4 * i;
+        rt_hit h;
+        if (!rt_intersect(c->rt, light, s, 1e-4f, INFINITY, &h) || h.draw == c->short_box)
+            continue;
+        float nrm[3];
+        float side = dot3(h.normal, s) < 0.0f ? 1.0f : -1.0f;
+        for (int a = 0; a < 3; a++)
+            nrm[a] = side * h.normal[a];
+        const float *cd = rm->cosine + 4 * ((i * 7919u) & (rm->size - 1));
+        /* Frame about nrm (any orthonormal one will do for the test). */
+        float t[3] = {0, 0, 0}, b[3];
+        t[fabsf(nrm[0]) < 0.9f ? 0 : 1] = 1.0f;
+        float d = dot3(t, nrm);
+        for (int a = 0; a < 3; a++)
+            t[a] -= d * nrm[a];
+        float tl = len3(t);
+        for (int a = 0; a < 3; a++)
+            t[a] /= tl;
+        b[0] = nrm[1] * t[2] - nrm[2] * t[1];
+        b[1] = nrm[2] * t[0] - nrm[0] * t[2];
+        b[2] = nrm[0] * t[1] - nrm[1] * t[0];
+        eng_bounce_photon *p = &out[n++];
+        memcpy(p->position, h.position, sizeof p->position);
+        for (int a = 0; a < 3; a++)
+            p->direction[a] = cd[0] * t[a] + cd[1] * b[a] + cd[2] * nrm[a];
+        p->power[0] = p->power[1] = p->power[2] = 0.001f;
+        p->path_density = 0.725f / 1000.0f;
+        p->ior = 1.0f;
+    }
+    return n;
+}
+
+START_TEST(determinism_threads)
+{
+    cornell c;
+    cornell_open(&c);
+    eng_random_maps rm;
+    eng_error err;
+    ck_assert_int_eq(rmap_create(0x15B3, 1u << 16, &rm, &err), ENG_OK);
+    const size_t want = 20000;
+    eng_bounce_photon *in = calloc(want, sizeof *in);
+    size_t n = cornell_bounce_photons(&c, &rm, want, in);
+    ck_assert_uint_eq(n, want);
+    in[5].power[0] = in[5].power[1] = in[5].power[2] = 0.0f; /* absorbed in the bounce map */
+    eng_photon_map a = {0}, b = {0};
+    eng_trace_stats sa, sb;
+    eng_trace_settings s1 = {.max_bounces = 4, .threads = 1}, s3 = {.max_bounces = 4, .threads = 3};
+    ck_assert_int_eq(photon_trace(c.rt, &c.fs, &rm, in, n, &s1, &a, &sa, &err), ENG_OK);
+    ck_assert_int_eq(photon_trace(c.rt, &c.fs, &rm, in, n, &s3, &b, &sb, &err), ENG_OK);
+    printf("photon: Cornell %zu bounce photons -> %zu stored (1 thread) / %zu (3 threads)\n", n, a.count, b.count);
+    ck_assert_uint_eq(sa.emitted, n - 1);
+    ck_assert_uint_eq(a.count, b.count);
+    ck_assert_int_eq(memcmp(a.photons, b.photons, a.count * sizeof(eng_photon)), 0);
+    ck_assert_int_eq(memcmp(&sa, &sb, sizeof sa), 0);
+    /* Re-tracing into a used map gives the same map again. */
+    ck_assert_int_eq(photon_trace(c.rt, &c.fs, &rm, in, n, &s3, &b, NULL, &err), ENG_OK);
+    ck_assert_int_eq(memcmp(a.photons, b.photons, a.count * sizeof(eng_photon)), 0);
+    photon_map_free(&a);
+    photon_map_free(&b);
+    free(in);
+    rmap_destroy(&rm);
+    cornell_close(&c);
+}
+END_TEST
+
+typedef struct path {
+    size_t count;
+    eng_photon photons[4];
+} path;
+
+static void trace_each(const cornell *c, const eng_random_maps *rm, const eng_bounce_photon *in, size_t n,
+                       uint32_t salt, path *out)
+{
+    eng_trace_settings s = {.max_bounces = 4, .threads = 1, .salt = salt};
+    eng_photon_map m = {0};
+    eng_error err;
+    for (size_t i = 0; i < n; i++) {
+        ck_assert_int_eq(photon_trace(c->rt, &c->fs, rm, &in[i], 1, &s, &m, NULL, &err), ENG_OK);
+        ck_assert_uint_le(m.count, 4);
+        memset(&out[i], 0, sizeof out[i]);
+        out[i].count = m.count;
+        memcpy(out[i].photons, m.photons, m.count * sizeof(eng_photon));
+    }
+    photon_map_free(&m);
+}
+
+static int touches(const path *p, const float lo[3], const float hi[3])
+{
+    const float e = 1e-3f;
+    for (size_t j = 0; j < p->count; j++) {
+        const float *x = p->photons[j].position;
+        if (x[0] >= lo[0] - e && x[0] <= hi[0] + e && x[1] >= lo[1] - e && x[1] <= hi[1] + e && x[2] >= lo[2] - e &&
+            x[2] <= hi[2] + e)
+            return 1;
+    }
+    return 0;
+}
+
+static int same_path(const path *a, const path *b)
+{
+    return a->count == b->count && memcmp(a->photons, b->photons, a->count * sizeof(eng_photon)) == 0;
+}
+
+START_TEST(frame_coherence)
+{
+    cornell c;
+    cornell_open(&c);
+    eng_random_maps rm;
+    eng_error err;
+    ck_assert_int_eq(rmap_create(0x15B3, 1u << 16, &rm, &err), ENG_OK);
+    const size_t want = 3000;
+    eng_bounce_photon *in = calloc(want, sizeof *in);
+    size_t n = cornell_bounce_photons(&c, &rm, want, in);
+    ck_assert_uint_eq(n, want);
+    path *here = calloc(n, sizeof *here), *away = calloc(n, sizeof *away), *back = calloc(n, sizeof *back),
+         *salted = calloc(n, sizeof *salted);
+    trace_each(&c, &rm, in, n, 0, here);
+
+    /* Move the short box 100 m out of the room's open front. */
+    eng_draw *d = &c.fs.draws[c.short_box];
+    float saved[16];
+    memcpy(saved, d->world, sizeof saved);
+    d->world[14] += 100.0f;
+    rt_update(c.rt, &c.fs);
+    trace_each(&c, &rm, in, n, 0, away);
+    const float lo2[3] = {c.box_min[0], c.box_min[1], c.box_min[2] + 100.0f};
+    const float hi2[3] = {c.box_max[0], c.box_max[1], c.box_max[2] + 100.0f};
+
+    size_t identical = 0, untouched = 0;
+    for (size_t i = 0; i < n; i++) {
+        int t = touches(&here[i], c.box_min, c.box_max) || touches(&away[i], lo2, hi2);
+        int same = same_path(&here[i], &away[i]);
+        identical += (size_t)same;
+        if (!t) {
+            untouched++;
+            ck_assert_msg(same, "path %zu never meets the short box but changed", i);
+        }
+    }
+    printf("photon: frame coherence: %zu/%zu paths bit-identical after moving the short box, %zu never touch it\n",
+           identical, n, untouched);
+    ck_assert_uint_ge(identical * 2, n);
+
+    /* Back in place: exactly the first frame's photons. */
+    memcpy(d->world, saved, sizeof saved);
+    rt_update(c.rt, &c.fs);
+    trace_each(&c, &rm, in, n, 0, back);
+    for (size_t i = 0; i < n; i++)
+        ck_assert(same_path(&here[i], &back[i]));
+
+    /* Per-frame random (salt ≠ 0): paths differ after their first stored photon. */
+    trace_each(&c, &rm, in, n, 1, salted);
+    size_t differ = 0, multi = 0;
+    for (size_t i = 0; i < n; i++) {
+        differ += (size_t)!same_path(&here[i], &salted[i]);
+        multi += here[i].count > 1 || salted[i].count > 1;
+    }
+    printf("photon: salt 1 vs 0: %zu/%zu paths differ (%zu store more than one photon)\n", differ, n, multi);
+    ck_assert_uint_ge(differ * 100, multi * 95);
+    ck_assert_uint_ge(differ * 100, n * 60);
+
+    free(here);
+    free(away);
+    free(back);
+    free(salted);
+    free(in);
+    rmap_destroy(&rm);
+    cornell_close(&c);
+}
+END_TEST
+
+static Suite *photon_suite(void)
+{
+    Suite *s = suite_create("photon");
+    TCase *tc = tcase_create("photon");
+    tcase_set_timeout(tc, 600);
+    tcase_add_test(tc, rmap_tables);
+    tcase_add_test(tc, rmap_hashes);
+    tcase_add_test(tc, bsdf_lambert_roulette);
+    tcase_add_test(tc, bsdf_mirror_and_ggx);
+    tcase_add_test(tc, bsdf_glass);
+    tcase_add_test(tc, rt_known_triangle);
+    tcase_add_test(tc, energy_closed_box);
+    tcase_add_test(tc, determinism_threads);
+    tcase_add_test(tc, frame_coherence);
+    suite_add_tcase(s, tc);
+    return s;
+}
+
+int main(void)
+{
+    SRunner *sr = srunner_create(photon_suite());
+    srunner_run_all(sr, CK_NORMAL);
+    int failed = srunner_ntests_failed(sr);
+    srunner_free(sr);
+    return failed ? EXIT_FAILURE : EXIT_SUCCESS;
+}
