@@ -181,6 +181,11 @@ eng_result pass_splat_create(int width, int height, pass_splat **out, eng_error 
 const glu_target *pass_splat_run(pass_splat *p, const eng_frame_scene *fs, const glu_target *gbuf,
                                  const eng_photon_map *map, const eng_settings *s);
 void pass_splat_destroy(pass_splat *p);
+/* ISPM §5.1 Eq. 2–3 on the CPU, the same kernel shaders/splat.frag.glsl evaluates: d = s − x
+ * (surface point minus photon), n_p the photon's surface normal. Returns κ in 1/m²; 0 outside
+ * the ellipsoid. Integrates to 1 over the photon's surface plane. */
+float splat_kernel(const float d[3], const float n_p[3], float r_xy, float r_z);
+
 /* The kernel radius r_xy of a photon of path density rho (ISPM §2.5/§4.3: large kernels for
  * improbable paths, small for caustics): kernel_radius · clamp((1000 ρ)^(−1/4), 1/4, 2). */
 float splat_radius(float kernel_radius, float rho);

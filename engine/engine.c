@@ -45,6 +45,7 @@ struct eng_engine {
     float *world, *prev_world;
     eng_frame_scene fs;
     float *scratch;
+    size_t scratch_capacity;
     eng_frame_stats stats;
     double readback_ms;
 };
@@ -175,9 +176,6 @@ eng_result eng_create(const eng_desc *desc, eng_engine **out, eng_error *err)
     e->fs.draw_count = ndraws;
     e->fs.lights = xcalloc(nlights, sizeof(eng_light_pose));
     e->fs.light_count = nlights;
-    size_t biggest = (size_t)e->width * (size_t)e->height * 8;
-    size_t sm = (size_t)e->settings.shadow_map_size * (size_t)e->settings.shadow_map_size;
-    e->scratch = xcalloc(biggest > sm ? biggest : sm, sizeof(float));
     *out = e;
     return ENG_OK;
 }
@@ -358,6 +356,16 @@ static int announce(eng_engine *e, int frame, const char *name, int w, int h, in
     return 0;
 }
 
+/* Makes e->scratch hold at least n floats. */
+static void scratch_reserve(eng_engine *e, size_t n)
+{
+    if (n <= e->scratch_capacity)
+        return;
+    free(e->scratch);
+    e->scratch = xcalloc(n, sizeof(float));
+    e->scratch_capacity = n;
+}
+
 /* Reads attachment `index` (layer `layer`) of t with the components in pick, and announces
  * it unless the sequence does not capture it. Returns non-zero if a listener aborted. */
 static int read_and_announce(eng_engine *e, int frame, const char *name, const glu_target *t, int index,
@@ -365,6 +373,7 @@ static int read_and_announce(eng_engine *e, int frame, const char *name, const g
 {
     if (!seq_wants(e->seq, name))
         return 0;
+    scratch_reserve(e, (size_t)t->width * (size_t)t->height * (size_t)nch);
     double t0 = now_ms();
     glu_read(t, index, layer, nch, pick, e->scratch);
     e->readback_ms += now_ms() - t0;
@@ -628,6 +637,7 @@ eng_result eng_render_frame(eng_engine *e, int frame, eng_error *err)
         if (!abort_at && seq_wants(e->seq, "gbuffer.material")) {
             /* Five channels from two targets: material parameters and the id. */
             size_t npix = (size_t)gb->width * (size_t)gb->height;
+            scratch_reserve(e, npix * 6);
             float *mat = e->scratch;
             float *id = e->scratch + npix * 5;
             double r0 = now_ms();

@@ -38,6 +38,19 @@ float splat_radius(float kernel_radius, float rho)
     return kernel_radius * s;
 }
 
+float splat_kernel(const float d[3], const float n_p[3], float r_xy, float r_z)
+{
+    double len = sqrt((double)d[0] * d[0] + (double)d[1] * d[1] + (double)d[2] * d[2]);
+    double t = 0.0;
+    if (len > 0.0) {
+        double c = fabs((double)d[0] * n_p[0] + (double)d[1] * n_p[1] + (double)d[2] * n_p[2]) / len;
+        t = len / r_xy * (1.0 + c * (r_xy - r_z) / r_z);
+    }
+    if (t >= 1.0)
+        return 0.0f;
+    return (float)(2.0 / (ENG_PI * (double)r_xy * r_xy) * (1.0 - t * t));
+}
+
 static void make_icosahedron(float v[12][3], unsigned idx[60])
 {
     const float t = (1.0f + sqrtf(5.0f)) * 0.5f;

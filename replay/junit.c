@@ -54,13 +54,15 @@ void rep_sb_xml(rep_sb *sb, const char *s)
             else
                 cp = (cp << 6) | (p[i] & 0x3F);
         }
-        if (ok) {
-            unsigned min = len == 2 ? 0x80 : len == 3 ? 0x800 : 0x10000;
-            ok = cp >= min && cp <= 0x10FFFF && !(cp >= 0xD800 && cp <= 0xDFFF) && cp != 0xFFFE && cp != 0xFFFF;
-        }
         if (!ok) {
             fffd(sb);
             p++;
+            continue;
+        }
+        unsigned min = len == 2 ? 0x80 : len == 3 ? 0x800 : 0x10000;
+        if (cp < min || cp > 0x10FFFF || (cp >= 0xD800 && cp <= 0xDFFF) || cp == 0xFFFE || cp == 0xFFFF) {
+            fffd(sb); /* well-formed bytes, forbidden character: one replacement for the lot */
+            p += len;
             continue;
         }
         rep_sb_printf(sb, "%.*s", len, (const char *)p);

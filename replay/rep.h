@@ -26,7 +26,8 @@ typedef struct rep_options {
     const char *run_dir;
     const char *golden_dir;   /* NULL: only check the run's integrity and non-finite values */
     const char *tolerances;   /* NULL: <golden_dir>/tolerances.json (missing file = defaults) */
-    const char *report_dir;   /* NULL: <run_dir>/replay ; gets report.json and report.txt */
+    const char *report_dir;   /* NULL: <run_dir>/replay ; gets report.json, report.txt,
+                                 report.junit.xml, report.html and img/ */
     int quiet;                /* summary: only the verdict line and failures */
 } rep_options;
 

@@ -5,7 +5,9 @@
  * differences within tolerance; inside each, the largest error first, non-finite and missing
  * buffers counting as infinite), then one verdict line. report.json carries the same results
  * per frame and per buffer with every metric and the tolerance applied, for tools. Both files
- * are written atomically so a reader never sees half a report. The report's entries are owned
+ * are written atomically so a reader never sees half a report; report.junit.xml (junit.c) and
+ * report.html (report_html.c) are written after them, from the same entries in the same
+ * worst-first order. The report's entries are owned
  * by rep_report and freed by rep_report_free.
  */
 #include "rep_internal.h"

@@ -6,7 +6,8 @@ cd "$(dirname "$0")/.."
 BUILD_DIR=${BUILD_DIR:-build}
 PKGS=(build-essential cmake pkg-config git
       libosmesa6-dev libembree-dev libopenexr-dev libopenimageio-dev openimageio-tools
-      libtinygltf-dev nlohmann-json3-dev libcjson-dev check libsubunit-dev libxxhash-dev)
+      libtinygltf-dev nlohmann-json3-dev libcjson-dev check libsubunit-dev libxxhash-dev
+      chromium libxml2-utils)
 missing=()
 for p in "${PKGS[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

@@ -4,6 +4,7 @@
  * counts and processes is tested end to end (tests/e2e_determinism.sh), since llvmpipe's
  * thread count is fixed per process. */
 #include "eng.h"
+#include "eng_internal.h"
 
 #include <check.h>
 #include <math.h>
@@ -342,8 +343,10 @@ START_TEST(final_display_is_srgb_of_composite)
     const kept *lin = find(&f.keep, "composite.radiance");
     const kept *dir = find(&f.keep, "direct.radiance");
     const kept *disp = find(&f.keep, "final.display");
+    const kept *ind = find(&f.keep, "indirect.radiance");
+    ck_assert(ind != NULL);
     for (size_t i = 0; i < (size_t)48 * 48 * 3; i++) {
-        ck_assert(lin->data[i] == dir->data[i]); /* no indirect yet: composite = direct */
+        ck_assert(lin->data[i] == dir->data[i] + ind->data[i]); /* composite = direct + indirect */
         double v = lin->data[i] < 0 ? 0 : lin->data[i] > 1 ? 1 : lin->data[i];
         double s = v <= 0.0031308 ? 12.92 * v : 1.055 * pow(v, 1.0 / 2.4) - 0.055;
         ck_assert_msg(fabs(s - disp->data[i]) < 2e-5, "display %f vs sRGB %f", disp->data[i], s);
@@ -417,6 +420,263 @@ START_TEST(directional_light_matches_closed_form)
 }
 END_TEST
 
+
+/* ---------------------------------------------------------------- indirect light (ISPM) */
+
+static void setup_cornell(fixture *f, int size, int frames, double fps, const char *extra)
+{
+    char json[1200];
+    snprintf(json, sizeof json,
+             "{\"name\":\"test\",\"scene\":\"%s\",\"frames\":%d,\"fps\":%g,\"resolution\":[%d,%d],"
+             "\"camera\":{\"node\":\"Camera\"},\"settings\":{\"shadow_map_size\":128%s%s}}",
+             CORNELL_GLTF, frames, fps, size, size, extra[0] ? "," : "", extra);
+    setup_json(f, json);
+}
+
+/* ISPM §5.1 Eq. 2–3: the kernel integrates to 1 over the photon's surface plane, vanishes
+ * beyond r_xy in the plane and beyond r_z along n_p. */
+START_TEST(kernel_integrates_to_one_over_the_surface_plane)
+{
+    const float n[3] = {0.0f, 0.0f, 1.0f};
+    const float radii[3][2] = {{0.1f, 0.025f}, {0.5f, 0.5f}, {0.03f, 0.003f}};
+    for (int k = 0; k < 3; k++) {
+        float r = radii[k][0], rz = radii[k][1];
+        int steps = 800;
+        double h = 2.0 * r / steps, sum = 0.0;
+        for (int i = 0; i < steps; i++)
+            for (int j = 0; j < steps; j++) {
+                float d[3] = {(float)(-r + (i + 0.5) * h), (float)(-r + (j + 0.5) * h), 0.0f};
+                sum += splat_kernel(d, n, r, rz) * h * h;
+            }
+        ck_assert_msg(fabs(sum - 1.0) < 1e-3, "r=%g: integral %f", r, sum);
+        float out_plane[3] = {r * 1.001f, 0, 0}, out_normal[3] = {0, 0, rz * 1.001f}, in_normal[3] = {0, 0, rz * 0.5f};
+        ck_assert(splat_kernel(out_plane, n, r, rz) == 0.0f);
+        ck_assert(splat_kernel(out_normal, n, r, rz) == 0.0f);
+        ck_assert(splat_kernel(in_normal, n, r, rz) > 0.0f);
+    }
+}
+END_TEST
+
+/* Decodes the photons.map buffer (14 channels, one photon per pixel, zero padding). */
+static size_t photons_of(const kept *pm, eng_photon *out, size_t cap)
+{
+    size_t n = 0, all = (size_t)pm->w * pm->h;
+    for (size_t i = 0; i < all && n < cap; i++) {
+        const float *d = pm->data + 14 * i;
+        if (d[13] == 0.0f)
+            continue;
+        eng_photon *p = &out[n++];
+        memcpy(p->position, d, 12);
+        memcpy(p->direction, d + 3, 12);
+        memcpy(p->power, d + 6, 12);
+        memcpy(p->normal, d + 9, 12);
+        p->path_density = d[12];
+        p->bounce = (uint32_t)d[13];
+    }
+    return n;
+}
+
+/* The rasterised photon volumes give what a CPU gather with the same kernel gives (ISPM §5:
+ * scattering is "mathematically identical" to gathering): Eq. 1 summed over the photon map at
+ * every G-buffer pixel. */
+START_TEST(photon_volumes_equal_a_cpu_gather)
+{
+    fixture f;
+    setup_cornell(&f, 48, 1, 8, "\"photon_count\":2048,\"kernel_radius\":0.2");
+    render(&f, 0);
+    const kept *pm = find(&f.keep, "photons.map");
+    const kept *pos = find(&f.keep, "gbuffer.position");
+    const kept *nrm = find(&f.keep, "gbuffer.normal");
+    const kept *alb = find(&f.keep, "gbuffer.albedo");
+    const kept *sp = find(&f.keep, "splat.indirect");
+    ck_assert(pm && pos && nrm && alb && sp && find(&f.keep, "indirect.radiance"));
+    size_t cap = (size_t)pm->w * pm->h;
+    eng_photon *ph = malloc(cap * sizeof *ph);
+    size_t n = photons_of(pm, ph, cap);
+    ck_assert_int_gt(n, 500);
+    int lit = 0;
+    double worst = 0.0;
+    for (size_t i = 0; i < (size_t)48 * 48; i++) {
+        const float *s = pos->data + 3 * i, *sn = nrm->data + 3 * i;
+        if (sn[0] == 0.0f && sn[1] == 0.0f && sn[2] == 0.0f)
+            continue;
+        double sum[3] = {0, 0, 0};
+        for (size_t k = 0; k < n; k++) {
+            float d[3] = {s[0] - ph[k].position[0], s[1] - ph[k].position[1], s[2] - ph[k].position[2]};
+            float r = splat_radius(0.2f, ph[k].path_density);
+            float kap = splat_kernel(d, ph[k].normal, r, r * f.seq.settings.normal_compression);
+            float c = ph[k].direction[0] * sn[0] + ph[k].direction[1] * sn[1] + ph[k].direction[2] * sn[2];
+            if (kap <= 0.0f || c <= 0.0f)
+                continue;
+            for (int ch = 0; ch < 3; ch++)
+                sum[ch] += alb->data[3 * i + ch] / PI_D * c * ph[k].power[ch] * kap;
+        }
+        for (int ch = 0; ch < 3; ch++) {
+            double got = sp->data[3 * i + ch];
+            double err = fabs(got - sum[ch]) / (fabs(sum[ch]) + 1e-4);
+            if (err > worst)
+                worst = err;
+            ck_assert_msg(err < 2e-3, "pixel %zu ch %d: splat %g, gather %g", i, ch, got, sum[ch]);
+        }
+        if (sum[0] > 1e-3)
+            lit++;
+    }
+    fprintf(stderr, "splat vs gather: %zu photons, %d lit pixels, worst relative difference %.2e\n", n, lit, worst);
+    ck_assert_int_gt(lit, 48 * 48 / 2);
+    free(ph);
+    teardown(&f);
+}
+END_TEST
+
+/* Sorts photons by their bytes so two maps can be compared as multisets. */
+static int photon_cmp(const void *a, const void *b)
+{
+    return memcmp(a, b, sizeof(eng_photon));
+}
+
+static size_t common_photons(eng_photon *a, size_t na, eng_photon *b, size_t nb)
+{
+    qsort(a, na, sizeof *a, photon_cmp);
+    qsort(b, nb, sizeof *b, photon_cmp);
+    size_t i = 0, j = 0, same = 0;
+    while (i < na && j < nb) {
+        int c = photon_cmp(&a[i], &b[j]);
+        if (c == 0) {
+            same++;
+            i++;
+            j++;
+        } else if (c < 0)
+            i++;
+        else
+            j++;
+    }
+    return same;
+}
+
+static kept copy_kept(const kept *k)
+{
+    kept c = *k;
+    size_t sz = (size_t)k->w * k->h * k->n * sizeof(float);
+    c.data = malloc(sz);
+    memcpy(c.data, k->data, sz);
+    return c;
+}
+
+/* Frame coherence (ISPM §4.1, 001_… §3.1): with precomputed random maps, when nothing moves
+ * the photon map and the indirect buffer are bit-identical from frame to frame; when the short
+ * box moves, photons whose paths never touch it keep their exact values; per-frame random
+ * changes (nearly) everything. fps 0.5 puts frames 1 and 2 after the animation's end. */
+static void coherence(const char *random, size_t *static_diff, double *moved_same)
+{
+    fixture f;
+    char extra[128];
+    snprintf(extra, sizeof extra, "\"photon_count\":2048,\"random\":\"%s\"", random);
+    setup_cornell(&f, 32, 3, 0.5, extra);
+    render(&f, 1);
+    kept pm1 = copy_kept(find(&f.keep, "photons.map")), in1 = copy_kept(find(&f.keep, "indirect.radiance"));
+    render(&f, 2);
+    const kept *pm2 = find(&f.keep, "photons.map"), *in2 = find(&f.keep, "indirect.radiance");
+    size_t d = 0;
+    if (pm1.w != pm2->w || pm1.h != pm2->h)
+        d = 1;
+    else
+        d += memcmp(pm1.data, pm2->data, (size_t)pm1.w * pm1.h * 14 * sizeof(float)) != 0;
+    d += memcmp(in1.data, in2->data, (size_t)in1.w * in1.h * 3 * sizeof(float)) != 0;
+    *static_diff = d;
+    /* Frame 0 (box at rest) against frame 1 (box at the end of its slide). */
+    render(&f, 0);
+    const kept *pm0 = find(&f.keep, "photons.map");
+    size_t cap0 = (size_t)pm0->w * pm0->h, cap1 = (size_t)pm1.w * pm1.h;
+    eng_photon *a = calloc(cap0, sizeof *a), *b = calloc(cap1, sizeof *b);
+    size_t na = photons_of(pm0, a, cap0), nb = photons_of(&pm1, b, cap1);
+    *moved_same = (double)common_photons(a, na, b, nb) / (double)(na > nb ? na : nb);
+    free(a);
+    free(b);
+    free(pm1.data);
+    free(in1.data);
+    teardown(&f);
+}
+
+START_TEST(random_maps_give_frame_coherence)
+{
+    size_t diff;
+    double same;
+    coherence("maps", &diff, &same);
+    fprintf(stderr, "random maps: static frames differ in %zu buffers; %.1f%% of photons unchanged when the box moves\n",
+            diff, same * 100);
+    ck_assert_int_eq(diff, 0);
+    ck_assert_msg(same > 0.3, "only %.1f%% of photons kept their values", same * 100);
+    coherence("per-frame", &diff, &same);
+    fprintf(stderr, "per-frame random: static frames differ in %zu buffers; %.1f%% of photons unchanged\n", diff,
+            same * 100);
+    ck_assert_int_eq(diff, 2);
+    ck_assert_msg(same < 0.05, "%.1f%% of photons unchanged with per-frame random", same * 100);
+}
+END_TEST
+
+/* Mean of channel c over a kept buffer. */
+static double mean_of(const kept *k, int c)
+{
+    double s = 0.0;
+    size_t n = (size_t)k->w * k->h;
+    for (size_t i = 0; i < n; i++)
+        s += k->data[i * k->n + c];
+    return s / (double)n;
+}
+
+typedef struct settings_probe {
+    uint64_t emitted;
+    uint32_t max_bounce;
+    double mean_count;
+} settings_probe;
+
+static settings_probe probe_settings(const char *extra)
+{
+    fixture f;
+    setup_cornell(&f, 32, 1, 8, extra);
+    render(&f, 0);
+    settings_probe r = {f.keep.last_stats.photons_emitted, 0, mean_of(find(&f.keep, "splat.count"), 0)};
+    const kept *pm = find(&f.keep, "photons.map");
+    for (size_t i = 0; i < (size_t)pm->w * pm->h; i++)
+        if (pm->data[14 * i + 13] > (float)r.max_bounce)
+            r.max_bounce = (uint32_t)pm->data[14 * i + 13];
+    teardown(&f);
+    return r;
+}
+
+START_TEST(settings_change_what_they_should)
+{
+    settings_probe base = probe_settings("\"photon_count\":2048");
+    settings_probe more = probe_settings("\"photon_count\":8192");
+    settings_probe one = probe_settings("\"photon_count\":2048,\"bounces\":1");
+    settings_probe wide = probe_settings("\"photon_count\":2048,\"kernel_radius\":0.3");
+    settings_probe flat = probe_settings("\"photon_count\":2048,\"normal_compression\":0.05");
+    ck_assert_msg(more.emitted > 3 * base.emitted, "emitted %llu vs %llu", (unsigned long long)more.emitted,
+                  (unsigned long long)base.emitted);
+    ck_assert_uint_eq(one.max_bounce, 2);
+    ck_assert_uint_ge(base.max_bounce, 3);
+    ck_assert_msg(wide.mean_count > 2.0 * base.mean_count, "kernel radius: coverage %f vs %f", wide.mean_count,
+                  base.mean_count);
+    ck_assert_msg(flat.mean_count < base.mean_count, "normal compression: coverage %f vs %f", flat.mean_count,
+                  base.mean_count);
+    ck_assert(more.mean_count > 3.0 * base.mean_count);
+}
+END_TEST
+
+START_TEST(indirect_none_announces_no_photon_buffers)
+{
+    fixture f;
+    setup_cornell(&f, 16, 1, 8, "\"indirect\":\"none\"");
+    render(&f, 0);
+    ck_assert(find(&f.keep, "photons.map") == NULL);
+    ck_assert(find(&f.keep, "bounce.light0.face0") == NULL);
+    ck_assert(find(&f.keep, "indirect.radiance") == NULL);
+    const kept *c = find(&f.keep, "composite.radiance"), *d = find(&f.keep, "direct.radiance");
+    ck_assert(memcmp(c->data, d->data, (size_t)16 * 16 * 3 * sizeof(float)) == 0);
+    teardown(&f);
+}
+END_TEST
+
 static int refuse_buffer(void *user, int frame, const eng_buffer *b)
 {
     (void)frame;
@@ -458,6 +718,14 @@ static Suite *engine_suite(void)
     tcase_add_test(a, spot_light_matches_closed_form);
     tcase_add_test(a, directional_light_matches_closed_form);
     suite_add_tcase(s, a);
+    TCase *ind = tcase_create("indirect");
+    tcase_set_timeout(ind, 600);
+    tcase_add_test(ind, kernel_integrates_to_one_over_the_surface_plane);
+    tcase_add_test(ind, photon_volumes_equal_a_cpu_gather);
+    tcase_add_test(ind, random_maps_give_frame_coherence);
+    tcase_add_test(ind, settings_change_what_they_should);
+    tcase_add_test(ind, indirect_none_announces_no_photon_buffers);
+    suite_add_tcase(s, ind);
     return s;
 }
 

@@ -1435,7 +1435,7 @@ START_TEST(report_xml_escapes_everything)
     rep_sb_xml(&sb, "a<b>&\"c'\x01\tz\xff\xc3\xa9\xed\xa0\x80\xef\xbf\xbe");
     /* é (U+00E9) is kept; a control byte, a stray 0xFF, a UTF-16 surrogate and U+FFFE are not. */
     ck_assert_str_eq(sb.s, "a&lt;b&gt;&amp;&quot;c&#39;\xEF\xBF\xBD\tz\xEF\xBF\xBD\xC3\xA9"
-                           "\xEF\xBF\xBD\xEF\xBF\xBD\xEF\xBF\xBD\xEF\xBF\xBD");
+                           "\xEF\xBF\xBD\xEF\xBF\xBD");
     free(sb.s);
 
     rep_report r;
