@@ -38,7 +38,8 @@ typedef struct cap_desc {
      * (else ENG_ERR_INVALID) and no manifest.json (a complete run; ENG_ERR_INVALID). Every
      * frame whose frames/NNNNNN.exr and frames/NNNNNN.json both exist counts as captured
      * (cap_frame_done), its record read back from the .json; a frame with only one of the
-     * two is removed, to be rendered again. Ignores overwrite. */
+     * two is removed, to be rendered again. A folder that holds no part of a run (killed
+     * before run.json was written, or never recorded) gets a new run. Ignores overwrite. */
     int resume;
 } cap_desc;
 

@@ -255,7 +255,7 @@ static eng_result remove_file(const char *path, eng_error *err)
 
 /* Prepares run_dir as cap_create documents (the resume checks of run.json's content and the
  * frames come later, in cap_create). */
-static eng_result prepare_run_dir(const char *run_dir, const char *frames_dir, int overwrite, int resume,
+static eng_result prepare_run_dir(const char *run_dir, const char *frames_dir, int overwrite, int *resume,
                                   eng_error *err)
 {
     eng_result r = make_dirs(run_dir, err);
@@ -267,7 +267,10 @@ static eng_result prepare_run_dir(const char *run_dir, const char *frames_dir, i
     char *runinfo_tmp = cap__join(run_dir, RUNINFO_TMP_NAME);
     int has_manifest = path_exists(manifest), has_runinfo = path_exists(runinfo), has_frames = 0;
     r = frames_present(frames_dir, &has_frames, err);
-    if (r == ENG_OK && resume) {
+    /* Killed before run.json was written, the folder holds nothing to keep: start afresh. */
+    if (r == ENG_OK && *resume && !has_manifest && !has_runinfo && !has_frames)
+        *resume = 0;
+    if (r == ENG_OK && *resume) {
         if (has_manifest)
             r = eng_fail(err, ENG_ERR_INVALID, "%s: the run is complete (it has %s): nothing to resume", run_dir,
                          MANIFEST_NAME);
@@ -279,7 +282,7 @@ static eng_result prepare_run_dir(const char *run_dir, const char *frames_dir, i
                      run_dir);
     /* The manifest goes first, so that no crash leaves it beside frames it does not describe;
      * then run.json, so that no crash leaves a resumable run of the old sequence. */
-    if (r == ENG_OK && !resume && (has_manifest || has_runinfo)) {
+    if (r == ENG_OK && !*resume && (has_manifest || has_runinfo)) {
         if ((r = remove_file(manifest, err)) == ENG_OK && (r = cap__fsync_dir(run_dir, err)) == ENG_OK &&
             (r = remove_file(runinfo, err)) == ENG_OK)
             r = cap__fsync_dir(run_dir, err);
@@ -291,7 +294,7 @@ static eng_result prepare_run_dir(const char *run_dir, const char *frames_dir, i
     if (r == ENG_OK)
         r = make_dirs(frames_dir, err);
     if (r == ENG_OK)
-        r = clean_frames(frames_dir, overwrite && !resume, err);
+        r = clean_frames(frames_dir, overwrite && !*resume, err);
     free(manifest);
     free(manifest_tmp);
     free(runinfo);
@@ -322,7 +325,8 @@ eng_result cap_create(const cap_desc *desc, cap_capture **out, eng_error *err)
     cap_capture *c = cap__xcalloc(1, sizeof *c);
     c->run_dir = cap__xstrdup(desc->run_dir);
     c->frames_dir = cap__join(desc->run_dir, "frames");
-    eng_result r = prepare_run_dir(c->run_dir, c->frames_dir, desc->overwrite, desc->resume, err);
+    int resume = desc->resume;
+    eng_result r = prepare_run_dir(c->run_dir, c->frames_dir, desc->overwrite, &resume, err);
     if (r != ENG_OK) {
         cap_destroy(c);
         return r;
@@ -347,7 +351,7 @@ eng_result cap_create(const cap_desc *desc, cap_capture **out, eng_error *err)
     c->frames = cap__xcalloc((size_t)c->frame_count, sizeof *c->frames);
     c->cur_frame = -1;
     c->status = ENG_OK;
-    r = desc->resume ? resume_run(c, err) : write_runinfo(c, err);
+    r = resume ? resume_run(c, err) : write_runinfo(c, err);
     if (r != ENG_OK) {
         cap_destroy(c);
         return r;

@@ -124,6 +124,24 @@ static int channel_index(const eng_buffer *b, const char *name)
     return -1;
 }
 
+/* The library's compressor for the chunk being encoded on this thread (see zip_safe_compress). */
+static _Thread_local exr_result_t (*library_compress)(exr_encode_pipeline_t *);
+
+/* OpenEXR up to 3.4.7 (Debian 12 ships 3.1.5) keeps the zlib output of a ZIP/ZIPS chunk when
+ * it is exactly as long as the raw packed pixels, but a reader takes a chunk of that length for
+ * uncompressed data and decodes the zlib bytes as pixels: silently wrong values, which replay
+ * then reports as a tampered frame (upstream issue #2306, fixed by storing the raw bytes when
+ * compression does not shrink them). This wrapper applies that fix: same size, raw bytes. */
+static exr_result_t zip_safe_compress(exr_encode_pipeline_t *enc)
+{
+    exr_result_t rv = library_compress(enc);
+    if (rv == EXR_ERR_SUCCESS && enc->compressed_buffer && enc->packed_buffer &&
+        enc->compressed_buffer != enc->packed_buffer && enc->compressed_bytes == enc->packed_bytes &&
+        enc->compressed_alloc_size >= enc->packed_bytes)
+        memcpy(enc->compressed_buffer, enc->packed_buffer, enc->packed_bytes);
+    return rv;
+}
+
 /* Encodes every scanline chunk of one part, top to bottom. */
 static exr_result_t write_part_pixels(exr_context_t ctxt, int part, const eng_buffer *b)
 {
@@ -167,6 +185,10 @@ static exr_result_t write_part_pixels(exr_context_t ctxt, int part, const eng_bu
             if (rv != EXR_ERR_SUCCESS)
                 break;
             routines = 1;
+        }
+        if (enc.compress_fn && enc.compress_fn != zip_safe_compress) {
+            library_compress = enc.compress_fn;
+            enc.compress_fn = zip_safe_compress;
         }
         rv = exr_encoding_run(ctxt, part, &enc);
     }

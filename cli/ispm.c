@@ -267,7 +267,7 @@ static int cmd_replay(int argc, char **argv)
     else {
         char dir[4096];
         snprintf(dir, sizeof dir, "%s", o.report_dir ? o.report_dir : o.run_dir);
-        printf("report: %s%s/report.txt (and report.json)\n", dir, o.report_dir ? "" : "/replay");
+        printf("report: %s%s/report.html (and report.txt, report.json, report.junit.xml)\n", dir, o.report_dir ? "" : "/replay");
     }
     return (int)rc;
 }

@@ -201,7 +201,7 @@ static eng_result parse_settings(parser *P, const cJSON *obj, eng_settings *s)
         (r = get_int(P, it, "settings.photon_count", 6, 1 << 22, &s->photon_count)))
         return r;
     if ((it = cJSON_GetObjectItemCaseSensitive(obj, "bounces")) &&
-        (r = get_int(P, it, "settings.bounces", 1, 15, &s->bounces)))
+        (r = get_int(P, it, "settings.bounces", 1, 14, &s->bounces)))
         return r;
     if ((it = cJSON_GetObjectItemCaseSensitive(obj, "random_seed")) &&
         (r = get_int(P, it, "settings.random_seed", 1, 2147483647, &s->random_seed)))

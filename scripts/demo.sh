@@ -14,5 +14,5 @@ set +e
 rc=$?
 set -e
 echo "run:    $RUN"
-echo "report: $RUN/replay/report.txt"
+echo "report: $RUN/replay/report.html (and report.txt, report.json, report.junit.xml)"
 exit $rc

@@ -44,4 +44,14 @@ rm "$WORK/nomanifest/manifest.json"
 "$ISPM" replay "$WORK/nomanifest" --golden "$GOLDEN" > /dev/null 2>&1; rc=$?
 [ $rc -eq 4 ] || fail "missing manifest: replay exited $rc, want 4"
 
+# The ISPM scenes replay against their goldens too: the caustic ring (mirror, spot light,
+# rotating) and the glass sphere (refractive caustic).
+for seq in caustic-ring/caustic-ring-ci cornell-box/cornell-glass-ci; do
+  name=$(basename "$seq")
+  "$ISPM" record "$SRC/scenes/$seq.json" -o "$WORK/$name" --quiet || fail "record $name"
+  "$ISPM" replay "$WORK/$name" --golden "$SRC/golden/$name" --quiet > "$WORK/$name.out"; rc=$?
+  cat "$WORK/$name.out"
+  [ $rc -eq 0 ] || fail "$name: replay against golden exited $rc"
+done
+
 echo "e2e_regression: ok"

@@ -677,6 +677,82 @@ START_TEST(indirect_none_announces_no_photon_buffers)
 }
 END_TEST
 
+
+static void cross3(const double a[3], const double b[3], double o[3])
+{
+    o[0] = a[1] * b[2] - a[2] * b[1];
+    o[1] = a[2] * b[0] - a[0] * b[2];
+    o[2] = a[0] * b[1] - a[1] * b[0];
+}
+
+/* The bounce map draws its random numbers from the precomputed maps at seed =
+ * rmap_hash_pixel(light, texel, face) (ISPM §4.1): recompute, on the CPU, the Lambertian
+ * photons of the face looking down (−Y) and compare with what the shader stored: same
+ * Russian-roulette decision, same outgoing direction. */
+START_TEST(bounce_map_uses_the_random_maps_at_hashed_seeds)
+{
+    fixture f;
+    setup_cornell(&f, 16, 1, 8, "\"photon_count\":6144");
+    render(&f, 0);
+    const kept *bm = find(&f.keep, "bounce.light0.face3");
+    const kept *lp = find(&f.keep, "lightgbuffer.light0.face3.position");
+    const kept *ln = find(&f.keep, "lightgbuffer.light0.face3.normal");
+    const kept *la = find(&f.keep, "lightgbuffer.light0.face3.albedo");
+    ck_assert(bm && lp && ln && la);
+    ck_assert_int_eq(bm->n, 8);
+    eng_random_maps rm;
+    eng_error err;
+    ck_assert_int_eq(rmap_create(1, 65536, &rm, &err), ENG_OK);
+    const float light[3] = {0.0f, 1.8f, 0.0f};
+    int size = bm->w, checked = 0, absorbed = 0;
+    for (int row = 0; row < size; row++)
+        for (int x = 0; x < size; x++) {
+            size_t i = (size_t)row * size + x;
+            const float *p = lp->data + 3 * i;
+            double wi[3] = {light[0] - p[0], light[1] - p[1], light[2] - p[2]};
+            double l = sqrt(wi[0] * wi[0] + wi[1] * wi[1] + wi[2] * wi[2]);
+            double n[3] = {ln->data[3 * i], ln->data[3 * i + 1], ln->data[3 * i + 2]};
+            if (n[0] * wi[0] + n[1] * wi[1] + n[2] * wi[2] < 0)
+                for (int c = 0; c < 3; c++)
+                    n[c] = -n[c];
+            uint32_t seed = rmap_hash_pixel(light, (uint32_t)x, (uint32_t)(size - 1 - row), 3, 0);
+            const float *u = rm.uniform + 4 * (seed & 65535u);
+            const float *d = rm.cosine + 4 * ((seed + 1u) & 65535u);
+            const float *a = la->data + 3 * i;
+            double pmax = fmax(a[0], fmax(a[1], a[2]));
+            const float *b = bm->data + 8 * i;
+            int survived = b[0] > 0.0f || b[1] > 0.0f || b[2] > 0.0f;
+            ck_assert_int_eq(survived, u[2] < pmax);
+            (void)l;
+            if (!survived) {
+                absorbed++;
+                continue;
+            }
+            double ax[3] = {fabs(n[0]) > 0.9 ? 0.0 : 1.0, fabs(n[0]) > 0.9 ? 1.0 : 0.0, 0.0}, t[3], bb[3];
+            cross3(ax, n, t);
+            double tl = sqrt(t[0] * t[0] + t[1] * t[1] + t[2] * t[2]);
+            for (int c = 0; c < 3; c++)
+                t[c] /= tl;
+            cross3(n, t, bb);
+            double wo[3], wl = 0.0;
+            for (int c = 0; c < 3; c++) {
+                wo[c] = t[c] * d[0] + bb[c] * d[1] + n[c] * d[2];
+                wl += wo[c] * wo[c];
+            }
+            for (int c = 0; c < 3; c++)
+                ck_assert_msg(fabs(wo[c] / sqrt(wl) - b[3 + c]) < 1e-4, "texel (%d,%d): direction %f vs %f", x, row,
+                              b[3 + c], wo[c] / sqrt(wl));
+            ck_assert_float_eq_tol(b[6], pmax / 1000.0, 1e-9); /* ρp = ρL/1000 (ISPM §4.3) */
+            checked++;
+        }
+    fprintf(stderr, "bounce map: %d photons recomputed on the CPU, %d absorbed\n", checked, absorbed);
+    ck_assert_int_gt(checked, 100);
+    ck_assert_int_gt(absorbed, 10);
+    rmap_destroy(&rm);
+    teardown(&f);
+}
+END_TEST
+
 static int refuse_buffer(void *user, int frame, const eng_buffer *b)
 {
     (void)frame;
@@ -721,6 +797,7 @@ static Suite *engine_suite(void)
     TCase *ind = tcase_create("indirect");
     tcase_set_timeout(ind, 600);
     tcase_add_test(ind, kernel_integrates_to_one_over_the_surface_plane);
+    tcase_add_test(ind, bounce_map_uses_the_random_maps_at_hashed_seeds);
     tcase_add_test(ind, photon_volumes_equal_a_cpu_gather);
     tcase_add_test(ind, random_maps_give_frame_coherence);
     tcase_add_test(ind, settings_change_what_they_should);

@@ -252,7 +252,7 @@ static void draw_left(app *ap, int h)
         text(ap, 6, y, 0xc0c0ff, LEFT_W - 10, line);
         y += ap->line_h;
     }
-    snprintf(line, sizeof line, "frame %d / %d", ap->s.frame, ap->s.frame_count);
+    snprintf(line, sizeof line, "frame %d of 0..%d", ap->s.frame, ap->s.frame_count - 1);
     text(ap, 6, y, 0xffffff, LEFT_W - 10, line);
     y += ap->line_h + 4;
     int rows = (h - BOTTOM_H - y) / ap->line_h;
@@ -299,8 +299,8 @@ static void draw_series(app *ap, int x, int y, int w, int h)
         prev_y = py;
     }
     char line[128];
-    snprintf(line, sizeof line, "%.5g .. %.5g", (double)lo, (double)hi);
-    text(ap, x + 2, y + 1, 0x909090, w - 4, line);
+    snprintf(line, sizeof line, "min %.5g  max %.5g", (double)lo, (double)hi);
+    text(ap, x, y + h + 2, 0x909090, w, line);
 }
 
 static void draw_right(app *ap, int w, int h, const eng_buffer *bufs, int count,
@@ -311,7 +311,7 @@ static void draw_right(app *ap, int w, int h, const eng_buffer *bufs, int count,
     char line[1024];
     int px = ap->hover ? ap->hover_x : ap->pin_x, py = ap->hover ? ap->hover_y : ap->pin_y;
     int have = ap->hover || ap->pinned;
-    int series_h = 70, list_max = y_max - series_h - 3 * ap->line_h;
+    int series_h = 70, list_max = y_max - series_h - 4 * ap->line_h;
     if (!have) {
         text_wrapped(ap, x0 + 6, &y, RIGHT_W - 12, list_max, 0xb0b0b0,
                      "probe: move the cursor over the image");
@@ -330,7 +330,7 @@ static void draw_right(app *ap, int w, int h, const eng_buffer *bufs, int count,
             text_wrapped(ap, x0 + 6, &y, RIGHT_W - 12, list_max, 0xc0c0ff, bl);
         }
     }
-    y = y_max - series_h - 2 * ap->line_h;
+    y = y_max - series_h - 3 * ap->line_h;
     if (ap->pinned) {
         snprintf(line, sizeof line, "%s at (%d, %d), frames %d..%d", ap->buffer_name, ap->pin_x,
                  ap->pin_y, ap->series_first, ap->series_first + ap->series_count - 1);
@@ -370,7 +370,11 @@ static void draw_bottom(app *ap, int w, int h, const eng_buffer *a, const char *
 static void draw_help(app *ap, int w, int h)
 {
     int n = (int)(sizeof HELP / sizeof HELP[0]);
-    int bw = 46 * ap->char_w + 24, bh = n * ap->line_h + 20;
+    int longest = 0;
+    for (int i = 0; i < n; i++)
+        if ((int)strlen(HELP[i]) > longest)
+            longest = (int)strlen(HELP[i]);
+    int bw = longest * ap->char_w + 24, bh = n * ap->line_h + 20;
     int x = (w - bw) / 2, y = (h - bh) / 2;
     SDL_SetRenderDrawBlendMode(ap->ren, SDL_BLENDMODE_BLEND);
     fill(ap, x, y, bw, bh, 0x000000, 235);
@@ -662,10 +666,18 @@ int main(int argc, char **argv)
         return 2;
     }
 
+    /* SDL falls back to its "offscreen" driver when there is no display, which would run
+     * invisibly forever: without a display (or an explicit SDL_VIDEODRIVER) stop here. */
     int rc = 0;
-    if (SDL_Init(SDL_INIT_VIDEO) != 0) {
-        fprintf(stderr, "ispm-view: cannot open a window (no display? set DISPLAY or use xvfb-run): %s\n",
-                SDL_GetError());
+    const char *driver_env = getenv("SDL_VIDEODRIVER");
+    int explicit_driver = driver_env && *driver_env;
+    const char *display = getenv("DISPLAY"), *wayland = getenv("WAYLAND_DISPLAY");
+    if ((!explicit_driver && !(display && *display) && !(wayland && *wayland)) ||
+        SDL_Init(SDL_INIT_VIDEO) != 0 ||
+        (!explicit_driver && (!strcmp(SDL_GetCurrentVideoDriver(), "offscreen") ||
+                              !strcmp(SDL_GetCurrentVideoDriver(), "dummy")))) {
+        fprintf(stderr, "ispm-view: cannot open a window: no display (set DISPLAY, or run under xvfb-run)\n");
+        SDL_Quit();
         view_run_close(ap.a);
         view_run_close(ap.b);
         return 1;

@@ -12,7 +12,9 @@
 //   directional: Φ = E · (2h/n)²  for an ortho box of half-width h.
 // Random numbers come from the precomputed random maps (001_… §3.1), read from entry
 // seed + k, with seed = hash(light position, texel, face) (003_… §4.1), so texels that see
-// the same surface get the same photon every frame.
+// the same surface get the same photon every frame. The hash is XXH32 of the six 32-bit
+// words (light x, y, z bits with −0 made +0; texel x, y; face) seeded with the salt, i.e.
+// exactly rmap_hash_pixel in engine/random_maps.c, so the CPU can recompute any seed.
 //
 // BSDF sampling (kept in step with engine/bsdf.c): opaque dielectrics Lambertian (cosine
 // sampling, weight = albedo, ρ factor ρL/1000 per §4.3); metals GGX (Walter et al. 2007,
@@ -41,12 +43,33 @@ uniform uint u_salt;
 layout(location = 0) out vec4 o_power;     // Φ_o RGB, path density ρp
 layout(location = 1) out vec4 o_direction; // ω_o, index of refraction of the medium after the bounce
 
-uint mix32(uint x)
+// XXH32 (Yann Collet) of 6 little-endian 32-bit words: one 16-byte stripe, then 2 words.
+const uint P1 = 2654435761u, P2 = 2246822519u, P3 = 3266489917u, P4 = 668265263u, P5 = 374761393u;
+
+uint rotl(uint x, int r)
 {
-    x ^= x >> 16; x *= 0x7feb352du;
-    x ^= x >> 15; x *= 0x846ca68bu;
-    x ^= x >> 16;
-    return x;
+    return (x << r) | (x >> (32 - r));
+}
+
+uint xxh_round(uint acc, uint w)
+{
+    return rotl(acc + w * P2, 13) * P1;
+}
+
+uint xxh32_6(uint w0, uint w1, uint w2, uint w3, uint w4, uint w5, uint seed)
+{
+    uint v1 = xxh_round(seed + P1 + P2, w0);
+    uint v2 = xxh_round(seed + P2, w1);
+    uint v3 = xxh_round(seed, w2);
+    uint v4 = xxh_round(seed - P1, w3);
+    uint h = rotl(v1, 1) + rotl(v2, 7) + rotl(v3, 12) + rotl(v4, 18);
+    h += 24u;
+    h = rotl(h + w4 * P3, 17) * P4;
+    h = rotl(h + w5 * P3, 17) * P4;
+    h ^= h >> 15; h *= P2;
+    h ^= h >> 13; h *= P3;
+    h ^= h >> 16;
+    return h;
 }
 
 vec4 rmap(int table, uint seed, uint k)
@@ -119,9 +142,9 @@ void main()
     vec3 n = normalize(texelFetch(u_lnrm, ivec3(px, u_layer), 0).xyz);
     vec3 albedo = texelFetch(u_lalb, ivec3(px, u_layer), 0).rgb;
     vec4 mat = texelFetch(u_lmat, ivec3(px, u_layer), 0); // roughness, metallic, transmission, ior
-    uint seed = mix32(floatBitsToUint(u_light_position.x + 0.0) ^ mix32(floatBitsToUint(u_light_position.y + 0.0) ^
-                mix32(floatBitsToUint(u_light_position.z + 0.0) ^ mix32(uint(px.x) ^ mix32(uint(px.y) ^
-                mix32(uint(u_layer) ^ mix32(u_salt)))))));
+    vec3 lp = u_light_position;
+    uint seed = xxh32_6(lp.x == 0.0 ? 0u : floatBitsToUint(lp.x), lp.y == 0.0 ? 0u : floatBitsToUint(lp.y),
+                        lp.z == 0.0 ? 0u : floatBitsToUint(lp.z), uint(px.x), uint(px.y), uint(u_layer), u_salt);
     vec4 u = rmap(0, seed, 0u);
 
     vec3 wo;
