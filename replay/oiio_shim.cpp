@@ -8,6 +8,7 @@
 // storage owned by the caller; nothing here keeps state between calls.
 #include "oiio_shim.h"
 
+#include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <memory>
@@ -55,8 +56,118 @@ std::string pending(OIIO::ImageInput *in)
     return m;
 }
 
+// Reads a NUL-terminated header string of at most max characters; false at EOF or when longer.
+bool read_cstr(std::FILE *f, size_t max, std::string &out)
+{
+    out.clear();
+    for (int c; (c = std::fgetc(f)) != EOF;) {
+        if (c == 0)
+            return true;
+        if (out.size() >= max)
+            return false;
+        out.push_back(static_cast<char>(c));
+    }
+    return false;
+}
+
+bool read_i32(std::FILE *f, int32_t &v)
+{
+    unsigned char b[4];
+    if (std::fread(b, 1, 4, f) != 4)
+        return false;
+    v = static_cast<int32_t>(static_cast<uint32_t>(b[0]) | static_cast<uint32_t>(b[1]) << 8 |
+                             static_cast<uint32_t>(b[2]) << 16 | static_cast<uint32_t>(b[3]) << 24);
+    return true;
+}
+
+// OpenEXR 3.1 (Debian 12) believes the size fields of a header: it allocates and clears a string
+// attribute as long as its size field says before noticing the file is shorter, and sizes a
+// part's chunk offset table from "chunkCount" or the data window. A few hundred hostile bytes
+// then cost gigabytes. So the header(s) are walked first, and any attribute, chunk count or
+// data window the file cannot possibly hold is refused before OpenImageIO sees the file. Files
+// that are not OpenEXR pass through (OpenImageIO decides what they are). Returns ENG_OK or
+// ENG_ERR_INVALID naming the part index and attribute.
+eng_result check_exr_header(const char *path, eng_error *err)
+{
+    std::FILE *f = std::fopen(path, "rb");
+    if (!f)
+        return ENG_OK; // missing or unreadable: OpenImageIO says so
+    struct Closer {
+        std::FILE *f;
+        ~Closer() { std::fclose(f); }
+    } closer{f};
+    if (std::fseek(f, 0, SEEK_END) != 0)
+        return ENG_OK;
+    long end = std::ftell(f);
+    std::rewind(f);
+    int32_t magic = 0, version = 0;
+    if (end < 8 || !read_i32(f, magic) || !read_i32(f, version) || magic != 20000630)
+        return ENG_OK;
+    const bool multipart = (version & 0x1000) != 0;
+    const size_t max_name = (version & 0x400) ? 255 : 31;
+    const uint64_t size = static_cast<uint64_t>(end);
+    for (int part = 0;; part++) {
+        if (part >= REP_MAX_PARTS)
+            return eng_fail(err, ENG_ERR_INVALID, "%s: EXR header: more than %d parts", path, REP_MAX_PARTS);
+        if (multipart && part > 0) {
+            int c = std::fgetc(f);
+            if (c == 0 || c == EOF)
+                return ENG_OK; // the empty header that ends a multi-part header list (or truncation: OIIO reports it)
+            std::ungetc(c, f);
+        }
+        bool tiled = false;
+        int64_t rows = 0;
+        std::string name, type;
+        for (;;) {
+            if (!read_cstr(f, max_name, name))
+                return ENG_OK; // malformed name or truncated: the library reports that cheaply
+            if (name.empty())
+                break;
+            int32_t len = 0;
+            if (!read_cstr(f, max_name, type) || !read_i32(f, len))
+                return ENG_OK;
+            long at = std::ftell(f);
+            if (len < 0 || at < 0 || static_cast<uint64_t>(len) > size - static_cast<uint64_t>(at))
+                return eng_fail(err, ENG_ERR_INVALID,
+                                "%s: EXR header of part %d: attribute \"%s\" claims %d bytes, more than the file holds",
+                                path, part, name.c_str(), len);
+            int32_t v[4] = {0, 0, 0, 0};
+            if (name == "chunkCount" && type == "int" && len == 4) {
+                if (!read_i32(f, v[0]))
+                    return ENG_OK;
+                if (v[0] < 0 || static_cast<uint64_t>(v[0]) * 8 > size)
+                    return eng_fail(err, ENG_ERR_INVALID,
+                                    "%s: EXR header of part %d: chunkCount %d needs a larger file", path, part, v[0]);
+                continue;
+            }
+            if (name == "dataWindow" && type == "box2i" && len == 16) {
+                for (int k = 0; k < 4; k++)
+                    if (!read_i32(f, v[k]))
+                        return ENG_OK;
+                rows = static_cast<int64_t>(v[3]) - v[1] + 1;
+                continue;
+            }
+            if (name == "tiles")
+                tiled = true;
+            if (std::fseek(f, len, SEEK_CUR) != 0)
+                return ENG_OK;
+        }
+        // A scanline part has at least one chunk, with an 8-byte offset, per 256 rows (DWAB,
+        // the largest block); tiled parts are bounded by the pixel limit checked after opening.
+        if (!tiled && rows > 0 && static_cast<uint64_t>((rows + 255) / 256) * 8 > size)
+            return eng_fail(err, ENG_ERR_INVALID,
+                            "%s: EXR header of part %d: %lld rows need a larger file", path, part,
+                            static_cast<long long>(rows));
+        if (!multipart)
+            return ENG_OK;
+    }
+}
+
 eng_result read_parts(const char *path, size_t max_floats, rep_part **out, int *count, eng_error *err)
 {
+    eng_result hr = check_exr_header(path, err);
+    if (hr != ENG_OK)
+        return hr;
     std::unique_ptr<OIIO::ImageInput> in = OIIO::ImageInput::open(path);
     if (!in)
         return eng_fail(err, ENG_ERR_IO, "%s: cannot open as an image: %s", path, pending(nullptr).c_str());

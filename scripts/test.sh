@@ -1,8 +1,25 @@
 #!/usr/bin/env bash
 # The test command: set up, build with -Werror, run every Check suite and end-to-end test
-# through CTest.
+# through CTest (this includes the fuzz smoke run, tests/fuzz/smoke.sh, and valgrind memcheck
+# on a short record + replay, tests/memcheck.sh); then build the whole project again in its own
+# folder with AddressSanitizer + UndefinedBehaviorSanitizer and run the same suite there.
+# SANITIZE=0 skips the sanitizer pass. Extra arguments go to both ctest runs.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-BUILD_DIR=${BUILD_DIR:-build} scripts/setup.sh -DISPM_WERROR=ON
-cd "${BUILD_DIR:-build}"
-ctest --output-on-failure --timeout 900 "$@"
+BUILD_DIR=${BUILD_DIR:-build}
+BUILD_DIR=$BUILD_DIR scripts/setup.sh -DISPM_WERROR=ON
+(cd "$BUILD_DIR" && ctest --output-on-failure --timeout 900 "$@")
+
+if [ "${SANITIZE:-1}" != 0 ]; then
+  SAN_DIR=${SANITIZE_BUILD_DIR:-$BUILD_DIR-sanitize}
+  echo "test: the suite again under ASan + UBSan ($SAN_DIR)"
+  cmake -S . -B "$SAN_DIR" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DISPM_WERROR=ON -DISPM_SANITIZE=ON > /dev/null
+  cmake --build "$SAN_DIR" -j"$(nproc)"
+  # Suppressions name third-party libraries only; why each: tests/sanitizers/README.md.
+  export ASAN_OPTIONS=${ASAN_OPTIONS:-detect_leaks=1:abort_on_error=1:malloc_context_size=10}
+  export LSAN_OPTIONS=${LSAN_OPTIONS:-suppressions=$PWD/tests/sanitizers/lsan.supp:print_suppressions=0}
+  export UBSAN_OPTIONS=${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1}
+  # Two kills instead of three in the crash test: the code paths are the same, and ASan's
+  # slowdown of the renderer keeps the whole command within the CI budget.
+  (cd "$SAN_DIR" && CRASH_KILLS=2 ctest --output-on-failure --timeout 900 "$@")
+fi

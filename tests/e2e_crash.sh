@@ -12,7 +12,7 @@ ISPM=$1; SRC=$2; WORK=$3
 fail() { echo "FAIL: $*"; exit 1; }
 rm -rf "$WORK"; mkdir -p "$WORK"
 RANDOM=${CRASH_SEED:-$$}
-KILLS=${CRASH_KILLS:-4}
+KILLS=${CRASH_KILLS:-3}
 echo "e2e_crash: CRASH_SEED=$RANDOM"
 
 # A short sequence: 4 frames of the Cornell box at 64x64.

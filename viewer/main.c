@@ -74,11 +74,12 @@ typedef struct app {
 
 static void usage(FILE *f)
 {
-    fprintf(f, "usage: ispm-view RUN [--golden DIR] [--frame N] [--buffer NAME] [--size WxH]\n"
+    fprintf(f, "usage: ispm-view RUN [--golden DIR] [--frame N] [--buffer NAME] [--size WxH] [--list]\n"
                "Interactive viewer for a recorded run: every buffer of every frame, channels,\n"
                "exposure, false colour, NaN/Inf overlay, comparison with a golden or second run\n"
                "(A/B flip, absolute/relative/signed difference), pixel probe. Press h in the\n"
-               "window for the keys. Exit: 0 ok, 1 no display, 2 bad arguments or unreadable run.\n");
+               "window for the keys. --list prints frame 0's buffers and exits.\n"
+               "Exit: 0 ok, 1 no display, 2 bad arguments or unreadable run.\n");
 }
 
 /* ---------------------------------------------------------------- drawing helpers */
@@ -606,12 +607,14 @@ static int fail_sdl(const char *what)
 int main(int argc, char **argv)
 {
     const char *run_dir = NULL, *golden = NULL, *buffer = NULL;
-    int frame = 0, win_w = 1280, win_h = 800;
+    int frame = 0, win_w = 1280, win_h = 800, list = 0;
     for (int i = 1; i < argc; i++) {
         const char *arg = argv[i];
         if (!strcmp(arg, "--help") || !strcmp(arg, "-h")) {
             usage(stdout);
             return 0;
+        } else if (!strcmp(arg, "--list")) {
+            list = 1;
         } else if (!strcmp(arg, "--golden") && i + 1 < argc) {
             golden = argv[++i];
         } else if (!strcmp(arg, "--frame") && i + 1 < argc) {
@@ -654,6 +657,14 @@ int main(int argc, char **argv)
         view_run_close(ap.a);
         view_run_close(ap.b);
         return 2;
+    }
+    if (list) {
+        /* The buffers of frame 0 in manifest (and panel) order, one a line; no window. */
+        for (int i = 0; i < view_run_buffer_count(ap.a, 0); i++)
+            printf("%s\n", view_run_buffer_name(ap.a, 0, i));
+        view_run_close(ap.a);
+        view_run_close(ap.b);
+        return 0;
     }
     view_state_init(&ap.s, view_run_frame_count(ap.a), 0, ap.b != NULL);
     view_state_set_frame(&ap.s, frame);
