@@ -287,6 +287,10 @@ typedef struct eng_frame_stats {
      * photon-map photons stored at bounce index b (b = 2 is the second surface of a path). */
     uint64_t photons_emitted;
     uint64_t photons_stored[16];
+    /* The eye camera of this frame: world → clip (column-major, GL conventions) and its
+     * position, so tools can project world-space data (e.g. photons) into the image. */
+    float camera_view_proj[16];
+    float camera_eye[3];
 } eng_frame_stats;
 
 /* A listener sees every announced buffer. Any callback may be NULL. A non-zero return

@@ -581,6 +581,8 @@ eng_result eng_render_frame(eng_engine *e, int frame, eng_error *err)
     pose_frame(e, frame);
     rt_update(e->rt, &e->fs);
     add_time(e, "scene", now_ms() - t0);
+    memcpy(e->stats.camera_view_proj, e->fs.camera.view_proj, sizeof e->stats.camera_view_proj);
+    memcpy(e->stats.camera_eye, e->fs.camera.eye, sizeof e->stats.camera_eye);
 
     /* Shadow maps, one per light. */
     const shadow_map *maps[8] = {0};
