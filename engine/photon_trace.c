@@ -160,6 +160,8 @@ eng_result photon_trace(const eng_rt *rt, const eng_frame_scene *fs, const eng_r
     }
     size_t at = 0;
     for (size_t i = 0; i < count; i++) {
+        if (n_stored[i] == 0)
+            continue; /* out->photons may still be NULL when nothing was stored */
         memcpy(out->photons + at, slots + i * per, n_stored[i] * sizeof(eng_photon));
         at += n_stored[i];
     }

@@ -80,6 +80,12 @@ bool read_i32(std::FILE *f, int32_t &v)
     return true;
 }
 
+eng_result malformed(const char *path, int part, eng_error *err)
+{
+    return eng_fail(err, ENG_ERR_IO, "%s: EXR header of part %d: truncated, or an attribute name or type over the "
+                    "length limit", path, part);
+}
+
 // OpenEXR 3.1 (Debian 12) believes the size fields of a header: it allocates and clears a string
 // attribute as long as its size field says before noticing the file is shorter, and sizes a
 // part's chunk offset table from "chunkCount" or the data window. A few hundred hostile bytes
@@ -115,17 +121,19 @@ eng_result check_exr_header(const char *path, eng_error *err)
                 return ENG_OK; // the empty header that ends a multi-part header list (or truncation: OIIO reports it)
             std::ungetc(c, f);
         }
-        bool tiled = false;
+        bool tiled = (version & 0x200) != 0;
         int64_t rows = 0;
         std::string name, type;
         for (;;) {
+            // A header this walk cannot follow is one the library would misread into arbitrary
+            // sizes: refuse it here (a conforming writer's header always parses).
+            int32_t len = 0;
             if (!read_cstr(f, max_name, name))
-                return ENG_OK; // malformed name or truncated: the library reports that cheaply
+                return malformed(path, part, err);
             if (name.empty())
                 break;
-            int32_t len = 0;
             if (!read_cstr(f, max_name, type) || !read_i32(f, len))
-                return ENG_OK;
+                return malformed(path, part, err);
             long at = std::ftell(f);
             if (len < 0 || at < 0 || static_cast<uint64_t>(len) > size - static_cast<uint64_t>(at))
                 return eng_fail(err, ENG_ERR_INVALID,
@@ -134,7 +142,7 @@ eng_result check_exr_header(const char *path, eng_error *err)
             int32_t v[4] = {0, 0, 0, 0};
             if (name == "chunkCount" && type == "int" && len == 4) {
                 if (!read_i32(f, v[0]))
-                    return ENG_OK;
+                    return malformed(path, part, err);
                 if (v[0] < 0 || static_cast<uint64_t>(v[0]) * 8 > size)
                     return eng_fail(err, ENG_ERR_INVALID,
                                     "%s: EXR header of part %d: chunkCount %d needs a larger file", path, part, v[0]);
@@ -143,14 +151,14 @@ eng_result check_exr_header(const char *path, eng_error *err)
             if (name == "dataWindow" && type == "box2i" && len == 16) {
                 for (int k = 0; k < 4; k++)
                     if (!read_i32(f, v[k]))
-                        return ENG_OK;
+                        return malformed(path, part, err);
                 rows = static_cast<int64_t>(v[3]) - v[1] + 1;
                 continue;
             }
             if (name == "tiles")
                 tiled = true;
             if (std::fseek(f, len, SEEK_CUR) != 0)
-                return ENG_OK;
+                return malformed(path, part, err);
         }
         // A scanline part has at least one chunk, with an 8-byte offset, per 256 rows (DWAB,
         // the largest block); tiled parts are bounded by the pixel limit checked after opening.

@@ -668,6 +668,64 @@ START_TEST(shim_rejects_garbage)
 }
 END_TEST
 
+/* Offset of the first occurrence of needle (len bytes) in hay, or -1. */
+static long find_bytes(const char *hay, size_t n, const char *needle, size_t len)
+{
+    for (size_t i = 0; i + len <= n; i++)
+        if (memcmp(hay + i, needle, len) == 0)
+            return (long)i;
+    return -1;
+}
+
+/* OpenEXR 3.1 sizes allocations from header fields before checking them against the file
+ * (found by fuzz_run_reader): the shim refuses an attribute longer than the file, a chunkCount
+ * whose offset table the file cannot hold and a data window with more rows than it can hold,
+ * quickly and with one line naming the attribute. */
+START_TEST(shim_rejects_lying_header_sizes)
+{
+    fx_run r;
+    fx_make(&r);
+    eng_buffer v[3];
+    for (int j = 0; j < 3; j++)
+        v[j] = fx_view(&r.f[0].bufs[j]);
+    char *path = tpath("lying.exr");
+    eng_error err;
+    ck_assert_msg(rep_oiio_write_parts(path, v, 3, &err) == ENG_OK, "%s", err.msg);
+    char *orig = NULL;
+    size_t len = 0;
+    ck_assert_int_eq(eng_read_file(path, 1 << 24, &orig, &len, &err), ENG_OK);
+    static const struct { const char *key; size_t key_len; size_t at; uint32_t value; const char *says; } cases[] = {
+        {"name\0string", 12, 12, 0x7ffffff0u, "claims"},           /* the attribute's size field */
+        {"chunkCount\0int\0\4\0\0\0", 19, 19, 0x7fffffffu, "chunkCount"}, /* its value */
+        {"dataWindow\0box2i\0\20\0\0\0", 21, 21 + 12, 0x7ffffff0u, "rows"}, /* yMax */
+    };
+    for (size_t c = 0; c < sizeof cases / sizeof cases[0]; c++) {
+        char *bytes = malloc(len);
+        ck_assert_ptr_nonnull(bytes);
+        memcpy(bytes, orig, len);
+        long at = find_bytes(bytes, len, cases[c].key, cases[c].key_len);
+        ck_assert_msg(at >= 0, "no %s in the file", cases[c].key);
+        uint32_t v32 = cases[c].value; /* little-endian, as EXR */
+        unsigned char le[4] = {(unsigned char)v32, (unsigned char)(v32 >> 8), (unsigned char)(v32 >> 16),
+                               (unsigned char)(v32 >> 24)};
+        memcpy(bytes + at + cases[c].at, le, 4);
+        ck_assert_int_eq(rep_write_atomic(path, bytes, len, &err), ENG_OK);
+        rep_part *parts = NULL;
+        int n = 0;
+        eng_result res = rep_oiio_read_parts(path, REP_MAX_FLOATS, &parts, &n, &err);
+        ck_assert_msg(res == ENG_ERR_INVALID, "case %zu: %s: %s", c, eng_result_name(res), err.msg);
+        ck_assert_ptr_null(parts);
+        ck_assert_ptr_nonnull(strstr(err.msg, path));
+        ck_assert_msg(strstr(err.msg, cases[c].says) != NULL, "case %zu: %s", c, err.msg);
+        ck_assert_ptr_null(strchr(err.msg, '\n'));
+        free(bytes);
+    }
+    free(orig);
+    free(path);
+    fx_free(&r);
+}
+END_TEST
+
 /* ---------------------------------------------------------------- end to end */
 
 START_TEST(e2e_identical_is_bitexact)
@@ -1533,6 +1591,7 @@ static Suite *replay_suite(void)
     tcase_set_timeout(files, 120);
     tcase_add_test(files, shim_round_trip);
     tcase_add_test(files, shim_rejects_garbage);
+    tcase_add_test(files, shim_rejects_lying_header_sizes);
     tcase_add_test(files, e2e_identical_is_bitexact);
     tcase_add_test(files, e2e_one_pixel_changed);
     tcase_add_test(files, e2e_nan_fails);
