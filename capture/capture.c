@@ -64,6 +64,11 @@ typedef struct cap_frame {
     eng_pass_time passes[ENG_MAX_PASSES];
     int buffer_count;
     cap_bufrec *buffers;
+    /* The eye camera (world → clip) and photon attrition of the frame, from eng_frame_stats. */
+    float view_proj[16];
+    float eye[3];
+    uint64_t photons_emitted;
+    uint64_t photons_stored[16];
 } cap_frame;
 
 /* A buffer of the frame in progress: its record and its pixel copy. */
@@ -527,6 +532,10 @@ static int on_frame_end(void *user, const eng_frame_stats *stats)
         f->passes[i] = stats->passes[i];
         f->passes[i].name[SCN_NAME_MAX - 1] = 0;
     }
+    memcpy(f->view_proj, stats->camera_view_proj, sizeof f->view_proj);
+    memcpy(f->eye, stats->camera_eye, sizeof f->eye);
+    f->photons_emitted = stats->photons_emitted;
+    memcpy(f->photons_stored, stats->photons_stored, sizeof f->photons_stored);
     f->buffer_count = c->pending_count;
     f->buffers = cap__xcalloc((size_t)c->pending_count, sizeof *f->buffers);
     for (int i = 0; i < c->pending_count; i++) {
@@ -628,6 +637,29 @@ static cJSON *frame_json(const cap_frame *f, int index)
         jpush(passes, p);
     }
     jadd(o, "passes", passes);
+    cJSON *cam = jok(cJSON_CreateObject());
+    cJSON *vp = jok(cJSON_CreateArray());
+    for (int i = 0; i < 16; i++)
+        jpush(vp, jfloat(f->view_proj[i]));
+    jadd(cam, "view_proj", vp);
+    cJSON *eye = jok(cJSON_CreateArray());
+    for (int i = 0; i < 3; i++)
+        jpush(eye, jfloat(f->eye[i]));
+    jadd(cam, "eye", eye);
+    jadd(o, "camera", cam);
+    if (f->photons_emitted) {
+        /* Photon attrition (ISPM Fig. 10): stored[k] counts photons at bounce index k + 2. */
+        cJSON *ph = jok(cJSON_CreateObject());
+        jadd(ph, "emitted", cJSON_CreateNumber((double)f->photons_emitted));
+        int last = 15;
+        while (last > 2 && f->photons_stored[last] == 0)
+            last--;
+        cJSON *st = jok(cJSON_CreateArray());
+        for (int b = 2; b <= last; b++)
+            jpush(st, cJSON_CreateNumber((double)f->photons_stored[b]));
+        jadd(ph, "stored", st);
+        jadd(o, "photons", ph);
+    }
     cJSON *bufs = jok(cJSON_CreateArray());
     for (int i = 0; i < f->buffer_count; i++) {
         const cap_bufrec *r = &f->buffers[i];
@@ -892,6 +924,25 @@ static eng_result frame_from_json(const char *path, int index, const cJSON *o, c
         eng_pass_time *pt = &f->passes[f->pass_count++];
         snprintf(pt->name, sizeof pt->name, "%s", name->valuestring);
         pt->ms = ms->valuedouble;
+    }
+    const cJSON *cam = cJSON_GetObjectItemCaseSensitive(o, "camera");
+    const cJSON *vp = cJSON_GetObjectItemCaseSensitive(cam, "view_proj");
+    const cJSON *eye = cJSON_GetObjectItemCaseSensitive(cam, "eye");
+    if (cJSON_GetArraySize(vp) != 16 || cJSON_GetArraySize(eye) != 3)
+        return eng_fail(err, ENG_ERR_INVALID, "%s: \"camera\" is not {\"view_proj\": [16], \"eye\": [3]}", path);
+    for (int i = 0; i < 16; i++)
+        f->view_proj[i] = (float)cJSON_GetArrayItem(vp, i)->valuedouble;
+    for (int i = 0; i < 3; i++)
+        f->eye[i] = (float)cJSON_GetArrayItem(eye, i)->valuedouble;
+    const cJSON *ph = cJSON_GetObjectItemCaseSensitive(o, "photons");
+    if (ph) {
+        const cJSON *em = cJSON_GetObjectItemCaseSensitive(ph, "emitted");
+        const cJSON *st = cJSON_GetObjectItemCaseSensitive(ph, "stored");
+        if (!cJSON_IsNumber(em) || !cJSON_IsArray(st) || cJSON_GetArraySize(st) > 14)
+            return eng_fail(err, ENG_ERR_INVALID, "%s: \"photons\" is not {\"emitted\", \"stored\"}", path);
+        f->photons_emitted = (uint64_t)em->valuedouble;
+        for (int b = 0; b < cJSON_GetArraySize(st); b++)
+            f->photons_stored[b + 2] = (uint64_t)cJSON_GetArrayItem(st, b)->valuedouble;
     }
     const cJSON *bufs = cJSON_GetObjectItemCaseSensitive(o, "buffers");
     int n = cJSON_IsArray(bufs) ? cJSON_GetArraySize(bufs) : 0;

@@ -87,6 +87,9 @@ typedef struct rep_frame_info {
     char *path; /* run folder + file */
     int buffer_count;
     rep_buffer_info *buffers;
+    int has_camera;        /* the manifest gave "camera" (runs recorded before it did not) */
+    float view_proj[16];   /* eye camera world → clip, column-major (GL) */
+    float eye[3];
 } rep_frame_info;
 
 /* A run's manifest, validated: one owner, freed whole by rep_run_close. */

@@ -184,6 +184,25 @@ static eng_result parse_frame(rep_run *run, int i, const cJSON *jf, eng_error *e
                         "%s: %s: \"file\" must be a relative path inside the run folder", mf, where);
     f->file = rep_xstrdup(file);
     f->path = rep_path_join(run->dir, file);
+    const cJSON *cam = cJSON_GetObjectItemCaseSensitive(jf, "camera");
+    if (cam) {
+        const cJSON *vp = cJSON_GetObjectItemCaseSensitive(cam, "view_proj");
+        const cJSON *eye = cJSON_GetObjectItemCaseSensitive(cam, "eye");
+        if (!cJSON_IsArray(vp) || cJSON_GetArraySize(vp) != 16 || !cJSON_IsArray(eye) || cJSON_GetArraySize(eye) != 3)
+            return eng_fail(err, ENG_ERR_INVALID, "%s: %s: \"camera\" must be {\"view_proj\": [16 numbers], \"eye\": [3]}",
+                            mf, where);
+        for (int k = 0; k < 19; k++) {
+            const cJSON *v = k < 16 ? cJSON_GetArrayItem(vp, k) : cJSON_GetArrayItem(eye, k - 16);
+            if (!cJSON_IsNumber(v) || !isfinite(v->valuedouble) || fabs(v->valuedouble) > 3.0e38)
+                return eng_fail(err, ENG_ERR_INVALID, "%s: %s: \"camera\" holds a value that is not a finite float",
+                                mf, where);
+            if (k < 16)
+                f->view_proj[k] = (float)v->valuedouble;
+            else
+                f->eye[k - 16] = (float)v->valuedouble;
+        }
+        f->has_camera = 1;
+    }
     const cJSON *jbs = cJSON_GetObjectItemCaseSensitive(jf, "buffers");
     if (!cJSON_IsArray(jbs))
         return eng_fail(err, ENG_ERR_INVALID, "%s: %s: \"buffers\" must be an array", mf, where);
