@@ -4,7 +4,8 @@
 # shows: an image in the image area that changes with the frame and the buffer, false colour
 # that turns grey walls into saturated hues, a difference against an identical run that is
 # black and one against a run with one changed pixel that shows exactly that spot, the A/B flip
-# showing the same pixels, the help overlay's text, the probe panel following the cursor. Also
+# showing the same pixels, the help overlay's text, the probe panel following the cursor, the
+# photon map (p) as cyan/yellow/magenta points over the image that vanish again. Also
 # the command-line contract: --help, and one line plus exit 2 for a missing or incomplete run,
 # exit 1 without a display. The regions come from viewer/main.c's fixed layout at 1280x800:
 # buffer list x<260, probe panel x>=920, timeline and status below y=752; a 160x160 buffer is
@@ -97,6 +98,10 @@ differ() {
   convert "$WORK/$2.png" -crop "$3" +repage "$WORK/c2.png"
   compare -metric AE "$WORK/c1.png" "$WORK/c2.png" null: 2>&1 | cut -d' ' -f1
 }
+IMAGE=660x660+260+46          # the whole 160x160 image
+# cyan SHOT: pixels of the bounce-2 point colour (0x00ffff) in the image.
+cyan() { convert "$WORK/$1.png" -crop $IMAGE +repage -fx 'r < 0.2 && g > 0.8 && b > 0.8' \
+           -format '%[fx:round(mean*w*h)]' info:; }
 gt() { awk -v a="$1" -v b="$2" 'BEGIN { exit !(a > b) }'; }
 
 # Up presses from final.display (the viewer's first buffer) to gbuffer.position, from the
@@ -112,6 +117,12 @@ start_viewer "$WORK/run" --golden "$GOLDEN"
 shot f0
 gt "$(stat f0 $IMG '%[fx:standard_deviation]')" 0.05 || fail "frame 0: the image area is flat"
 gt "$(mean f0 $IMG)" 0.1 || fail "frame 0: the image area is black"
+grep -q '"camera"' "$WORK/run/manifest.json" || fail "the recorded run has no camera"
+keys p; shot photons
+c0=$(cyan f0); c1=$(cyan photons)
+gt "$c1" "$((c0 + 1000))" || fail "photons (p): cyan point pixels $c0 -> $c1, want 1000 more"
+keys p; shot photons_off
+[ "$(differ f0 photons_off $IMAGE)" = 0 ] || fail "photons off: the image is not as before"
 keys Right; shot f1
 gt "$(differ f0 f1 $IMG)" 100 || fail "next frame: the image did not change"
 sat1=$(sat f1)

@@ -280,6 +280,12 @@ START_TEST(run_lazy_cache)
     ck_assert_int_eq(view_run_open(GOLDEN, 2, &r, &err), ENG_OK);
     ck_assert_int_eq(view_run_decodes(r), 0); /* opening decodes nothing */
     ck_assert_int_ge(view_run_frame_count(r), 3);
+    int rw = 0, rh = 0;
+    float vp[16];
+    view_run_resolution(r, &rw, &rh);
+    ck_assert_int_eq(rw, 160);
+    ck_assert_int_eq(rh, 160);
+    ck_assert_int_eq(view_run_camera(r, 999, vp), 0);
     int fin = view_run_find(r, 0, "final.display");
     ck_assert_int_ge(fin, 0);
     ck_assert_int_eq(view_run_buffer_channels(r, 0, fin), 3);
@@ -303,6 +309,75 @@ START_TEST(run_lazy_cache)
     ck_assert_int_eq(view_run_frame(r, 999, &bufs, &count, &err), ENG_ERR_INVALID);
     view_run_close(r);
     view_run_close(NULL);
+}
+END_TEST
+
+static const char *const PHOTON_NAMES[14] = {
+    "position.X", "position.Y", "position.Z", "direction.X", "direction.Y", "direction.Z", "power.R",
+    "power.G", "power.B", "normal.X", "normal.Y", "normal.Z", "density", "bounce"};
+
+static void put_photon(float *map, int i, float x, float y, float z, float bounce)
+{
+    float *px = map + i * 14;
+    px[0] = x;
+    px[1] = y;
+    px[2] = z;
+    px[6] = 1.0f;
+    px[13] = bounce;
+}
+
+START_TEST(photon_projection)
+{
+    /* Camera at the origin looking down -Z, 90 degrees, near 0.1, far 100: a point at depth d
+     * in front maps x/d, y/d to NDC. Column-major: element (r, c) at [c*4+r]. */
+    const float n = 0.1f, f = 100.0f;
+    float vp[16] = {0};
+    vp[0] = 1.0f;
+    vp[5] = 1.0f;
+    vp[10] = -(f + n) / (f - n);
+    vp[11] = -1.0f;
+    vp[14] = -2.0f * f * n / (f - n);
+    float map[8 * 14] = {0};
+    put_photon(map, 0, 0.0f, 0.0f, -5.0f, 2.0f);   /* centre */
+    put_photon(map, 1, 0.0f, 0.0f, 5.0f, 2.0f);    /* behind the camera: w < 0 */
+    put_photon(map, 2, 10.0f, 0.0f, -5.0f, 3.0f);  /* NDC x = 2: outside */
+    put_photon(map, 3, 2.5f, 2.5f, -5.0f, 3.0f);   /* NDC (0.5, 0.5): upper right */
+    put_photon(map, 4, -5.0f, -5.0f, -5.0f, 6.0f); /* NDC (-1, -1): the lower left corner */
+    put_photon(map, 5, 1.0f, 1.0f, -5.0f, 0.0f);   /* bounce 0: no photon */
+    eng_buffer b = make_buffer(8, 1, 14, PHOTON_NAMES, map);
+    view_point pts[8];
+    int total = -1;
+    ck_assert_int_eq(view_project_photons(&b, vp, 160, 120, pts, 8, &total), 3);
+    ck_assert_int_eq(total, 5);
+    ck_assert_float_eq_tol(pts[0].x, 80.0f, 1e-4f); /* exact centre -> the image's centre */
+    ck_assert_float_eq_tol(pts[0].y, 60.0f, 1e-4f);
+    ck_assert_int_eq(pts[0].bounce, 2);
+    ck_assert_float_eq_tol(pts[1].x, 120.0f, 1e-3f);
+    ck_assert_float_eq_tol(pts[1].y, 30.0f, 1e-3f); /* rows top-first: +y is up */
+    ck_assert_int_eq(pts[1].bounce, 3);
+    ck_assert_float_eq_tol(pts[2].x, 0.0f, 1e-3f);
+    ck_assert_float_eq_tol(pts[2].y, 120.0f, 1e-3f);
+    ck_assert_int_eq(pts[2].bounce, 6);
+    /* cap limits the points written, not the count */
+    ck_assert_int_eq(view_project_photons(&b, vp, 160, 120, pts, 1, &total), 1);
+    ck_assert_int_eq(total, 5);
+    /* colours by bounce */
+    ck_assert_uint_eq(view_bounce_colour(2), 0x00ffffu);
+    ck_assert_uint_eq(view_bounce_colour(3), 0xffff00u);
+    ck_assert_uint_eq(view_bounce_colour(4), 0xff00ffu);
+    ck_assert_uint_eq(view_bounce_colour(9), 0xff00ffu);
+    /* a buffer without the channels */
+    eng_buffer rgb = make_buffer(8, 1, 3, RGB_NAMES, map);
+    ck_assert_int_eq(view_project_photons(&rgb, vp, 160, 120, pts, 8, &total), -1);
+    ck_assert_int_eq(total, 0);
+    /* the toggle */
+    view_state s;
+    view_state_init(&s, 3, 2, 0);
+    ck_assert_int_eq(s.photons, 0);
+    ck_assert_int_eq(view_state_apply(&s, VIEW_ACT_TOGGLE_PHOTONS), 1);
+    ck_assert_int_eq(s.photons, 1);
+    view_state_apply(&s, VIEW_ACT_TOGGLE_PHOTONS);
+    ck_assert_int_eq(s.photons, 0);
 }
 END_TEST
 
@@ -336,6 +411,7 @@ int main(void)
     tcase_add_test(model, auto_range);
     tcase_add_test(model, state_actions);
     tcase_add_test(model, layout_and_probe);
+    tcase_add_test(model, photon_projection);
     suite_add_tcase(s, model);
     TCase *run = tcase_create("run");
     tcase_add_test(run, run_lazy_cache);

@@ -48,6 +48,8 @@ static const char *const HELP[] = {
     "wheel, z/x      zoom in/out; right-drag pans",
     "click image     pin pixel for the series",
     "click timeline  go to frame",
+    "p               photons as points over eye-sized buffers:",
+    "                bounce 2 cyan, 3 yellow, 4+ magenta",
     "h or F1         this help; q or Esc quits",
 };
 
@@ -70,6 +72,9 @@ typedef struct app {
     char buffer_name[256];         /* kept across frames: a frame change keeps the buffer */
     float series[SERIES_MAX];
     int series_first, series_count, series_valid;
+    view_point *points;            /* photon points of the shown frame */
+    SDL_Rect *rects;
+    size_t points_cap;
 } app;
 
 static void usage(FILE *f)
@@ -384,6 +389,64 @@ static void draw_help(app *ap, int w, int h)
         text(ap, x + 12, y + 10 + i * ap->line_h, i == 0 ? 0xffff80 : 0xffffff, bw - 24, HELP[i]);
 }
 
+/* Draws the frame's photon map as points over the image a drawn at dst (clip already set),
+ * and appends the photon count, or why there are no points, to note. */
+static void draw_photons(app *ap, const eng_buffer *bufs, int count, const eng_buffer *a,
+                         view_rect dst, char *note, size_t n)
+{
+    size_t len = strlen(note);
+    if (len >= n)
+        return;
+    int f = ap->s.frame, j = view_run_find(ap->a, f, "photons.map"), eye_w, eye_h;
+    float vp[16];
+    view_run_resolution(ap->a, &eye_w, &eye_h);
+    if (j < 0 || j >= count) {
+        snprintf(note + len, n - len, "  | photons: this frame has no photons.map");
+        return;
+    }
+    if (!view_run_camera(ap->a, f, vp)) {
+        snprintf(note + len, n - len, "  | photons: the manifest gives no camera for this frame");
+        return;
+    }
+    if (a->width != eye_w || a->height != eye_h) {
+        snprintf(note + len, n - len, "  | photons are drawn over eye-sized (%dx%d) buffers", eye_w,
+                 eye_h);
+        return;
+    }
+    const eng_buffer *map = &bufs[j];
+    size_t need = (size_t)map->width * (size_t)map->height;
+    if (need > ap->points_cap) {
+        free(ap->points);
+        free(ap->rects);
+        ap->points = malloc(need * sizeof *ap->points);
+        ap->rects = malloc(need * sizeof *ap->rects);
+        ap->points_cap = ap->points && ap->rects ? need : 0;
+    }
+    int total = 0;
+    int shown = view_project_photons(map, vp, eye_w, eye_h, ap->points, (int)ap->points_cap, &total);
+    if (shown < 0) {
+        snprintf(note + len, n - len, "  | photons: photons.map lacks position or bounce channels");
+        return;
+    }
+    /* One batch per colour: bounce 2, 3, 4+. Points are 3x3 screen pixels. */
+    for (int cls = 2; cls <= 4; cls++) {
+        int k = 0;
+        for (int i = 0; i < shown; i++) {
+            int b = ap->points[i].bounce;
+            if ((b <= 2 ? 2 : b >= 4 ? 4 : 3) != cls)
+                continue;
+            int sx = dst.x + (int)floorf(ap->points[i].x * (float)dst.w / (float)a->width);
+            int sy = dst.y + (int)floorf(ap->points[i].y * (float)dst.h / (float)a->height);
+            ap->rects[k++] = (SDL_Rect){sx - 1, sy - 1, 3, 3};
+        }
+        uint32_t c = view_bounce_colour(cls);
+        SDL_SetRenderDrawColor(ap->ren, (uint8_t)(c >> 16), (uint8_t)(c >> 8), (uint8_t)c, 255);
+        if (k > 0)
+            SDL_RenderFillRects(ap->ren, ap->rects, k);
+    }
+    snprintf(note + len, n - len, "  | photons %d (%d in view)", total, shown);
+}
+
 static void redraw(app *ap)
 {
     int w, h;
@@ -443,6 +506,8 @@ static void redraw(app *ap)
                 fill(ap, cx - 6, cy, 13, 1, 0xffff00, 255);
                 fill(ap, cx, cy - 6, 1, 13, 0xffff00, 255);
             }
+            if (ap->s.photons)
+                draw_photons(ap, bufs, count, a, dst, note, sizeof note);
             SDL_RenderSetClipRect(ap->ren, NULL);
         }
     }
@@ -505,6 +570,7 @@ static view_action key_action(const SDL_Keysym *k)
     case SDLK_z: return VIEW_ACT_ZOOM_IN;
     case SDLK_x: return VIEW_ACT_ZOOM_OUT;
     case SDLK_h: case SDLK_F1: return VIEW_ACT_HELP;
+    case SDLK_p: return VIEW_ACT_TOGGLE_PHOTONS;
     case SDLK_q: case SDLK_ESCAPE: return VIEW_ACT_QUIT;
     default: return VIEW_ACT_NONE;
     }
@@ -768,6 +834,8 @@ out:
         TTF_Quit();
     SDL_Quit();
     free(ap.pixels);
+    free(ap.points);
+    free(ap.rects);
     view_run_close(ap.a);
     view_run_close(ap.b);
     return rc;

@@ -376,6 +376,7 @@ int view_state_apply(view_state *s, view_action a)
         s->zoom /= 1.25f;
         return 1;
     case VIEW_ACT_HELP: s->help = !s->help; return 1;
+    case VIEW_ACT_TOGGLE_PHOTONS: s->photons = !s->photons; return 1;
     case VIEW_ACT_QUIT: s->quit = 1; return 0;
     }
     return 0;
@@ -387,6 +388,58 @@ int view_state_tick(view_state *s)
         return 0;
     s->frame = (s->frame + 1) % s->frame_count;
     return 1;
+}
+
+/* ---------------------------------------------------------------- photon points */
+
+uint32_t view_bounce_colour(int bounce)
+{
+    return bounce <= 2 ? 0x00ffffu : bounce == 3 ? 0xffff00u : 0xff00ffu;
+}
+
+static int channel_index(const eng_buffer *b, const char *name)
+{
+    for (int c = 0; c < b->channel_count; c++)
+        if (b->channels[c] && !strcmp(b->channels[c], name))
+            return c;
+    return -1;
+}
+
+int view_project_photons(const eng_buffer *map, const float view_proj[16], int img_w, int img_h,
+                         view_point *out, int cap, int *total)
+{
+    if (total)
+        *total = 0;
+    int cx = channel_index(map, "position.X"), cy = channel_index(map, "position.Y");
+    int cz = channel_index(map, "position.Z"), cb = channel_index(map, "bounce");
+    if (cx < 0 || cy < 0 || cz < 0 || cb < 0)
+        return -1;
+    const float *m = view_proj;
+    size_t n = (size_t)map->width * (size_t)map->height, nch = (size_t)map->channel_count;
+    int count = 0, photons = 0;
+    for (size_t i = 0; i < n; i++) {
+        const float *px = map->data + i * nch;
+        if (!(px[cb] != 0.0f))
+            continue;
+        photons++;
+        if (count >= cap)
+            continue;
+        float p[3] = {px[cx], px[cy], px[cz]}, clip[4];
+        for (int r = 0; r < 4; r++)
+            clip[r] = m[r] * p[0] + m[4 + r] * p[1] + m[8 + r] * p[2] + m[12 + r];
+        if (!(clip[3] > 0.0f))
+            continue;
+        float nx = clip[0] / clip[3], ny = clip[1] / clip[3];
+        if (!(nx >= -1.0f && nx <= 1.0f && ny >= -1.0f && ny <= 1.0f))
+            continue;
+        out[count].x = (nx * 0.5f + 0.5f) * (float)img_w;
+        out[count].y = (0.5f - ny * 0.5f) * (float)img_h;
+        out[count].bounce = (int)lroundf(px[cb]);
+        count++;
+    }
+    if (total)
+        *total = photons;
+    return count;
 }
 
 /* ---------------------------------------------------------------- layout and probe */

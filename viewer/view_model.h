@@ -5,8 +5,8 @@
  *   view_model.c  the state (frame, buffer, channel, exposure, offset, compare mode, zoom),
  *                 the actions keys map to, and pure functions mapping float pixels to RGBA8
  *                 for every display mode (channel selection, exposure/offset, sRGB, false
- *                 colour, NaN/Inf/negative overlay, error heatmaps), the image layout and the
- *                 pixel-probe text;
+ *                 colour, NaN/Inf/negative overlay, error heatmaps), the image layout, the
+ *                 pixel-probe text and the projection of photon maps into the eye image;
  *   view_run.c    a recorded run opened through replay's run reader (rep_run_open,
  *                 rep_run_read_frame: manifest validated, every frame verified against its
  *                 digests) with frames decoded lazily into a small LRU cache.
@@ -133,6 +133,7 @@ typedef enum view_action {
     VIEW_ACT_ZOOM_IN,
     VIEW_ACT_ZOOM_OUT,
     VIEW_ACT_HELP,
+    VIEW_ACT_TOGGLE_PHOTONS,
     VIEW_ACT_QUIT
 } view_action;
 
@@ -143,6 +144,7 @@ typedef struct view_state {
     int has_b;         /* a second run is open: compare and flip allowed */
     view_display d;
     int playing, help, quit;
+    int photons;       /* draw the frame's photon map as points over eye-sized buffers */
     float zoom;        /* 1 = fit to the image area */
 } view_state;
 
@@ -189,6 +191,28 @@ char *view_probe_line(const eng_buffer *b, int x, int y, char *out, size_t n);
  * where outside. Used for the across-frames series. */
 float view_probe_value(const eng_buffer *b, view_channel ch, int x, int y);
 
+/* ---------------------------------------------------------------- photon points */
+
+/* One photon of a photon map projected into the eye image: (x, y) in image pixels, x right,
+ * y down (row 0 at the top), continuous (pixel (i, j) covers [i, i+1) x [j, j+1)). */
+typedef struct view_point {
+    float x, y;
+    int bounce; /* the photon's bounce index: 2 = second surface of its path, 3, ... */
+} view_point;
+
+/* The point colour (0xRRGGBB) for a bounce index: 2 (and below) cyan, 3 yellow, 4+ magenta. */
+uint32_t view_bounce_colour(int bounce);
+
+/* Projects the photons of `map` (the "photons.map" buffer: one photon a pixel, channels found
+ * by name: position.X/Y/Z and bounce; bounce 0 = no photon) into an img_w x img_h eye image
+ * through view_proj (world -> clip, column-major GL: element (row r, col c) at [c*4+r]):
+ * clip -> NDC, dropping photons with w <= 0 or NDC x or y outside [-1, 1], then
+ * x = (ndc.x*0.5+0.5)*img_w, y = (0.5-ndc.y*0.5)*img_h. Writes at most cap points to out in map
+ * order and returns how many were written; *total (may be NULL) gets the photons in the map,
+ * projected or not. Returns -1 (and *total 0) if map lacks one of those channels. */
+int view_project_photons(const eng_buffer *map, const float view_proj[16], int img_w, int img_h,
+                         view_point *out, int cap, int *total);
+
 /* ---------------------------------------------------------------- runs (view_run.c) */
 
 typedef struct view_run view_run;
@@ -212,6 +236,13 @@ int view_run_find(const view_run *r, int f, const char *name);
  * view_run_frame call on this run. A frame that fails to decode or verify fails the same way
  * each time it is asked for (the failure is cached), err naming the file. */
 eng_result view_run_frame(view_run *r, int f, const eng_buffer **bufs, int *count, eng_error *err);
+
+/* The run's eye resolution (the manifest's "resolution"). */
+void view_run_resolution(const view_run *r, int *w, int *h);
+
+/* Frame f's eye camera (world -> clip, column-major) into view_proj. Returns 0 if the frame is
+ * out of range or the manifest gave no camera (runs recorded before it did). */
+int view_run_camera(const view_run *r, int f, float view_proj[16]);
 
 /* How many frame decodes this run has done (cache misses); for tests. */
 int view_run_decodes(const view_run *r);

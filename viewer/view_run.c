@@ -185,3 +185,17 @@ eng_result view_run_frame(view_run *r, int f, const eng_buffer **bufs, int *coun
     *count = e->count;
     return ENG_OK;
 }
+
+void view_run_resolution(const view_run *r, int *w, int *h)
+{
+    *w = r->run->width;
+    *h = r->run->height;
+}
+
+int view_run_camera(const view_run *r, int f, float view_proj[16])
+{
+    if (f < 0 || f >= r->run->frame_count || !r->run->frames[f].has_camera)
+        return 0;
+    memcpy(view_proj, r->run->frames[f].view_proj, 16 * sizeof *view_proj);
+    return 1;
+}
