@@ -60,6 +60,8 @@ PIDS+=($!)
 for _ in $(seq 50); do [ -s "$WORK/display" ] && break; sleep 0.1; done
 [ -s "$WORK/display" ] || { cat "$WORK/xvfb.log"; fail "Xvfb did not start"; }
 export DISPLAY=:$(head -n1 "$WORK/display")
+# Wait until the server answers clients (on a loaded machine -displayfd can come first).
+for _ in $(seq 50); do xdotool getdisplaygeometry > /dev/null 2>&1 && break; sleep 0.1; done
 export SDL_RENDER_DRIVER=software SDL_VIDEODRIVER=x11
 
 # start_viewer ARGS...: runs the viewer, waits for its window; sets VPID and WIN.

@@ -753,7 +753,9 @@ int main(int argc, char **argv)
         SDL_Init(SDL_INIT_VIDEO) != 0 ||
         (!explicit_driver && (!strcmp(SDL_GetCurrentVideoDriver(), "offscreen") ||
                               !strcmp(SDL_GetCurrentVideoDriver(), "dummy")))) {
-        fprintf(stderr, "ispm-view: cannot open a window: no display (set DISPLAY, or run under xvfb-run)\n");
+        const char *why = SDL_GetError();
+        fprintf(stderr, "ispm-view: cannot open a window: no display (set DISPLAY, or run under xvfb-run)%s%s\n",
+                why && *why ? ": " : "", why && *why ? why : "");
         SDL_Quit();
         view_run_close(ap.a);
         view_run_close(ap.b);
