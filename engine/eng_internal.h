@@ -58,6 +58,18 @@ void glu_read(const glu_target *t, int index, int layer, int channels, const int
 
 GLuint glu_fullscreen_vao(void); /* an empty VAO: the fullscreen triangle is made in the VS */
 
+/* A fullscreen fragment pass: fullscreen.vert.glsl + a fragment shader, `count` RGBA32F
+ * targets of width×height, and the empty VAO it draws with. */
+typedef struct glu_pass {
+    glu_target target;
+    GLuint program, vao;
+} glu_pass;
+
+eng_result glu_pass_create(glu_pass *p, const char *frag_name, int count, int width, int height, eng_error *err);
+void glu_pass_destroy(glu_pass *p);
+/* Draws the fullscreen triangle into p's target with p's program (bound by the caller). */
+void glu_pass_draw(const glu_pass *p);
+
 /* ---------------------------------------------------------------- scene as drawn */
 
 typedef struct eng_gpu_prim {

@@ -269,3 +269,39 @@ GLuint glu_fullscreen_vao(void)
     glGenVertexArrays(1, &vao);
     return vao;
 }
+
+eng_result glu_pass_create(glu_pass *p, const char *frag_name, int count, int width, int height, eng_error *err)
+{
+    memset(p, 0, sizeof *p);
+    eng_result r = glu_program("fullscreen.vert.glsl", frag_name, &p->program, err);
+    if (r == ENG_OK)
+        r = glu_target_create(&p->target, count, width, height, 0, err);
+    if (r != ENG_OK) {
+        glu_pass_destroy(p);
+        return r;
+    }
+    p->vao = glu_fullscreen_vao();
+    return ENG_OK;
+}
+
+void glu_pass_destroy(glu_pass *p)
+{
+    glu_target_destroy(&p->target);
+    if (p->vao)
+        glDeleteVertexArrays(1, &p->vao);
+    if (p->program)
+        glDeleteProgram(p->program);
+    memset(p, 0, sizeof *p);
+}
+
+void glu_pass_draw(const glu_pass *p)
+{
+    glBindFramebuffer(GL_FRAMEBUFFER, p->target.fbo);
+    glViewport(0, 0, p->target.width, p->target.height);
+    glDisable(GL_DEPTH_TEST);
+    glBindVertexArray(p->vao);
+    glDrawArrays(GL_TRIANGLES, 0, 3);
+    glBindVertexArray(0);
+    glBindFramebuffer(GL_FRAMEBUFFER, 0);
+    glActiveTexture(GL_TEXTURE0);
+}

@@ -12,8 +12,7 @@
 #define SHADOW_UNIT0 4
 
 struct pass_direct {
-    glu_target target;
-    GLuint program, vao;
+    glu_pass pass;
 };
 
 eng_result pass_direct_create(int width, int height, pass_direct **out, eng_error *err)
@@ -22,23 +21,21 @@ eng_result pass_direct_create(int width, int height, pass_direct **out, eng_erro
     pass_direct *p = calloc(1, sizeof *p);
     if (!p)
         return eng_fail(err, ENG_ERR_NOMEM, "direct: out of memory");
-    eng_result r = glu_program("fullscreen.vert.glsl", "direct.frag.glsl", &p->program, err);
-    if (r == ENG_OK)
-        r = glu_target_create(&p->target, 1, width, height, 0, err);
+    eng_result r = glu_pass_create(&p->pass, "direct.frag.glsl", 1, width, height, err);
     if (r != ENG_OK) {
-        pass_direct_destroy(p);
+        free(p);
         return r;
     }
-    p->vao = glu_fullscreen_vao();
-    glUseProgram(p->program);
-    glUniform1i(glGetUniformLocation(p->program, "u_position"), 0);
-    glUniform1i(glGetUniformLocation(p->program, "u_normal"), 1);
-    glUniform1i(glGetUniformLocation(p->program, "u_albedo"), 2);
-    glUniform1i(glGetUniformLocation(p->program, "u_material"), 3);
+    GLuint g = p->pass.program;
+    glUseProgram(g);
+    glUniform1i(glGetUniformLocation(g, "u_position"), 0);
+    glUniform1i(glGetUniformLocation(g, "u_normal"), 1);
+    glUniform1i(glGetUniformLocation(g, "u_albedo"), 2);
+    glUniform1i(glGetUniformLocation(g, "u_material"), 3);
     for (int i = 0; i < DIRECT_MAX_LIGHTS; i++) {
         char name[32];
         snprintf(name, sizeof name, "u_shadow[%d]", i);
-        glUniform1i(glGetUniformLocation(p->program, name), SHADOW_UNIT0 + i);
+        glUniform1i(glGetUniformLocation(g, name), SHADOW_UNIT0 + i);
     }
     *out = p;
     return ENG_OK;
@@ -54,7 +51,7 @@ static GLint loc(GLuint prog, const char *fmt, int i)
 const glu_target *pass_direct_run(pass_direct *p, const eng_frame_scene *fs, const glu_target *gbuf,
                                   const shadow_map *const *shadows, const eng_settings *s)
 {
-    GLuint g = p->program;
+    GLuint g = p->pass.program;
     glUseProgram(g);
     for (int i = 0; i < 4; i++) {
         glActiveTexture(GL_TEXTURE0 + i);
@@ -91,25 +88,14 @@ const glu_target *pass_direct_run(pass_direct *p, const eng_frame_scene *fs, con
     glUniform1f(glGetUniformLocation(g, "u_shadow_bias"), s->shadow_bias);
     glUniform3fv(glGetUniformLocation(g, "u_eye"), 1, fs->camera.eye);
 
-    glBindFramebuffer(GL_FRAMEBUFFER, p->target.fbo);
-    glViewport(0, 0, p->target.width, p->target.height);
-    glDisable(GL_DEPTH_TEST);
-    glBindVertexArray(p->vao);
-    glDrawArrays(GL_TRIANGLES, 0, 3);
-    glBindVertexArray(0);
-    glBindFramebuffer(GL_FRAMEBUFFER, 0);
-    glActiveTexture(GL_TEXTURE0);
-    return &p->target;
+    glu_pass_draw(&p->pass);
+    return &p->pass.target;
 }
 
 void pass_direct_destroy(pass_direct *p)
 {
     if (!p)
         return;
-    glu_target_destroy(&p->target);
-    if (p->vao)
-        glDeleteVertexArrays(1, &p->vao);
-    if (p->program)
-        glDeleteProgram(p->program);
+    glu_pass_destroy(&p->pass);
     free(p);
 }
