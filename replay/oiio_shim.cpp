@@ -8,6 +8,7 @@
 // storage owned by the caller; nothing here keeps state between calls.
 #include "oiio_shim.h"
 
+#include <algorithm>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -171,8 +172,22 @@ eng_result check_exr_header(const char *path, eng_error *err)
     }
 }
 
+// Frame files hold many small parts: decoding each on OpenImageIO's and OpenEXR's thread
+// pools costs a thread start and join per part (slow, and very slow under ASan) for no gain.
+// Replay decodes on the calling thread; the results do not depend on it.
+void single_threaded_decode()
+{
+    static bool done = false;
+    if (done)
+        return;
+    OIIO::attribute("threads", 1);
+    OIIO::attribute("exr_threads", -1); // -1: no OpenEXR thread pool at all
+    done = true;
+}
+
 eng_result read_parts(const char *path, size_t max_floats, rep_part **out, int *count, eng_error *err)
 {
+    single_threaded_decode();
     eng_result hr = check_exr_header(path, err);
     if (hr != ENG_OK)
         return hr;
@@ -222,7 +237,14 @@ eng_result read_parts(const char *path, size_t max_floats, rep_part **out, int *
         p.data = static_cast<float *>(std::malloc(floats * sizeof(float)));
         if (!p.data)
             return eng_fail(err, ENG_ERR_NOMEM, "%s: part %s: out of memory for %zu floats", path, pn, floats);
-        if (!in->read_image(s, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, p.data))
+        // All-float parts are read in their native format: OpenImageIO then decodes straight
+        // into p.data instead of through a conversion buffer of up to 64 MB per call.
+        bool all_float = spec.format == OIIO::TypeDesc::FLOAT &&
+                         (spec.channelformats.empty() ||
+                          std::all_of(spec.channelformats.begin(), spec.channelformats.end(),
+                                      [](const OIIO::TypeDesc &t) { return t == OIIO::TypeDesc::FLOAT; }));
+        if (!in->read_image(s, 0, 0, spec.nchannels, all_float ? OIIO::TypeDesc::UNKNOWN : OIIO::TypeDesc::FLOAT,
+                            p.data))
             return eng_fail(err, ENG_ERR_IO, "%s: part %s: cannot decode pixels: %s", path, pn,
                             pending(in.get()).c_str());
     }
