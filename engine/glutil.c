@@ -126,8 +126,32 @@ static eng_result compile(GLenum kind, const char *name, GLuint *out, eng_error 
     const char *src = eng_glsl_source(name);
     if (!src)
         return eng_fail(err, ENG_ERR_GL, "engine/shaders/%s: no such embedded shader", name);
+    /* A line `#pragma ispm_include "NAME"` splices in engine/shaders/NAME (GLSL has no
+     * include): the shader is compiled from the three strings before, NAME, after. */
+    static const char directive[] = "#pragma ispm_include \"";
+    const char *parts[3] = {src, "", ""};
+    GLint lens[3] = {-1, 0, 0};
+    const char *at = strstr(src, directive);
+    if (at) {
+        const char *name_start = at + sizeof directive - 1;
+        const char *name_end = strchr(name_start, '"');
+        char lib_name[64];
+        if (!name_end || (size_t)(name_end - name_start) >= sizeof lib_name)
+            return eng_fail(err, ENG_ERR_GL, "engine/shaders/%s: malformed ispm_include", name);
+        memcpy(lib_name, name_start, (size_t)(name_end - name_start));
+        lib_name[name_end - name_start] = 0;
+        const char *lib = eng_glsl_source(lib_name);
+        if (!lib)
+            return eng_fail(err, ENG_ERR_GL, "engine/shaders/%s: includes %s, which is not embedded", name, lib_name);
+        const char *after = strchr(name_end, '\n');
+        lens[0] = (GLint)(at - src);
+        parts[1] = lib;
+        lens[1] = -1;
+        parts[2] = after ? after : "";
+        lens[2] = -1;
+    }
     GLuint sh = glCreateShader(kind);
-    glShaderSource(sh, 1, &src, NULL);
+    glShaderSource(sh, 3, parts, lens);
     glCompileShader(sh);
     GLint ok = 0;
     glGetShaderiv(sh, GL_COMPILE_STATUS, &ok);

@@ -96,10 +96,7 @@ float fresnel_dielectric(float cos_i, float eta_i, float eta_t)
     return 0.5 * (rs * rs + rp * rp);
 }
 
-float smith_g1(float c, float a2)
-{
-    return 2.0 * c / (c + sqrt(a2 + (1.0 - a2) * c * c));
-}
+#pragma ispm_include "ggx.glsl"
 
 void main()
 {

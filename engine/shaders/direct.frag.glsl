@@ -82,16 +82,7 @@ float visibility(int i, vec3 p, vec3 n)
     return lit / taps;
 }
 
-float ggx_d(float noh, float a2)
-{
-    float d = noh * noh * (a2 - 1.0) + 1.0;
-    return a2 / (PI * d * d);
-}
-
-float smith_g1(float nox, float a2)
-{
-    return 2.0 * nox / (nox + sqrt(a2 + (1.0 - a2) * nox * nox));
-}
+#pragma ispm_include "ggx.glsl"
 
 void main()
 {

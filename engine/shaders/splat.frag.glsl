@@ -26,16 +26,7 @@ uniform vec3 u_eye;
 
 layout(location = 0) out vec4 o_radiance;
 
-float ggx_d(float noh, float a2)
-{
-    float d = noh * noh * (a2 - 1.0) + 1.0;
-    return a2 / (PI * d * d);
-}
-
-float smith_g1(float c, float a2)
-{
-    return 2.0 * c / (c + sqrt(a2 + (1.0 - a2) * c * c));
-}
+#pragma ispm_include "ggx.glsl"
 
 void main()
 {
