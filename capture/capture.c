@@ -730,6 +730,12 @@ static cJSON *manifest_json(const cap_capture *c)
     jadd(st, "random", jstr(eng_random_name(s.random)));
     jadd(st, "random_map_size", cJSON_CreateNumber(s.random_map_size));
     jadd(st, "random_seed", cJSON_CreateNumber(s.random_seed));
+    jadd(st, "splat_subsample", cJSON_CreateNumber(s.splat_subsample));
+    jadd(st, "temporal", cJSON_CreateBool(s.temporal));
+    jadd(st, "temporal_alpha", jfloat(s.temporal_alpha));
+    jadd(st, "atrous_iterations", cJSON_CreateNumber(s.atrous_iterations));
+    jadd(st, "atrous_detail", jstr(eng_detail_name(s.atrous_detail)));
+    jadd(st, "atrous_gamma", jfloat(s.atrous_gamma));
     jadd(root, "settings", st);
 
     cJSON *det = jok(cJSON_CreateObject());

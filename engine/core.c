@@ -172,12 +172,28 @@ void eng_settings_defaults(eng_settings *s)
     if (s->random == ENG_RANDOM_DEFAULT) s->random = ENG_RANDOM_MAPS;
     if (s->random_map_size == 0) s->random_map_size = 65536;
     if (s->random_seed == 0) s->random_seed = 1;
+    if (s->splat_subsample == 0) s->splat_subsample = 1;
+    if (s->temporal_alpha == 0.0f) s->temporal_alpha = 0.95f;
+    if (s->atrous_detail == ENG_DETAIL_DEFAULT) s->atrous_detail = ENG_DETAIL_CLIPPED;
+    if (s->atrous_gamma == 0.0f) s->atrous_gamma = 0.05f;
+}
+
+const char *eng_detail_name(eng_atrous_detail m)
+{
+    switch (m) {
+    case ENG_DETAIL_NONE: return "none";
+    case ENG_DETAIL_ALL: return "all";
+    case ENG_DETAIL_CLIPPED:
+    case ENG_DETAIL_DEFAULT: return "clipped";
+    }
+    return "unknown";
 }
 
 const char *eng_indirect_name(eng_indirect m)
 {
     switch (m) {
     case ENG_INDIRECT_NONE: return "none";
+    case ENG_INDIRECT_KDGATHER: return "kd-gather";
     case ENG_INDIRECT_ISPM:
     case ENG_INDIRECT_DEFAULT: return "ispm";
     }

@@ -186,8 +186,18 @@ int32_t scn_find_node(const scn_scene *scene, const char *name); /* -1 if absent
 typedef enum eng_indirect {
     ENG_INDIRECT_DEFAULT = 0, /* = ISPM */
     ENG_INDIRECT_NONE,        /* direct light only */
-    ENG_INDIRECT_ISPM         /* bounce map + CPU trace + photon volumes (ISPM §3) */
+    ENG_INDIRECT_ISPM,        /* bounce map + CPU trace + photon volumes (ISPM §3) */
+    ENG_INDIRECT_KDGATHER     /* the same photon map, gathered per pixel from a k-d tree on the
+                               * CPU (traditional photon mapping, ISPM Appendix A): the baseline */
 } eng_indirect;
+
+/* What the À-Trous filter keeps of its detail coefficients (002_… §7.3.1). */
+typedef enum eng_atrous_detail {
+    ENG_DETAIL_DEFAULT = 0, /* = clipped */
+    ENG_DETAIL_CLIPPED,     /* clamp(D_i, −γσ_i, γσ_i), Eq. 7.8 */
+    ENG_DETAIL_NONE,        /* scaling coefficients only (Dammertz et al.; 002 Fig. 7.2a) */
+    ENG_DETAIL_ALL          /* every detail kept: reconstructs the input (a test of the transform) */
+} eng_atrous_detail;
 
 typedef enum eng_random_mode {
     ENG_RANDOM_DEFAULT = 0,   /* = maps */
@@ -197,6 +207,7 @@ typedef enum eng_random_mode {
 
 const char *eng_indirect_name(eng_indirect m);
 const char *eng_random_name(eng_random_mode m);
+const char *eng_detail_name(eng_atrous_detail m);
 
 /* Engine settings. A zero-initialised struct means defaults (eng_settings_defaults fills
  * them in explicitly so the manifest can record the values used). */
@@ -215,6 +226,16 @@ typedef struct eng_settings {
     eng_random_mode random;
     int random_map_size;      /* entries per random table, a power of two; default 65536 */
     int random_seed;          /* seed of the random tables; default 1 */
+    /* Reconstruction filters (DESIGN.md step 7). With all of them off (the defaults) the
+     * splat writes outgoing radiance directly, as before; with any on, it writes irradiance
+     * (splat.irradiance) that the filters work on and the BSDF is applied last (002 Eq. 7.9). */
+    int splat_subsample;      /* 1 (full resolution), 2, 4 or 8: photon volumes at 1/k resolution,
+                               * joint bilateral upsampling level by level (003 §5.2); default 1 */
+    int temporal;             /* 1: temporal accumulation (002 §7.2, Eq. 7.3–7.4); default 0 */
+    float temporal_alpha;     /* the 0.95 of Eq. 7.4 (history weight); default 0.95 */
+    int atrous_iterations;    /* À-Trous wavelet iterations (002 §7.3, Eq. 7.5), 0 = off; default 0 */
+    eng_atrous_detail atrous_detail; /* default clipped */
+    float atrous_gamma;       /* γ of Eq. 7.7; default 0.05 (002 §8.2's table) */
 } eng_settings;
 
 void eng_settings_defaults(eng_settings *s);

@@ -319,4 +319,27 @@ void rt_update(eng_rt *rt, const eng_frame_scene *fs);
 int rt_occluded(const eng_rt *rt, const float a[3], const float b[3]);
 void rt_destroy(eng_rt *rt);
 
+/* ---------------------------------------------------------------- for CPU renderers */
+
+/* Poses the scene at frame `frame` (t = frame / fps) exactly as eng_render_frame does (world
+ * matrices, draws, lights, camera, Embree scene) without rendering anything, and returns the
+ * posed scene and the Embree scene (owned by the engine; valid until the next call or
+ * eng_render_frame). For CPU renderers that must see what the passes see (reference.c). */
+void eng_pose(eng_engine *e, int frame, const eng_frame_scene **fs, const eng_rt **rt);
+const eng_settings *eng_settings_of(const eng_engine *e);
+void eng_image_size(const eng_engine *e, int *width, int *height);
+
+/* k-d tree gather (kdgather.c), the traditional photon mapping baseline (003_… Appendix A):
+ * outgoing indirect radiance at each eye G-buffer pixel from the photons of `map` whose
+ * kernel reaches the pixel's surface point, with the same kernel (splat_kernel, splat_radius,
+ * s->kernel_radius, s->normal_compression) and the same BSDF as shaders/splat.frag.glsl, so
+ * that it matches the photon-volume scatter up to float rounding. Inputs are w×h images, top
+ * row first: position (x,y,z, coverage; coverage 0 = background), normal (x,y,z), albedo
+ * (r,g,b), material (roughness, metallic, transmission, ior). out gets w×h×4 floats: radiance
+ * R,G,B and the number of photons whose kernel covers the pixel. Multi-threaded (s->threads),
+ * bit-identical for any thread count. */
+eng_result kd_gather(const eng_photon_map *map, int w, int h, const float *position, const float *normal,
+                     const float *albedo, const float *material, const float eye[3], const eng_settings *s,
+                     float *out, eng_error *err);
+
 #endif

@@ -707,6 +707,22 @@ eng_result eng_render_frame(eng_engine *e, int frame, eng_error *err)
     return ENG_OK;
 }
 
+void eng_pose(eng_engine *e, int frame, const eng_frame_scene **fs, const eng_rt **rt)
+{
+    pose_frame(e, frame);
+    rt_update(e->rt, &e->fs);
+    *fs = &e->fs;
+    *rt = e->rt;
+}
+
+const eng_settings *eng_settings_of(const eng_engine *e) { return &e->settings; }
+
+void eng_image_size(const eng_engine *e, int *width, int *height)
+{
+    *width = e->width;
+    *height = e->height;
+}
+
 int eng_occluded(eng_engine *e, const float a[3], const float b[3])
 {
     if (!e->fs.draw_count)

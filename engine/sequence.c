@@ -148,7 +148,9 @@ static eng_result parse_settings(parser *P, const cJSON *obj, eng_settings *s)
 {
     static const char *const keys[] = {"shadow_map_size", "pcf_radius", "shadow_bias", "exposure", "threads",
                                        "indirect", "photon_count", "bounces", "kernel_radius",
-                                       "normal_compression", "random", "random_map_size", "random_seed", NULL};
+                                       "normal_compression", "random", "random_map_size", "random_seed",
+                                       "splat_subsample", "temporal", "temporal_alpha", "atrous_iterations",
+                                       "atrous_detail", "atrous_gamma", NULL};
     char v[80];
     eng_result r;
     if (!cJSON_IsObject(obj))
@@ -186,8 +188,11 @@ static eng_result parse_settings(parser *P, const cJSON *obj, eng_settings *s)
             s->indirect = ENG_INDIRECT_NONE;
         else if (cJSON_IsString(it) && !strcmp(it->valuestring, "ispm"))
             s->indirect = ENG_INDIRECT_ISPM;
+        else if (cJSON_IsString(it) && !strcmp(it->valuestring, "kd-gather"))
+            s->indirect = ENG_INDIRECT_KDGATHER;
         else
-            return bad(P, "settings.indirect: %s is not one of \"ispm\", \"none\"", show(it, v, sizeof v));
+            return bad(P, "settings.indirect: %s is not one of \"ispm\", \"kd-gather\", \"none\"",
+                       show(it, v, sizeof v));
     }
     if ((it = cJSON_GetObjectItemCaseSensitive(obj, "random"))) {
         if (cJSON_IsString(it) && !strcmp(it->valuestring, "maps"))
@@ -226,6 +231,46 @@ static eng_result parse_settings(parser *P, const cJSON *obj, eng_settings *s)
             return bad(P, "settings.normal_compression: %s is out of range 0.01..1 (r_z / r_xy)",
                        show(it, v, sizeof v));
         s->normal_compression = (float)d;
+    }
+    if ((it = cJSON_GetObjectItemCaseSensitive(obj, "splat_subsample"))) {
+        if ((r = get_int(P, it, "settings.splat_subsample", 1, 8, &s->splat_subsample)))
+            return r;
+        if (s->splat_subsample & (s->splat_subsample - 1))
+            return bad(P, "settings.splat_subsample: %s is not 1, 2, 4 or 8", show(it, v, sizeof v));
+    }
+    if ((it = cJSON_GetObjectItemCaseSensitive(obj, "temporal"))) {
+        if (!cJSON_IsBool(it))
+            return bad(P, "settings.temporal: expected true or false, got %s", show(it, v, sizeof v));
+        s->temporal = cJSON_IsTrue(it) ? 1 : 0;
+    }
+    if ((it = cJSON_GetObjectItemCaseSensitive(obj, "temporal_alpha"))) {
+        if ((r = get_number(P, it, "settings.temporal_alpha", &d)))
+            return r;
+        if (!(d > 0.0 && d < 1.0))
+            return bad(P, "settings.temporal_alpha: %s is out of range (0, 1)", show(it, v, sizeof v));
+        s->temporal_alpha = (float)d;
+    }
+    if ((it = cJSON_GetObjectItemCaseSensitive(obj, "atrous_iterations")) &&
+        (r = get_int(P, it, "settings.atrous_iterations", 0, 8, &s->atrous_iterations)))
+        return r;
+    if ((it = cJSON_GetObjectItemCaseSensitive(obj, "atrous_detail"))) {
+        if (cJSON_IsString(it) && !strcmp(it->valuestring, "clipped"))
+            s->atrous_detail = ENG_DETAIL_CLIPPED;
+        else if (cJSON_IsString(it) && !strcmp(it->valuestring, "none"))
+            s->atrous_detail = ENG_DETAIL_NONE;
+        else if (cJSON_IsString(it) && !strcmp(it->valuestring, "all"))
+            s->atrous_detail = ENG_DETAIL_ALL;
+        else
+            return bad(P, "settings.atrous_detail: %s is not one of \"clipped\", \"none\", \"all\"",
+                       show(it, v, sizeof v));
+    }
+    if ((it = cJSON_GetObjectItemCaseSensitive(obj, "atrous_gamma"))) {
+        if ((r = get_number(P, it, "settings.atrous_gamma", &d)))
+            return r;
+        if (!(d > 0.0 && d <= 1000.0))
+            return bad(P, "settings.atrous_gamma: %s is out of range (0, 1000] (γ of 002 Eq. 7.7; "
+                          "use \"atrous_detail\": \"none\" for scaling coefficients only)", show(it, v, sizeof v));
+        s->atrous_gamma = (float)d;
     }
     return ENG_OK;
 }
