@@ -272,9 +272,9 @@ static eng_result read_floats(loader *L, int index, const char *where, uint32_t 
                               float **out, uint64_t *count)
 {
     int type = comps == 1 ? GLS_TYPE_SCALAR : comps == 3 ? GLS_TYPE_VEC3 : GLS_TYPE_VEC4;
-    const gls_accessor *a;
-    const unsigned char *base;
-    uint64_t stride;
+    const gls_accessor *a = NULL;
+    const unsigned char *base = NULL;
+    uint64_t stride = 0;
     eng_result r = use_accessor(L, index, where, type, GLS_COMPONENT_FLOAT, &a, &base, &stride);
     if (r)
         return r;
@@ -302,9 +302,9 @@ static eng_result read_floats(loader *L, int index, const char *where, uint32_t 
 static eng_result read_indices(loader *L, int index, const char *where, uint32_t vertex_count,
                                uint32_t **out, uint64_t *count)
 {
-    const gls_accessor *a;
-    const unsigned char *base;
-    uint64_t stride;
+    const gls_accessor *a = NULL;
+    const unsigned char *base = NULL;
+    uint64_t stride = 0;
     eng_result r = use_accessor(L, index, where, GLS_TYPE_SCALAR, 0, &a, &base, &stride);
     if (r)
         return r;

@@ -132,7 +132,7 @@ static eng_result get_vec3(parser *P, const cJSON *item, const char *where, floa
         return bad(P, "%s: expected an array of 3 numbers, got %s", where, show(item, v, sizeof v));
     int i = 0;
     for (const cJSON *e = item->child; e; e = e->next, i++) {
-        double d;
+        double d = 0.0;
         snprintf(w, sizeof w, "%s[%d]", where, i);
         eng_result r = get_number(P, e, w, &d);
         if (r)
@@ -167,7 +167,7 @@ static eng_result parse_settings(parser *P, const cJSON *obj, eng_settings *s)
     if ((it = cJSON_GetObjectItemCaseSensitive(obj, "threads")) &&
         (r = get_int(P, it, "settings.threads", 1, 64, &s->threads)))
         return r;
-    double d;
+    double d = 0.0;
     if ((it = cJSON_GetObjectItemCaseSensitive(obj, "shadow_bias"))) {
         if ((r = get_number(P, it, "settings.shadow_bias", &d)))
             return r;
@@ -346,7 +346,7 @@ static eng_result parse_camera(parser *P, const cJSON *cam, seq_sequence *out)
     if ((r = check_keys(P, cam, "camera (with \"keys\")", look_keys)) || (r = parse_camera_keys(P, keys, out)))
         return r;
     const cJSON *it;
-    double d;
+    double d = 0.0;
     if ((it = cJSON_GetObjectItemCaseSensitive(cam, "up"))) {
         if ((r = get_vec3(P, it, "camera.up", out->camera_up)))
             return r;
