@@ -40,6 +40,7 @@ struct eng_engine {
     size_t bounce_count, bounce_capacity;
     eng_photon_map pmap;
     pass_splat *splat;
+    GLuint gather_tex; /* k-d gather's result, uploaded for the composite */
     int listener_count;
     eng_listener listeners[ENG_MAX_LISTENERS];
     float *world, *prev_world;
@@ -151,7 +152,7 @@ eng_result eng_create(const eng_desc *desc, eng_engine **out, eng_error *err)
         r = pass_direct_create(e->width, e->height, &e->direct, err);
     if (r == ENG_OK)
         r = pass_composite_create(e->width, e->height, &e->composite, err);
-    if (r == ENG_OK && e->settings.indirect == ENG_INDIRECT_ISPM) {
+    if (r == ENG_OK && (e->settings.indirect == ENG_INDIRECT_ISPM || e->settings.indirect == ENG_INDIRECT_KDGATHER)) {
         r = rmap_create((uint64_t)e->settings.random_seed, (uint32_t)e->settings.random_map_size, &e->rmaps, err);
         if (r == ENG_OK)
             r = pass_lightmaps_create(&e->rmaps, &e->lightmaps, err);
@@ -189,6 +190,8 @@ void eng_destroy(eng_engine *e)
             light_maps_release(&e->lmaps[i]);
         pass_lightmaps_destroy(e->lightmaps);
         pass_splat_destroy(e->splat);
+        if (e->gather_tex)
+            glDeleteTextures(1, &e->gather_tex);
         pass_composite_destroy(e->composite);
         pass_direct_destroy(e->direct);
         pass_shadow_destroy(e->shadow);
@@ -563,6 +566,62 @@ static int announce_photon_map(eng_engine *e, int frame)
     return rc;
 }
 
+/* Indirect light by the k-d gather baseline (kdgather.c, 003_… Appendix A) instead of photon
+ * volumes: the eye G-buffer read back, gathered on the CPU, uploaded for the composite. Timed
+ * as "gather", read-back and upload included since the method cannot do without them; then
+ * announced as gather.indirect, gather.count and indirect.radiance. *tex gets the texture. */
+static eng_result gather_pass(eng_engine *e, int frame, const glu_target *gb, GLuint *tex, eng_error *err)
+{
+    const int w = gb->width, h = gb->height;
+    const size_t npix = (size_t)w * (size_t)h;
+    const int p4[] = {0, 1, 2, 3}, p3[] = {0, 1, 2};
+    double t0 = now_ms();
+    float *buf = xmalloc(npix * 18 * sizeof(float));
+    float *pos = buf, *nrm = pos + 4 * npix, *alb = nrm + 3 * npix, *mat = alb + 3 * npix, *out = mat + 4 * npix;
+    glu_read(gb, 0, 0, 4, p4, pos);
+    glu_read(gb, 1, 0, 3, p3, nrm);
+    glu_read(gb, 2, 0, 3, p3, alb);
+    glu_read(gb, 3, 0, 4, p4, mat);
+    eng_result r = kd_gather(&e->pmap, w, h, pos, nrm, alb, mat, e->fs.camera.eye, &e->settings, out, err);
+    if (r != ENG_OK) {
+        free(buf);
+        return r;
+    }
+    if (!e->gather_tex) {
+        glGenTextures(1, &e->gather_tex);
+        glBindTexture(GL_TEXTURE_2D, e->gather_tex);
+        glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA32F, w, h, 0, GL_RGBA, GL_FLOAT, NULL);
+        glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+        glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+        glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
+        glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+    }
+    /* Announced rows are top first, GL's row 0 is the bottom: upload flipped (into pos, no
+     * longer needed). */
+    for (int y = 0; y < h; y++)
+        memcpy(pos + 4 * (size_t)(h - 1 - y) * w, out + 4 * (size_t)y * w, 4 * (size_t)w * sizeof(float));
+    glBindTexture(GL_TEXTURE_2D, e->gather_tex);
+    glPixelStorei(GL_UNPACK_ALIGNMENT, 4);
+    glTexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, w, h, GL_RGBA, GL_FLOAT, pos);
+    glBindTexture(GL_TEXTURE_2D, 0);
+    glFinish();
+    add_time(e, "gather", now_ms() - t0);
+    *tex = e->gather_tex;
+    float *rgb = nrm, *count = alb; /* 3·npix and npix floats fit in what nrm and alb held */
+    for (size_t i = 0; i < npix; i++) {
+        memcpy(rgb + 3 * i, out + 4 * i, 3 * sizeof(float));
+        count[i] = out[4 * i + 3];
+    }
+    int aborted = (seq_wants(e->seq, "gather.indirect") && announce(e, frame, "gather.indirect", w, h, 3, CH_RGB, rgb)) ||
+                  (seq_wants(e->seq, "gather.count") && announce(e, frame, "gather.count", w, h, 1, CH_Y, count)) ||
+                  (seq_wants(e->seq, "indirect.radiance") &&
+                   announce(e, frame, "indirect.radiance", w, h, 3, CH_RGB, rgb));
+    free(buf);
+    if (aborted)
+        return eng_fail(err, ENG_ERR_ABORTED, "frame %d: capture failed in the gather pass", frame);
+    return ENG_OK;
+}
+
 eng_result eng_render_frame(eng_engine *e, int frame, eng_error *err)
 {
     if (frame < 0 || frame >= e->seq->frame_count)
@@ -606,7 +665,7 @@ eng_result eng_render_frame(eng_engine *e, int frame, eng_error *err)
 
     /* Light G-buffers, bounce maps and the CPU photon trace (ISPM §3 1b–d). */
     int ispm = e->settings.indirect == ENG_INDIRECT_ISPM;
-    if (ispm) {
+    if (ispm || e->settings.indirect == ENG_INDIRECT_KDGATHER) {
         uint32_t salt = e->settings.random == ENG_RANDOM_PER_FRAME ? (uint32_t)frame + 1u : 0u;
         eng_result r = light_passes(e, frame, salt, err);
         if (r != ENG_OK)
@@ -685,6 +744,12 @@ eng_result eng_render_frame(eng_engine *e, int frame, eng_error *err)
             read_and_announce(e, frame, "splat.count", sp, 0, 0, 1, p3, CH_Y) ||
             read_and_announce(e, frame, "indirect.radiance", sp, 0, 0, 3, p012, CH_RGB))
             return eng_fail(err, ENG_ERR_ABORTED, "frame %d: capture failed in the splat pass", frame);
+    }
+
+    if (e->settings.indirect == ENG_INDIRECT_KDGATHER) {
+        eng_result r = gather_pass(e, frame, gb, &indirect_tex, err);
+        if (r != ENG_OK)
+            return r;
     }
 
     /* Composite and display transform. */

@@ -1,0 +1,301 @@
+/* kdgather.c — traditional photon mapping's radiance estimate (003_… Appendix A), the baseline
+ * that ISPM's scatter is measured against: the photon map is balanced into a k-d tree once
+ * per frame, then every eye G-buffer pixel gathers the photons within a constant radius
+ * (Appendix A, "Radiance estimates" step 2, the constant-radius variant) and sums step 3(a),
+ * L_o += f(s, ω_i, ω_o) · Φ_i · max(0, ω_i · n) · κ(x − s).
+ *
+ * The kernel and BSDF are those of shaders/splat.frag.glsl, evaluated in the same float
+ * operations in the same order (ISPM §5 calls scatter and gather "mathematically identical";
+ * here they are also numerically identical up to the GPU's rounding): κ of §5.1 Eq. 2–3 with
+ * the photon's r_xy = splat_radius(kernel_radius, ρp) and r_z = normal_compression · r_xy,
+ * Lambert for the non-metallic, non-transmissive part and a GGX lobe for metals. The gather
+ * radius is the largest r_xy in the map: the ellipsoid never reaches farther than r_xy.
+ *
+ * Determinism: rows are shared among OpenMP threads, but each pixel is computed by one thread
+ * and sums its photons in photon-index order (the order the GPU's instances are drawn in), so
+ * the result is bit-identical for any thread count. Owns nothing between calls. */
+#include "eng_internal.h"
+#include "kdtree.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* ---------------------------------------------------------------- the tree */
+
+static void oom(void)
+{
+    fprintf(stderr, "ispm: out of memory\n");
+    abort();
+}
+
+typedef struct build_ctx {
+    const float *points;
+    size_t stride;
+} build_ctx;
+
+/* The total order of the median split: coordinate, then input index. */
+static int before(const build_ctx *c, int axis, uint32_t a, uint32_t b)
+{
+    float fa = c->points[(size_t)a * c->stride + (size_t)axis];
+    float fb = c->points[(size_t)b * c->stride + (size_t)axis];
+    return fa < fb || (fa == fb && a < b);
+}
+
+static void swap_u32(uint32_t *a, uint32_t *b)
+{
+    uint32_t t = *a;
+    *a = *b;
+    *b = t;
+}
+
+/* Quickselect: puts the k-th smallest of idx[lo, hi) at k, smaller ones before it and larger
+ * ones after (Lomuto partition around a median-of-three pivot; keys are unique, so the result
+ * depends on nothing but the points). */
+static void select_kth(const build_ctx *c, int axis, uint32_t *idx, size_t lo, size_t hi, size_t k)
+{
+    while (hi - lo > 1) {
+        size_t mid = lo + (hi - lo) / 2, last = hi - 1;
+        if (before(c, axis, idx[mid], idx[lo]))
+            swap_u32(&idx[mid], &idx[lo]);
+        if (before(c, axis, idx[last], idx[lo]))
+            swap_u32(&idx[last], &idx[lo]);
+        if (before(c, axis, idx[last], idx[mid]))
+            swap_u32(&idx[last], &idx[mid]);
+        swap_u32(&idx[mid], &idx[last]); /* the median of three becomes the pivot, at the end */
+        uint32_t pivot = idx[last];
+        size_t store = lo;
+        for (size_t i = lo; i < last; i++)
+            if (before(c, axis, idx[i], pivot))
+                swap_u32(&idx[i], &idx[store++]);
+        swap_u32(&idx[store], &idx[last]);
+        if (k == store)
+            return;
+        if (k < store)
+            hi = store;
+        else
+            lo = store + 1;
+    }
+}
+
+static void build_range(const build_ctx *c, uint32_t *idx, uint8_t *axis, size_t lo, size_t hi)
+{
+    while (hi > lo) {
+        float mn[3] = {INFINITY, INFINITY, INFINITY}, mx[3] = {-INFINITY, -INFINITY, -INFINITY};
+        for (size_t i = lo; i < hi; i++) {
+            const float *p = c->points + (size_t)idx[i] * c->stride;
+            for (int a = 0; a < 3; a++) {
+                mn[a] = fminf(mn[a], p[a]);
+                mx[a] = fmaxf(mx[a], p[a]);
+            }
+        }
+        int ax = 0;
+        for (int a = 1; a < 3; a++)
+            if (mx[a] - mn[a] > mx[ax] - mn[ax])
+                ax = a;
+        size_t mid = lo + (hi - lo) / 2;
+        select_kth(c, ax, idx, lo, hi, mid);
+        axis[mid] = (uint8_t)ax;
+        build_range(c, idx, axis, lo, mid);
+        lo = mid + 1; /* the right half iteratively: recursion depth stays log2(count) */
+    }
+}
+
+eng_result kd_tree_build(const float *points, size_t count, size_t stride, kd_tree *t, eng_error *err)
+{
+    memset(t, 0, sizeof *t);
+    if (count >= UINT32_MAX || stride < 3)
+        return eng_fail(err, ENG_ERR_INVALID, "kd-gather: %zu points of stride %zu cannot be indexed", count, stride);
+    t->index = malloc((count ? count : 1) * sizeof *t->index);
+    t->point = malloc((count ? count : 1) * 3 * sizeof *t->point);
+    t->axis = malloc(count ? count : 1);
+    if (!t->index || !t->point || !t->axis) {
+        kd_tree_free(t);
+        return eng_fail(err, ENG_ERR_NOMEM, "kd-gather: out of memory for a tree of %zu points", count);
+    }
+    t->count = count;
+    for (size_t i = 0; i < count; i++)
+        t->index[i] = (uint32_t)i;
+    build_ctx c = {points, stride};
+    build_range(&c, t->index, t->axis, 0, count);
+    for (size_t i = 0; i < count; i++)
+        memcpy(t->point + 3 * i, points + (size_t)t->index[i] * stride, 3 * sizeof(float));
+    return ENG_OK;
+}
+
+void kd_tree_free(kd_tree *t)
+{
+    free(t->index);
+    free(t->point);
+    free(t->axis);
+    memset(t, 0, sizeof *t);
+}
+
+void kd_tree_range(const kd_tree *t, const float q[3], float r, uint32_t **out, size_t *n, size_t *cap)
+{
+    /* Explicit stack of index ranges; depth <= log2(count) + 1 < 64. */
+    size_t stack_lo[64], stack_hi[64];
+    int top = 0;
+    if (t->count == 0)
+        return;
+    stack_lo[0] = 0;
+    stack_hi[0] = t->count;
+    top = 1;
+    const float r2 = r * r;
+    while (top > 0) {
+        top--;
+        size_t lo = stack_lo[top], hi = stack_hi[top];
+        while (hi > lo) {
+            size_t mid = lo + (hi - lo) / 2;
+            const float *p = t->point + 3 * mid;
+            float dx = p[0] - q[0], dy = p[1] - q[1], dz = p[2] - q[2];
+            if (dx * dx + dy * dy + dz * dz <= r2) {
+                if (*n == *cap) {
+                    *cap = *cap ? 2 * *cap : 256;
+                    uint32_t *grown = realloc(*out, *cap * sizeof **out);
+                    if (!grown)
+                        oom();
+                    *out = grown;
+                }
+                (*out)[(*n)++] = t->index[mid];
+            }
+            int a = t->axis[mid];
+            float split = p[a];
+            int go_left = q[a] - r <= split && mid > lo;
+            int go_right = q[a] + r >= split && hi > mid + 1;
+            if (go_left && go_right) {
+                stack_lo[top] = mid + 1;
+                stack_hi[top] = hi;
+                top++;
+                hi = mid;
+            } else if (go_left) {
+                hi = mid;
+            } else if (go_right) {
+                lo = mid + 1;
+            } else {
+                break;
+            }
+        }
+    }
+}
+
+/* ---------------------------------------------------------------- the gather */
+
+static int cmp_u32(const void *a, const void *b)
+{
+    uint32_t x = *(const uint32_t *)a, y = *(const uint32_t *)b;
+    return (x > y) - (x < y);
+}
+
+/* shaders/ggx.glsl, in the same float operations. */
+static float ggx_d(float noh, float a2)
+{
+    float d = noh * noh * (a2 - 1.0f) + 1.0f;
+    return a2 / ((float)ENG_PI * d * d);
+}
+
+static float smith_g1(float c, float a2)
+{
+    return 2.0f * c / (c + sqrtf(a2 + (1.0f - a2) * c * c));
+}
+
+static float dot3f(const float a[3], const float b[3])
+{
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+}
+
+/* One pixel: shaders/splat.frag.glsl's main() summed over the photons in `list` (sorted by
+ * photon index). acc gets R, G, B and the number of photons that passed every discard. */
+static void gather_pixel(const eng_photon_map *map, const float *r_xy, float compression, const uint32_t *list,
+                         size_t n, const float s[3], const float nrm[3], const float albedo[3], const float mat[4],
+                         const float eye[3], float acc[4])
+{
+    const float PI_F = (float)ENG_PI;
+    float v[3] = {eye[0] - s[0], eye[1] - s[1], eye[2] - s[2]};
+    float vlen = sqrtf(dot3f(v, v));
+    for (int c = 0; c < 3; c++)
+        v[c] = v[c] / vlen;
+    float nov = fmaxf(dot3f(nrm, v), 1e-4f);
+    float a = fmaxf(mat[0] * mat[0], 1e-2f), a2 = a * a;
+    for (size_t k = 0; k < n; k++) {
+        const eng_photon *ph = &map->photons[list[k]];
+        float rxy = r_xy[list[k]], rz = rxy * compression;
+        float d[3] = {s[0] - ph->position[0], s[1] - ph->position[1], s[2] - ph->position[2]};
+        float len = sqrtf(dot3f(d, d));
+        float t = len > 0.0f ? len / rxy * (1.0f + fabsf(dot3f(d, ph->normal)) / len * (rxy - rz) / rz) : 0.0f;
+        if (t >= 1.0f)
+            continue;
+        float kappa = 2.0f / (PI_F * rxy * rxy) * (1.0f - t * t);
+        float cos_i = dot3f(ph->direction, nrm);
+        if (cos_i <= 0.0f)
+            continue;
+        float f[3];
+        for (int c = 0; c < 3; c++)
+            f[c] = albedo[c] * (1.0f - mat[1]) * (1.0f - mat[2]) / PI_F;
+        if (mat[1] > 0.0f) {
+            float h[3] = {ph->direction[0] + v[0], ph->direction[1] + v[1], ph->direction[2] + v[2]};
+            float hl = sqrtf(dot3f(h, h));
+            for (int c = 0; c < 3; c++)
+                h[c] = h[c] / hl;
+            float voh = fmaxf(dot3f(v, h), 0.0f);
+            float spec = ggx_d(fmaxf(dot3f(nrm, h), 0.0f), a2) * smith_g1(cos_i, a2) * smith_g1(nov, a2) /
+                         (4.0f * cos_i * nov);
+            for (int c = 0; c < 3; c++) {
+                float fr = albedo[c] + (1.0f - albedo[c]) * powf(1.0f - voh, 5.0f);
+                f[c] += mat[1] * fr * spec;
+            }
+        }
+        for (int c = 0; c < 3; c++)
+            acc[c] += f[c] * cos_i * ph->power[c] * kappa;
+        acc[3] += 1.0f;
+    }
+}
+
+eng_result kd_gather(const eng_photon_map *map, int w, int h, const float *position, const float *normal,
+                     const float *albedo, const float *material, const float eye[3], const eng_settings *s,
+                     float *out, eng_error *err)
+{
+    memset(out, 0, (size_t)w * (size_t)h * 4 * sizeof(float));
+    if (map->count == 0)
+        return ENG_OK;
+    kd_tree tree;
+    eng_result r = kd_tree_build(map->photons[0].position, map->count, sizeof(eng_photon) / sizeof(float), &tree, err);
+    if (r != ENG_OK)
+        return r;
+    float *r_xy = malloc(map->count * sizeof *r_xy);
+    if (!r_xy) {
+        kd_tree_free(&tree);
+        return eng_fail(err, ENG_ERR_NOMEM, "kd-gather: out of memory for %zu photons", map->count);
+    }
+    float radius = 0.0f;
+    for (size_t i = 0; i < map->count; i++) {
+        r_xy[i] = splat_radius(s->kernel_radius, map->photons[i].path_density);
+        radius = fmaxf(radius, r_xy[i]);
+    }
+    const float compression = s->normal_compression;
+    int threads = s->threads > 0 ? s->threads : 2;
+#pragma omp parallel num_threads(threads)
+    {
+        uint32_t *list = NULL;
+        size_t cap = 0;
+#pragma omp for schedule(dynamic, 1)
+        for (int y = 0; y < h; y++) {
+            for (int x = 0; x < w; x++) {
+                size_t i = (size_t)y * (size_t)w + (size_t)x;
+                const float *p = position + 4 * i;
+                if (p[3] == 0.0f)
+                    continue;
+                size_t n = 0;
+                kd_tree_range(&tree, p, radius, &list, &n, &cap);
+                qsort(list, n, sizeof *list, cmp_u32);
+                gather_pixel(map, r_xy, compression, list, n, p, normal + 3 * i, albedo + 3 * i, material + 4 * i,
+                             eye, out + 4 * i);
+            }
+        }
+        free(list);
+    }
+    free(r_xy);
+    kd_tree_free(&tree);
+    return ENG_OK;
+}
