@@ -26,6 +26,7 @@ static void usage(FILE *f)
             "  record SEQUENCE -o RUN     render every frame of a sequence, capture every pass to RUN\n"
             "  replay RUN [--golden DIR]  compare a run buffer by buffer against a golden\n"
             "  bless RUN DIR              make a complete run the golden in DIR\n"
+            "  bench CONFIG -o OUTDIR     speed vs accuracy of engine settings against a reference run\n"
             "\n"
             "Run 'ispm <command> --help' for a command's options and exit codes.\n");
 }
@@ -298,6 +299,8 @@ static int cmd_bless(int argc, char **argv)
     return EXIT_OK;
 }
 
+int cmd_bench(int argc, char **argv, const char *command_line); /* cmd_bench.c */
+
 int main(int argc, char **argv)
 {
     if (argc < 2) {
@@ -332,6 +335,8 @@ int main(int argc, char **argv)
         return cmd_replay(argc, argv);
     if (!strcmp(cmd, "bless"))
         return cmd_bless(argc, argv);
+    if (!strcmp(cmd, "bench"))
+        return cmd_bench(argc, argv, line);
     fprintf(stderr, "ispm: unknown command '%s'\n", cmd);
     usage(stderr);
     return EXIT_INPUT;
