@@ -1038,8 +1038,10 @@ int cmd_bench(int argc, char **argv, const char *command_line)
             if (c.frames[i] >= pts[0].seq->frame_count)
                 r = eng_fail(&err, ENG_ERR_INVALID, "%s: frame %d requested, the sequence %s has %d frames", c.path,
                              c.frames[i], c.sequence, pts[0].seq->frame_count);
-    if (r == ENG_OK)
-        r = load_reference(&c, pts[0].seq->width, pts[0].seq->height, &ref, &err);
+    if (r == ENG_OK && (r = load_reference(&c, pts[0].seq->width, pts[0].seq->height, &ref, &err)) != ENG_OK) {
+        eng_error inner = err;
+        eng_fail(&err, r, "%s: reference: %s", c.path, inner.msg);
+    }
     if (r == ENG_OK)
         r = scn_load_gltf(pts[0].seq->scene_path, &scene, &err);
     if (r != ENG_OK) { /* the config, sequence, scene or reference */
