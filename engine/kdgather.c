@@ -286,8 +286,17 @@ eng_result kd_gather(const eng_photon_map *map, int w, int h, const float *posit
                 const float *p = position + 4 * i;
                 if (p[3] == 0.0f)
                     continue;
-                size_t n = 0;
+                size_t n = 0, kept = 0;
                 kd_tree_range(&tree, p, radius, &list, &n, &cap);
+                /* Photons whose own kernel cannot reach s (t >= |d|/r_xy >= 1) are dropped
+                 * before sorting; the margin keeps every photon the kernel could accept. */
+                for (size_t k = 0; k < n; k++) {
+                    const float *x = map->photons[list[k]].position;
+                    float dx = p[0] - x[0], dy = p[1] - x[1], dz = p[2] - x[2], r = r_xy[list[k]];
+                    if (dx * dx + dy * dy + dz * dz <= r * r * 1.001f)
+                        list[kept++] = list[k];
+                }
+                n = kept;
                 qsort(list, n, sizeof *list, cmp_u32);
                 gather_pixel(map, r_xy, compression, list, n, p, normal + 3 * i, albedo + 3 * i, material + 4 * i,
                              eye, out + 4 * i);
