@@ -69,6 +69,8 @@ eng_result glu_pass_create(glu_pass *p, const char *frag_name, int count, int wi
 void glu_pass_destroy(glu_pass *p);
 /* Draws the fullscreen triangle into p's target with p's program (bound by the caller). */
 void glu_pass_draw(const glu_pass *p);
+/* Same into another target of the same kind (ping-pong, per-iteration targets). */
+void glu_pass_draw_to(const glu_pass *p, const glu_target *t);
 
 /* ---------------------------------------------------------------- scene as drawn */
 
@@ -189,7 +191,10 @@ void pass_lightmaps_destroy(pass_lightmaps *p);
  * target (RGB radiance, A = number of kernels covering the pixel), depth-tested against the
  * eye G-buffer's depth buffer. */
 typedef struct pass_splat pass_splat;
-eng_result pass_splat_create(int width, int height, pass_splat **out, eng_error *err);
+/* irradiance = 0: one attachment, RGB outgoing radiance (splat.frag.glsl). irradiance = 1:
+ * for the reconstruction filters, two attachments: 0 irradiance RGB + count, 1 the glossy
+ * radiance (splat_irradiance.frag.glsl). width×height must be the G-buffer's it runs against. */
+eng_result pass_splat_create(int width, int height, int irradiance, pass_splat **out, eng_error *err);
 const glu_target *pass_splat_run(pass_splat *p, const eng_frame_scene *fs, const glu_target *gbuf,
                                  const eng_photon_map *map, const eng_settings *s);
 void pass_splat_destroy(pass_splat *p);
@@ -201,6 +206,46 @@ float splat_kernel(const float d[3], const float n_p[3], float r_xy, float r_z);
 /* The kernel radius r_xy of a photon of path density rho (ISPM §2.5/§4.3: large kernels for
  * improbable paths, small for caustics): kernel_radius · clamp((1000 ρ)^(−1/4), 1/4, 2). */
 float splat_radius(float kernel_radius, float rho);
+
+/* Reconstruction filters (pass_filter.c; DESIGN.md step 7). G-buffer targets are laid out as
+ * pass_gbuffer's: 0 position, 1 normal (w: the point's eye depth in the previous frame),
+ * 2 albedo, 3 material, 4 (eye depth, material id, motion x, motion y). Every run returns the
+ * pass's own target(s); inputs are textures. */
+
+/* Joint bilateral upsampling by one level (003 §5.2, 004 §6): from a low-resolution G-buffer
+ * and its irradiance + glossy textures to hi_gb's resolution. Returns 2 attachments:
+ * 0 irradiance (A = weight sum, 0 where the closest-depth tap was taken alone), 1 glossy. */
+typedef struct pass_upsample pass_upsample;
+eng_result pass_upsample_create(int width, int height, pass_upsample **out, eng_error *err);
+const glu_target *pass_upsample_run(pass_upsample *p, const glu_target *lo_gb, GLuint lo_irradiance,
+                                    GLuint lo_glossy, const glu_target *hi_gb);
+void pass_upsample_destroy(pass_upsample *p);
+
+/* Temporal accumulation (002 §7.2, Eq. 7.3–7.4). Keeps its result and the G-buffer's normal
+ * and depth for the next call; the first call after create or reset has no history (α = 0).
+ * Returns 2 attachments: 0 result RGB + α in A, 1 the reprojected history RGB. */
+typedef struct pass_temporal pass_temporal;
+eng_result pass_temporal_create(int width, int height, pass_temporal **out, eng_error *err);
+const glu_target *pass_temporal_run(pass_temporal *p, const glu_target *gb, GLuint irradiance, float alpha);
+void pass_temporal_reset(pass_temporal *p);
+void pass_temporal_destroy(pass_temporal *p);
+
+/* Edge-avoiding À-Trous with variance-clipped details (002 §7.3, Eq. 7.5–7.8), `iterations`
+ * iterations (1..8) at steps 1, 2, 4, ... Returns an array of `iterations` targets, one per
+ * iteration i, with 4 attachments: 0 S_{i+1}, 1 the kept detail D'_i, 2 Σ_{k≤i} D'_k,
+ * 3 S_{i+1} + Σ_{k≤i} D'_k (the last one's is the filter's result). */
+typedef struct pass_atrous pass_atrous;
+eng_result pass_atrous_create(int width, int height, int iterations, pass_atrous **out, eng_error *err);
+const glu_target *pass_atrous_run(pass_atrous *p, const glu_target *gb, GLuint irradiance,
+                                  eng_atrous_detail detail, float gamma);
+void pass_atrous_destroy(pass_atrous *p);
+
+/* The BSDF applied to reconstructed irradiance (002 §7.4 Eq. 7.9) plus the glossy radiance:
+ * outgoing indirect radiance RGB in attachment 0. */
+typedef struct pass_resolve pass_resolve;
+eng_result pass_resolve_create(int width, int height, pass_resolve **out, eng_error *err);
+const glu_target *pass_resolve_run(pass_resolve *p, const glu_target *gb, GLuint irradiance, GLuint glossy);
+void pass_resolve_destroy(pass_resolve *p);
 
 /* Composite (pass_composite.c): attachment 0 = direct + indirect (linear radiance),
  * attachment 1 = display transform (exposure, clamp, sRGB encoding). indirect may be 0. */

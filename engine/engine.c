@@ -41,6 +41,17 @@ struct eng_engine {
     eng_photon_map pmap;
     pass_splat *splat;
     GLuint gather_tex; /* k-d gather's result, uploaded for the composite */
+    /* Reconstruction filters (DESIGN.md step 7), on when any of splat_subsample > 1,
+     * temporal, atrous_iterations is set: G-buffers at 1/2^l resolution (gbuffer_lo[l-1]),
+     * upsampling to level l (upsample[l]), temporal accumulation, À-Trous, BSDF resolve. */
+    int filtered, levels;
+    pass_gbuffer *gbuffer_lo[3];
+    pass_upsample *upsample[3];
+    pass_temporal *temporal;
+    pass_atrous *atrous;
+    pass_resolve *resolve;
+    int next_frame; /* the frame the temporal history is ready for (frames render in order) */
+    int silent;     /* re-rendering earlier frames for the temporal history: announce nothing */
     int listener_count;
     eng_listener listeners[ENG_MAX_LISTENERS];
     float *world, *prev_world;
@@ -152,12 +163,36 @@ eng_result eng_create(const eng_desc *desc, eng_engine **out, eng_error *err)
         r = pass_direct_create(e->width, e->height, &e->direct, err);
     if (r == ENG_OK)
         r = pass_composite_create(e->width, e->height, &e->composite, err);
-    if (r == ENG_OK && (e->settings.indirect == ENG_INDIRECT_ISPM || e->settings.indirect == ENG_INDIRECT_KDGATHER)) {
+    if (r == ENG_OK && e->settings.indirect == ENG_INDIRECT_KDGATHER) {
+        /* The k-d gather needs the photon map only: no photon volumes, no filters. */
         r = rmap_create((uint64_t)e->settings.random_seed, (uint32_t)e->settings.random_map_size, &e->rmaps, err);
         if (r == ENG_OK)
             r = pass_lightmaps_create(&e->rmaps, &e->lightmaps, err);
+    }
+    if (r == ENG_OK && e->settings.indirect == ENG_INDIRECT_ISPM) {
+        r = rmap_create((uint64_t)e->settings.random_seed, (uint32_t)e->settings.random_map_size, &e->rmaps, err);
         if (r == ENG_OK)
-            r = pass_splat_create(e->width, e->height, &e->splat, err);
+            r = pass_lightmaps_create(&e->rmaps, &e->lightmaps, err);
+        const eng_settings *st = &e->settings;
+        e->filtered = st->splat_subsample > 1 || st->temporal || st->atrous_iterations > 0;
+        int w = e->width, h = e->height;
+        while ((1 << e->levels) < st->splat_subsample && e->levels < 3) {
+            e->levels++;
+            if (r == ENG_OK) /* level l+1 is level l's G-buffer halved, rounded up */
+                r = pass_upsample_create(w, h, &e->upsample[e->levels - 1], err);
+            w = (w + 1) / 2;
+            h = (h + 1) / 2;
+            if (r == ENG_OK)
+                r = pass_gbuffer_create(w, h, &e->gbuffer_lo[e->levels - 1], err);
+        }
+        if (r == ENG_OK)
+            r = pass_splat_create(w, h, e->filtered, &e->splat, err);
+        if (r == ENG_OK && st->temporal)
+            r = pass_temporal_create(e->width, e->height, &e->temporal, err);
+        if (r == ENG_OK && st->atrous_iterations > 0)
+            r = pass_atrous_create(e->width, e->height, st->atrous_iterations, &e->atrous, err);
+        if (r == ENG_OK && e->filtered)
+            r = pass_resolve_create(e->width, e->height, &e->resolve, err);
     }
     if (r != ENG_OK) {
         eng_destroy(e);
@@ -192,6 +227,13 @@ void eng_destroy(eng_engine *e)
         pass_splat_destroy(e->splat);
         if (e->gather_tex)
             glDeleteTextures(1, &e->gather_tex);
+        for (int l = 0; l < 3; l++) {
+            pass_gbuffer_destroy(e->gbuffer_lo[l]);
+            pass_upsample_destroy(e->upsample[l]);
+        }
+        pass_temporal_destroy(e->temporal);
+        pass_atrous_destroy(e->atrous);
+        pass_resolve_destroy(e->resolve);
         pass_composite_destroy(e->composite);
         pass_direct_destroy(e->direct);
         pass_shadow_destroy(e->shadow);
@@ -352,6 +394,8 @@ static void pose_frame(eng_engine *e, int frame)
 static int announce(eng_engine *e, int frame, const char *name, int w, int h, int nch,
                     const char *const *channels, const float *data)
 {
+    if (e->silent)
+        return 0;
     eng_buffer b = {name, w, h, nch, channels, data};
     for (int i = 0; i < e->listener_count; i++)
         if (e->listeners[i].buffer && e->listeners[i].buffer(e->listeners[i].user, frame, &b) != 0)
@@ -374,7 +418,7 @@ static void scratch_reserve(eng_engine *e, size_t n)
 static int read_and_announce(eng_engine *e, int frame, const char *name, const glu_target *t, int index,
                              int layer, int nch, const int *pick, const char *const *channels)
 {
-    if (!seq_wants(e->seq, name))
+    if (e->silent || !seq_wants(e->seq, name))
         return 0;
     scratch_reserve(e, (size_t)t->width * (size_t)t->height * (size_t)nch);
     double t0 = now_ms();
@@ -622,16 +666,111 @@ static eng_result gather_pass(eng_engine *e, int frame, const glu_target *gb, GL
     return ENG_OK;
 }
 
+/* The indirect light through the reconstruction filters (DESIGN.md steps 6–7): G-buffers at
+ * the subsampled levels, photon volumes as irradiance at the coarsest level, upsampling level
+ * by level, temporal accumulation, À-Trous, and the BSDF. Announces every level; *tex gets
+ * the texture of indirect.radiance. */
+static eng_result filtered_indirect(eng_engine *e, int frame, const glu_target *gb, GLuint *tex, eng_error *err)
+{
+    static const int p012[] = {0, 1, 2}, p3[] = {3}, p2[] = {0};
+    const eng_settings *s = &e->settings;
+    const glu_target *lvl[4] = {gb, NULL, NULL, NULL};
+    char name[64];
+    int aborted = 0;
+    double t0 = now_ms();
+    for (int l = 1; l <= e->levels; l++)
+        lvl[l] = pass_gbuffer_run(e->gbuffer_lo[l - 1], &e->fs);
+    glFinish();
+    if (e->levels)
+        add_time(e, "gbuffer_lo", now_ms() - t0);
+    for (int l = 1; l <= e->levels && !aborted; l++) {
+        snprintf(name, sizeof name, "gbuffer.level%d.position", l);
+        aborted = read_and_announce(e, frame, name, lvl[l], 0, 0, 3, p012, CH_XYZ);
+        snprintf(name, sizeof name, "gbuffer.level%d.normal", l);
+        aborted = aborted || read_and_announce(e, frame, name, lvl[l], 1, 0, 3, p012, CH_XYZ);
+        snprintf(name, sizeof name, "gbuffer.level%d.depth", l);
+        aborted = aborted || read_and_announce(e, frame, name, lvl[l], 4, 0, 1, p2, CH_Z);
+    }
+    t0 = now_ms();
+    const glu_target *sp = pass_splat_run(e->splat, &e->fs, lvl[e->levels], &e->pmap, s);
+    glFinish();
+    add_time(e, "splat", now_ms() - t0);
+    aborted = aborted || read_and_announce(e, frame, "splat.irradiance", sp, 0, 0, 3, p012, CH_RGB) ||
+              read_and_announce(e, frame, "splat.count", sp, 0, 0, 1, p3, CH_Y) ||
+              read_and_announce(e, frame, "splat.glossy", sp, 1, 0, 3, p012, CH_RGB);
+    GLuint irradiance = sp->color[0], glossy = sp->color[1];
+    for (int l = e->levels - 1; l >= 0 && !aborted; l--) {
+        t0 = now_ms();
+        const glu_target *up = pass_upsample_run(e->upsample[l], lvl[l + 1], irradiance, glossy, lvl[l]);
+        glFinish();
+        add_time(e, "upsample", now_ms() - t0);
+        snprintf(name, sizeof name, "upsample.level%d", l);
+        aborted = read_and_announce(e, frame, name, up, 0, 0, 3, p012, CH_RGB);
+        irradiance = up->color[0];
+        glossy = up->color[1];
+    }
+    if (e->temporal && !aborted) {
+        t0 = now_ms();
+        const glu_target *tt = pass_temporal_run(e->temporal, gb, irradiance, s->temporal_alpha);
+        glFinish();
+        add_time(e, "temporal", now_ms() - t0);
+        aborted = read_and_announce(e, frame, "temporal.history", tt, 1, 0, 3, p012, CH_RGB) ||
+                  read_and_announce(e, frame, "temporal.alpha", tt, 0, 0, 1, p3, CH_Y) ||
+                  read_and_announce(e, frame, "temporal.result", tt, 0, 0, 3, p012, CH_RGB);
+        irradiance = tt->color[0];
+    }
+    if (e->atrous && !aborted) {
+        t0 = now_ms();
+        const glu_target *lv = pass_atrous_run(e->atrous, gb, irradiance, s->atrous_detail, s->atrous_gamma);
+        glFinish();
+        add_time(e, "atrous", now_ms() - t0);
+        int n = s->atrous_iterations;
+        for (int i = 0; i < n && !aborted; i++) {
+            snprintf(name, sizeof name, "atrous.scale%d", i + 1);
+            aborted = read_and_announce(e, frame, name, &lv[i], 0, 0, 3, p012, CH_RGB);
+            snprintf(name, sizeof name, "atrous.detail%d", i);
+            aborted = aborted || read_and_announce(e, frame, name, &lv[i], 1, 0, 3, p012, CH_RGB);
+        }
+        aborted = aborted || read_and_announce(e, frame, "atrous.result", &lv[n - 1], 3, 0, 3, p012, CH_RGB);
+        irradiance = lv[n - 1].color[3];
+    }
+    if (aborted)
+        return eng_fail(err, ENG_ERR_ABORTED, "frame %d: capture failed in the filter passes", frame);
+    t0 = now_ms();
+    const glu_target *rs = pass_resolve_run(e->resolve, gb, irradiance, glossy);
+    glFinish();
+    add_time(e, "resolve", now_ms() - t0);
+    if (read_and_announce(e, frame, "indirect.radiance", rs, 0, 0, 3, p012, CH_RGB))
+        return eng_fail(err, ENG_ERR_ABORTED, "frame %d: capture failed at indirect.radiance", frame);
+    *tex = rs->color[0];
+    return ENG_OK;
+}
+
 eng_result eng_render_frame(eng_engine *e, int frame, eng_error *err)
 {
     if (frame < 0 || frame >= e->seq->frame_count)
         return eng_fail(err, ENG_ERR_INVALID, "%s: frame %d outside 0..%d", e->seq->path, frame, e->seq->frame_count - 1);
+    if (e->temporal && !e->silent && frame != e->next_frame) {
+        /* Frame i's temporal result depends on every earlier frame: asked for frames out of
+         * order (e.g. record --resume), rebuild the history from frame 0 without announcing,
+         * so the result is the same as in an uninterrupted run. */
+        pass_temporal_reset(e->temporal);
+        e->silent = 1;
+        for (int k = 0; k < frame; k++) {
+            eng_result r = eng_render_frame(e, k, err);
+            if (r != ENG_OK) {
+                e->silent = 0;
+                return r;
+            }
+        }
+        e->silent = 0;
+    }
     double t = frame / e->seq->fps;
     memset(&e->stats, 0, sizeof e->stats);
     e->stats.frame = frame;
     e->stats.time = t;
     e->readback_ms = 0.0;
-    for (int i = 0; i < e->listener_count; i++)
+    for (int i = 0; i < e->listener_count && !e->silent; i++)
         if (e->listeners[i].frame_begin && e->listeners[i].frame_begin(e->listeners[i].user, frame, t) != 0)
             return eng_fail(err, ENG_ERR_ABORTED, "frame %d: a listener refused the frame", frame);
 
@@ -695,7 +834,7 @@ eng_result eng_render_frame(eng_engine *e, int frame, eng_error *err)
         abort_at = abort_at || read_and_announce(e, frame, "gbuffer.position", gb, 0, 0, 3, p012, CH_XYZ);
         abort_at = abort_at || read_and_announce(e, frame, "gbuffer.normal", gb, 1, 0, 3, p012, CH_XYZ);
         abort_at = abort_at || read_and_announce(e, frame, "gbuffer.albedo", gb, 2, 0, 3, p012, CH_RGB);
-        if (!abort_at && seq_wants(e->seq, "gbuffer.material")) {
+        if (!abort_at && !e->silent && seq_wants(e->seq, "gbuffer.material")) {
             /* Five channels from two targets: material parameters and the id. */
             size_t npix = (size_t)gb->width * (size_t)gb->height;
             scratch_reserve(e, npix * 6);
@@ -731,9 +870,13 @@ eng_result eng_render_frame(eng_engine *e, int frame, eng_error *err)
     if (read_and_announce(e, frame, "direct.radiance", direct, 0, 0, 3, p012, CH_RGB))
         return eng_fail(err, ENG_ERR_ABORTED, "frame %d: capture failed at direct.radiance", frame);
 
-    /* Indirect light: photon volumes (ISPM §3 step 4). */
+    /* Indirect light: photon volumes (ISPM §3 step 4), reconstructed by the filters. */
     GLuint indirect_tex = 0;
-    if (ispm) {
+    if (ispm && e->filtered) {
+        eng_result r = filtered_indirect(e, frame, gb, &indirect_tex, err);
+        if (r != ENG_OK)
+            return r;
+    } else if (ispm) {
         t0 = now_ms();
         const glu_target *sp = pass_splat_run(e->splat, &e->fs, gb, &e->pmap, &e->settings);
         glFinish();
@@ -766,7 +909,8 @@ eng_result eng_render_frame(eng_engine *e, int frame, eng_error *err)
         return eng_fail(err, ENG_ERR_GL, "%s: frame %d: GL error 0x%x after the composite pass", e->seq->path,
                         frame, gle);
     add_time(e, "readback", e->readback_ms);
-    for (int i = 0; i < e->listener_count; i++)
+    e->next_frame = frame + 1;
+    for (int i = 0; i < e->listener_count && !e->silent; i++)
         if (e->listeners[i].frame_end && e->listeners[i].frame_end(e->listeners[i].user, &e->stats) != 0)
             return eng_fail(err, ENG_ERR_ABORTED, "frame %d: a listener failed to finish the frame", frame);
     return ENG_OK;

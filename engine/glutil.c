@@ -127,12 +127,17 @@ static eng_result compile(GLenum kind, const char *name, GLuint *out, eng_error 
     if (!src)
         return eng_fail(err, ENG_ERR_GL, "engine/shaders/%s: no such embedded shader", name);
     /* A line `#pragma ispm_include "NAME"` splices in engine/shaders/NAME (GLSL has no
-     * include): the shader is compiled from the three strings before, NAME, after. */
+     * include): the shader is compiled from the strings between the directives and the
+     * included files, in order. Included files do not include further. */
     static const char directive[] = "#pragma ispm_include \"";
-    const char *parts[3] = {src, "", ""};
-    GLint lens[3] = {-1, 0, 0};
-    const char *at = strstr(src, directive);
-    if (at) {
+    enum { MAX_INCLUDES = 8 };
+    const char *parts[2 * MAX_INCLUDES + 1];
+    GLint lens[2 * MAX_INCLUDES + 1];
+    int nparts = 0;
+    const char *rest = src;
+    for (const char *at; (at = strstr(rest, directive));) {
+        if (nparts == 2 * MAX_INCLUDES)
+            return eng_fail(err, ENG_ERR_GL, "engine/shaders/%s: more than %d ispm_include lines", name, MAX_INCLUDES);
         const char *name_start = at + sizeof directive - 1;
         const char *name_end = strchr(name_start, '"');
         char lib_name[64];
@@ -143,15 +148,17 @@ static eng_result compile(GLenum kind, const char *name, GLuint *out, eng_error 
         const char *lib = eng_glsl_source(lib_name);
         if (!lib)
             return eng_fail(err, ENG_ERR_GL, "engine/shaders/%s: includes %s, which is not embedded", name, lib_name);
+        parts[nparts] = rest;
+        lens[nparts++] = (GLint)(at - rest);
+        parts[nparts] = lib;
+        lens[nparts++] = -1;
         const char *after = strchr(name_end, '\n');
-        lens[0] = (GLint)(at - src);
-        parts[1] = lib;
-        lens[1] = -1;
-        parts[2] = after ? after : "";
-        lens[2] = -1;
+        rest = after ? after : "";
     }
+    parts[nparts] = rest;
+    lens[nparts++] = -1;
     GLuint sh = glCreateShader(kind);
-    glShaderSource(sh, 3, parts, lens);
+    glShaderSource(sh, nparts, parts, lens);
     glCompileShader(sh);
     GLint ok = 0;
     glGetShaderiv(sh, GL_COMPILE_STATUS, &ok);
@@ -320,8 +327,13 @@ void glu_pass_destroy(glu_pass *p)
 
 void glu_pass_draw(const glu_pass *p)
 {
-    glBindFramebuffer(GL_FRAMEBUFFER, p->target.fbo);
-    glViewport(0, 0, p->target.width, p->target.height);
+    glu_pass_draw_to(p, &p->target);
+}
+
+void glu_pass_draw_to(const glu_pass *p, const glu_target *t)
+{
+    glBindFramebuffer(GL_FRAMEBUFFER, t->fbo);
+    glViewport(0, 0, t->width, t->height);
     glDisable(GL_DEPTH_TEST);
     glBindVertexArray(p->vao);
     glDrawArrays(GL_TRIANGLES, 0, 3);

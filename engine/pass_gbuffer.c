@@ -10,7 +10,7 @@
 struct pass_gbuffer {
     glu_target target;
     GLuint program;
-    GLint u_world, u_prev_world, u_normal_matrix, u_view, u_view_proj, u_prev_view_proj;
+    GLint u_world, u_prev_world, u_normal_matrix, u_view, u_view_proj, u_prev_view_proj, u_prev_view;
     GLint u_eye, u_base_color, u_material, u_material_id, u_double_sided, u_viewport;
 };
 
@@ -34,6 +34,7 @@ eng_result pass_gbuffer_create(int width, int height, pass_gbuffer **out, eng_er
     p->u_view = glGetUniformLocation(g, "u_view");
     p->u_view_proj = glGetUniformLocation(g, "u_view_proj");
     p->u_prev_view_proj = glGetUniformLocation(g, "u_prev_view_proj");
+    p->u_prev_view = glGetUniformLocation(g, "u_prev_view");
     p->u_eye = glGetUniformLocation(g, "u_eye");
     p->u_base_color = glGetUniformLocation(g, "u_base_color");
     p->u_material = glGetUniformLocation(g, "u_material");
@@ -62,6 +63,7 @@ const glu_target *pass_gbuffer_run(pass_gbuffer *p, const eng_frame_scene *fs)
     glUniformMatrix4fv(p->u_view, 1, GL_FALSE, fs->camera.view);
     glUniformMatrix4fv(p->u_view_proj, 1, GL_FALSE, fs->camera.view_proj);
     glUniformMatrix4fv(p->u_prev_view_proj, 1, GL_FALSE, fs->prev_camera.view_proj);
+    glUniformMatrix4fv(p->u_prev_view, 1, GL_FALSE, fs->prev_camera.view);
     glUniform3fv(p->u_eye, 1, fs->camera.eye);
     glUniform2f(p->u_viewport, (float)t->width, (float)t->height);
     for (uint32_t i = 0; i < fs->draw_count; i++) {

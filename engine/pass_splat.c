@@ -66,15 +66,16 @@ static void make_icosahedron(float v[12][3], unsigned idx[60])
     memcpy(idx, faces, sizeof faces);
 }
 
-eng_result pass_splat_create(int width, int height, pass_splat **out, eng_error *err)
+eng_result pass_splat_create(int width, int height, int irradiance, pass_splat **out, eng_error *err)
 {
     *out = NULL;
     pass_splat *p = calloc(1, sizeof *p);
     if (!p)
         return eng_fail(err, ENG_ERR_NOMEM, "splat: out of memory");
-    eng_result r = glu_program("splat.vert.glsl", "splat.frag.glsl", &p->program, err);
+    eng_result r = glu_program("splat.vert.glsl", irradiance ? "splat_irradiance.frag.glsl" : "splat.frag.glsl",
+                               &p->program, err);
     if (r == ENG_OK)
-        r = glu_target_create(&p->target, 1, width, height, 0, err);
+        r = glu_target_create(&p->target, irradiance ? 2 : 1, width, height, 0, err);
     if (r != ENG_OK) {
         pass_splat_destroy(p);
         return r;
@@ -122,7 +123,8 @@ const glu_target *pass_splat_run(pass_splat *p, const eng_frame_scene *fs, const
     glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, gbuf->depth);
     glViewport(0, 0, t->width, t->height);
     const float zero[4] = {0, 0, 0, 0};
-    glClearBufferfv(GL_COLOR, 0, zero);
+    for (int i = 0; i < t->count; i++)
+        glClearBufferfv(GL_COLOR, i, zero);
     if (map->count > 0) {
         if (map->count > p->inst_capacity) {
             p->inst_capacity = map->count;

@@ -45,8 +45,9 @@ rm "$WORK/nomanifest/manifest.json"
 [ $rc -eq 4 ] || fail "missing manifest: replay exited $rc, want 4"
 
 # The ISPM scenes replay against their goldens too: the caustic ring (mirror, spot light,
-# rotating) and the glass sphere (refractive caustic).
-for seq in caustic-ring/caustic-ring-ci cornell-box/cornell-glass-ci; do
+# rotating), the glass sphere (refractive caustic) and the Cornell box with every
+# reconstruction filter on (subsampled splat, upsampling levels, temporal, À-Trous).
+for seq in caustic-ring/caustic-ring-ci cornell-box/cornell-glass-ci cornell-box/cornell-box-filtered-ci; do
   name=$(basename "$seq")
   "$ISPM" record "$SRC/scenes/$seq.json" -o "$WORK/$name" --quiet || fail "record $name"
   "$ISPM" replay "$WORK/$name" --golden "$SRC/golden/$name" --quiet > "$WORK/$name.out"; rc=$?

@@ -1,7 +1,9 @@
 #version 450 core
 // Eye G-buffer, fragment stage. Outputs (all RGBA32F):
 //   0 world position, w = 1 where a surface was drawn
-//   1 world normal, unit; flipped toward the viewer for double-sided materials
+//   1 world normal, unit; flipped toward the viewer for double-sided materials; w = the
+//     surface point's eye depth in the previous frame (not captured; the temporal filter's
+//     disocclusion test, 002_… Eq. 7.1 against the previous depth)
 //   2 albedo (baseColorFactor, linear)
 //   3 roughness, metallic, transmission, ior
 //   4 eye depth (metres along the view axis), material id, motion x, motion y
@@ -12,6 +14,7 @@ in vec3 v_normal;
 in vec4 v_clip;
 in vec4 v_prev_clip;
 in float v_eye_depth;
+in float v_prev_eye_depth;
 
 uniform vec3 u_eye;
 uniform vec4 u_base_color;
@@ -35,7 +38,7 @@ void main()
     vec2 prev_ndc = v_prev_clip.xy / v_prev_clip.w;
     vec2 motion = (prev_ndc - ndc) * 0.5 * u_viewport * vec2(1.0, -1.0);
     o_position = vec4(v_position, 1.0);
-    o_normal = vec4(n, 0.0);
+    o_normal = vec4(n, v_prev_eye_depth);
     o_albedo = vec4(u_base_color.rgb, u_base_color.a);
     o_material = u_material;
     o_misc = vec4(v_eye_depth, u_material_id, motion);

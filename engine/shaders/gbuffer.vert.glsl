@@ -11,12 +11,14 @@ uniform mat3 u_normal_matrix;
 uniform mat4 u_view;
 uniform mat4 u_view_proj;
 uniform mat4 u_prev_view_proj;
+uniform mat4 u_prev_view;
 
 out vec3 v_position;
 out vec3 v_normal;
 out vec4 v_clip;
 out vec4 v_prev_clip;
 out float v_eye_depth;
+out float v_prev_eye_depth; // this point's eye depth in the previous frame (temporal filter)
 
 void main()
 {
@@ -24,7 +26,9 @@ void main()
     v_position = wp.xyz;
     v_normal = u_normal_matrix * a_normal;
     v_clip = u_view_proj * wp;
-    v_prev_clip = u_prev_view_proj * (u_prev_world * vec4(a_position, 1.0));
+    vec4 prev_wp = u_prev_world * vec4(a_position, 1.0);
+    v_prev_clip = u_prev_view_proj * prev_wp;
+    v_prev_eye_depth = -(u_prev_view * prev_wp).z;
     v_eye_depth = -(u_view * wp).z;
     gl_Position = v_clip;
 }
