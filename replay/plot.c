@@ -17,14 +17,21 @@
 #include <string.h>
 #include <unistd.h>
 
-/* A colour-blind-safe palette (Okabe & Ito), black first. Index 0 is the background. */
+/* Index 0 is the background, 1 black (axes, text), 9 grey (grid); the series colours are the
+ * colour-blind-safe Okabe & Ito palette, then darker/lighter companions so that up to 14
+ * series (a per-pass breakdown) stay distinct. */
 static const int PALETTE[][3] = {
     {255, 255, 255}, {0, 0, 0}, {0, 114, 178}, {213, 94, 0}, {0, 158, 115}, {204, 121, 167},
-    {230, 159, 0}, {86, 180, 233}, {240, 228, 66}, {120, 120, 120},
+    {230, 159, 0}, {86, 180, 233}, {240, 228, 66}, {120, 120, 120}, {0, 60, 110}, {140, 50, 0},
+    {0, 95, 70}, {120, 60, 110}, {160, 110, 0}, {40, 40, 40},
 };
 #define PALETTE_N ((int)(sizeof PALETTE / sizeof PALETTE[0]))
 
-static int series_colour(int s) { return 2 + s % (PALETTE_N - 2); }
+static int series_colour(int s)
+{
+    static const int order[] = {2, 3, 4, 5, 6, 7, 8, 10, 11, 12, 13, 14, 15, 9};
+    return order[s % (int)(sizeof order / sizeof order[0])];
+}
 
 /* The driver for a file name, or NULL. */
 static const char *device_for(const char *path)
