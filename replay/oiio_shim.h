@@ -51,6 +51,11 @@ eng_result rep_oiio_write_parts(const char *path, const eng_buffer *parts, int c
 eng_result rep_oiio_write_png(const char *path, int width, int height, int channel_count,
                               const unsigned char *pixels, eng_error *err);
 
+/* Reads any 8-bit-representable image OpenImageIO can open (PNG charts and thumbnails, for
+ * tests and tools) as width*height*channel_count bytes, top row first; caller frees. */
+eng_result rep_oiio_read_image8(const char *path, int *width, int *height, int *channel_count,
+                                unsigned char **pixels, eng_error *err);
+
 /* A borrowed eng_buffer view of a part (valid while the part lives). */
 static inline eng_buffer rep_part_buffer(const rep_part *p)
 {
