@@ -265,6 +265,7 @@ typedef struct rep_report {
     const char *digest_why;
     rep_exit exit;
     eng_error error;         /* the unreadable input, when exit is UNREADABLE */
+    struct rep_stab_report *stab; /* temporal stability (stability_internal.h); NULL: not measured */
 } rep_report;
 
 /* Appends a zeroed entry for (frame, buffer) and returns it. */

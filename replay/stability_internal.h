@@ -141,4 +141,42 @@ void rep_stab_finish(rep_stab_run *st);
 void rep_stab_free(rep_stab_run *st);
 rep_stab_buffer *rep_stab_find(const rep_stab_run *st, const char *name);
 
+/* ---------------------------------------------------------------- verdicts and output */
+
+/* One measured buffer's verdict against the "stability" limits of its tolerance rule. */
+typedef struct rep_stab_verdict {
+    rep_tol_stab tol;
+    char *tol_match; /* the rule's pattern, or "default" */
+    int checked;     /* the rule had a stability object */
+    int failed;
+    char *why;       /* what exceeded which limit, or NULL */
+} rep_stab_verdict;
+
+typedef struct rep_stab_report {
+    rep_stab_run run, golden;
+    int has_golden;              /* golden measured too (its own values for golden_margin) */
+    char *reference_dir;
+    rep_stab_verdict *verdicts;  /* parallel to run.buffers */
+    char *out_dir;               /* the stability run written (report folder/stability), or NULL */
+    int failed;                  /* buffers over a limit */
+} rep_stab_report;
+
+/* Fills report->verdicts from the tolerances (NULL: nothing is checked). */
+void rep_stab_judge(rep_stab_report *s, const rep_tolerances *tols);
+void rep_stab_report_free(rep_stab_report *s);
+
+/* The flicker images of one frame as frames/NNNNNN.exr of a run folder (parts stability.<part>, Y);
+ * rec gets the frame's manifest record (cJSON object, as a string). */
+eng_result rep_stab_write_frame(const char *run_dir, const rep_frame_info *f, const rep_stab_run *st, float **flicker,
+                                int count, char **rec, eng_error *err);
+/* The stability run's manifest.json, last: records are the frames' records in order. */
+eng_result rep_stab_write_manifest(const char *run_dir, const char *sequence_name, const rep_stab_run *st,
+                                   char **records, int count, eng_error *err);
+
+/* report.txt's stability section; report.json's "stability" object (cJSON *), the HTML section
+ * with its charts (written into dir/img). */
+void rep_stab_text(rep_sb *sb, const rep_report *r);
+void *rep_stab_json(const rep_report *r);
+void rep_stab_html(rep_sb *sb, const rep_report *r, const char *dir);
+
 #endif
