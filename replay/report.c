@@ -245,6 +245,9 @@ char *rep_report_text(const rep_report *r, int quiet)
     rep_sb_printf(&sb, "replay: %s — ", rep_exit_word(r->exit));
     if (cnt[REP_V_SIZE])
         rep_sb_printf(&sb, "%zu size mismatch, ", cnt[REP_V_SIZE]);
+    if (r->stab && r->stab->failed)
+        rep_sb_printf(&sb, "stability: %d buffer%s over %s limits, ", r->stab->failed, r->stab->failed == 1 ? "" : "s",
+                      r->stab->failed == 1 ? "its" : "their");
     if (r->golden_dir)
         rep_sb_printf(&sb, "%zu failed, %zu warned, %zu within tolerance, %zu bit-exact (%zu buffers, %d frames)\n",
                       cnt[REP_V_FAIL], cnt[REP_V_WARN], cnt[REP_V_WITHIN], cnt[REP_V_BITEXACT], r->count, r->frames);
