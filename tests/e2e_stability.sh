@@ -65,6 +65,7 @@ cat "$WORK/worse.out"
 grep -q "FAIL  indirect.radiance.*over golden" "$WORK/worse.out" || fail "summary does not name the stability failure"
 [ "$(jnum "$WORK/worse/report.json" "r['counts']['fail']")" = 0 ] || fail "pixel comparisons should all pass here"
 [ "$(jnum "$WORK/worse/report.json" "r['stability']['verdict']")" = FAIL ] || fail "report.json stability verdict"
+grep -q '<failure type="stability"' "$WORK/worse/report.junit.xml" || fail "report.junit.xml has no stability failure"
 # ...and so does an absolute limit, on the run's own golden.
 cat > "$WORK/abs.json" <<'JSON'
 {"buffers": [{"match": "splat.indirect", "stability": {"static_mean": 0.001}}]}
