@@ -34,6 +34,11 @@ done
 # The stability run is a run: replay reads it (integrity, digests) like any other.
 "$ISPM" replay "$WORK/corner/replay/stability" --report "$WORK/stability-of-corner" --quiet > /dev/null; rc=$?
 [ $rc -eq 0 ] || fail "the stability run does not replay cleanly ($rc)"
+VIEW=$(dirname "$ISPM")/../viewer/ispm-view
+if [ -x "$VIEW" ]; then  # built only with SDL2
+  "$VIEW" "$WORK/corner/replay/stability" --list | grep -qx stability.indirect.radiance \
+    || fail "ispm-view does not list stability.indirect.radiance"
+fi
 
 # Random maps: the right half of the divider scene (x >= 56 of 96) never flickers; per-frame does.
 region_max() {  # RUN FRAME: max of stability.indirect.radiance over columns 56..95
