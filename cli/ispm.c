@@ -55,16 +55,21 @@ static void record_usage(FILE *f)
 static void replay_usage(FILE *f)
 {
     fprintf(f,
-            "usage: ispm replay RUN [--golden DIR] [--tolerances FILE] [--report DIR] [--quiet]\n"
+            "usage: ispm replay RUN [--golden DIR] [--tolerances FILE] [--report DIR] [--reference REFRUN] [--quiet]\n"
             "\n"
             "Decodes every buffer of every frame of RUN, verifies it against the run's manifest,\n"
             "counts NaN/Inf, and compares it with the golden's buffer of the same name using the\n"
             "golden's tolerances.json. Writes report.txt and report.json to the report folder\n"
-            "(default RUN/replay) and prints the summary.\n"
+            "(default RUN/replay) and prints the summary. Where the run has an eye G-buffer it also\n"
+            "measures temporal stability (flicker of every image pass between frames, static and\n"
+            "reprojected; docs/stability.md), checked against the \"stability\" limits of the\n"
+            "tolerances, with the per-pixel flicker written as a run in REPORT/stability.\n"
             "\n"
             "  -g, --golden DIR        golden run (without it: integrity and NaN/Inf checks only)\n"
             "  -t, --tolerances FILE   tolerance file (default DIR/tolerances.json)\n"
             "  -r, --report DIR        where to write report.txt and report.json\n"
+            "  -R, --reference REFRUN  a run whose frames hold reference.full/.indirect/.direct: the\n"
+            "                          temporal error of composite/indirect/direct against them\n"
             "  -q, --quiet             print only failures and the verdict\n"
             "  -h, --help              this text\n"
             "\n"
@@ -241,14 +246,15 @@ static int cmd_replay(int argc, char **argv)
     static const struct option opts[] = {
         {"golden", required_argument, NULL, 'g'}, {"tolerances", required_argument, NULL, 't'},
         {"report", required_argument, NULL, 'r'}, {"quiet", no_argument, NULL, 'q'},
-        {"help", no_argument, NULL, 'h'}, {NULL, 0, NULL, 0},
+        {"reference", required_argument, NULL, 'R'}, {"help", no_argument, NULL, 'h'}, {NULL, 0, NULL, 0},
     };
     rep_options o;
     memset(&o, 0, sizeof o);
     int c;
-    while ((c = getopt_long(argc, argv, "g:t:r:qh", opts, NULL)) != -1) {
+    while ((c = getopt_long(argc, argv, "g:t:r:R:qh", opts, NULL)) != -1) {
         switch (c) {
         case 'g': o.golden_dir = optarg; break;
+        case 'R': o.reference_dir = optarg; break;
         case 't': o.tolerances = optarg; break;
         case 'r': o.report_dir = optarg; break;
         case 'q': o.quiet = 1; break;

@@ -13,6 +13,7 @@
  * document malformed. No times are written: the output is a pure function of the report.
  */
 #include "rep_internal.h"
+#include "stability_internal.h"
 
 #include <stdlib.h>
 #include <string.h>
@@ -109,7 +110,12 @@ char *rep_report_junit(const rep_report *r, const char *suite)
     for (size_t i = 0; i < r->count; i++)
         if (r->entries[i].verdict == REP_V_FAIL || r->entries[i].verdict == REP_V_SIZE)
             failures++;
-    size_t tests = r->count + errors;
+    /* Buffers with stability limits are test cases too (classname ispm.<suite>.stability). */
+    size_t checked = 0;
+    for (int k = 0; r->stab && r->stab->verdicts && k < r->stab->run.buffer_count; k++)
+        checked += r->stab->verdicts[k].checked;
+    failures += r->stab ? (size_t)r->stab->failed : 0;
+    size_t tests = r->count + errors + checked;
     char *sname = rep_xprintf("ispm.%s", suite);
 
     rep_sb sb = {0};
@@ -170,6 +176,25 @@ char *rep_report_junit(const rep_report *r, const char *suite)
         }
         rep_sb_printf(&sb, "    </testcase>\n");
         free(text);
+    }
+    for (int k = 0; checked && k < r->stab->run.buffer_count; k++) {
+        const rep_stab_verdict *v = &r->stab->verdicts[k];
+        if (!v->checked)
+            continue;
+        char *cls = rep_xprintf("%s.stability", sname);
+        rep_sb_printf(&sb, "    <testcase");
+        attr(&sb, "classname", cls);
+        attr(&sb, "name", r->stab->run.buffers[k].name);
+        free(cls);
+        if (!v->failed) {
+            rep_sb_printf(&sb, "/>\n");
+            continue;
+        }
+        rep_sb_printf(&sb, ">\n      <failure type=\"stability\"");
+        attr(&sb, "message", v->why);
+        rep_sb_printf(&sb, ">");
+        rep_sb_xml(&sb, v->why);
+        rep_sb_printf(&sb, "</failure>\n    </testcase>\n");
     }
     rep_sb_printf(&sb, "  </testsuite>\n</testsuites>\n");
     free(sname);

@@ -29,6 +29,9 @@ typedef struct rep_options {
     const char *report_dir;   /* NULL: <run_dir>/replay ; gets report.json, report.txt,
                                  report.junit.xml, report.html and img/ */
     int quiet;                /* summary: only the verdict line and failures */
+    const char *reference_dir;/* NULL, or a run whose frames hold reference.full / reference.indirect /
+                                 reference.direct: the temporal error of the matching passes is
+                                 measured against them (one frame, or as many as the run) */
 } rep_options;
 
 /* Returns the idiff-style exit code; on REP_UNREADABLE err names the file and problem. The

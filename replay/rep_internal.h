@@ -124,8 +124,19 @@ eng_result rep_run_read_frame(const rep_run *run, int frame, rep_part **parts, e
 
 /* One buffer's tolerances. Thresholds are compared with ">": a difference equal to the
  * threshold passes. Disabled thresholds (hardwarn, rmse_* unless set) are +INFINITY. */
+/* Stability limits of one buffer (the "stability" object of a tolerance rule): the run's
+ * sequence-level statistics (stability_internal.h) must not exceed them. INFINITY = unchecked;
+ * golden_margin < 0 = unchecked, else every statistic must also stay within the golden run's own
+ * value × (1 + golden_margin). */
+typedef struct rep_tol_stab {
+    int set;
+    double static_mean, static_p99, reprojected_mean, reprojected_p99, temporal_std_mean, temporal_std_p99;
+    double golden_margin;
+} rep_tol_stab;
+
 typedef struct rep_tol {
     int exact; /* any bit difference fails */
+    rep_tol_stab stab;
     double warn, warnrelative, warnpercent, hardwarn;
     double fail, failrelative, failpercent, hardfail;
     double rmse_warn, rmse_fail;
@@ -254,6 +265,7 @@ typedef struct rep_report {
     const char *digest_why;
     rep_exit exit;
     eng_error error;         /* the unreadable input, when exit is UNREADABLE */
+    struct rep_stab_report *stab; /* temporal stability (stability_internal.h); NULL: not measured */
 } rep_report;
 
 /* Appends a zeroed entry for (frame, buffer) and returns it. */

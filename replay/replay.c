@@ -9,11 +9,21 @@
  * matches it. Buffers or frames present on one side only fail. Without a golden only
  * integrity and non-finite values are checked. The report (report.json, report.txt) is
  * written even when an input is unreadable, if there is a place to put it.
+ *
+ * The same walk measures temporal stability (stability.c) of the run, and of the golden for its
+ * own values, whenever the run has an eye G-buffer: each frame is fed after its comparison, the
+ * per-pixel flicker goes to <report>/stability.tmp.<pid>/ frame by frame and that folder becomes
+ * <report>/stability/ only once its manifest is written, so no reader sees a partial one.
  */
-#include "rep_internal.h"
+#define _POSIX_C_SOURCE 200809L
 
+#include "rep_internal.h"
+#include "stability_internal.h"
+
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 static char *shape(int w, int h, int n, const char *const *channels)
 {
@@ -123,10 +133,141 @@ static void one_side(rep_report *r, const rep_frame_info *f, rep_problem problem
     }
 }
 
+/* Stability state of one walk: the measurements and the stability run being written. */
+typedef struct stab_walk {
+    rep_stab_report *s;
+    int on, golden_on;
+    char *tmp;     /* the stability run being written, or NULL (no report folder) */
+    char **records;
+    int record_count;
+    rep_run *ref;
+    rep_part *ref_parts; /* a one-frame reference, kept */
+} stab_walk;
+
+static void stab_walk_free(stab_walk *w)
+{
+    if (w->tmp) {
+        eng_error ignored;
+        rep_remove_tree(w->tmp, &ignored);
+    }
+    free(w->tmp);
+    for (int i = 0; i < w->record_count; i++)
+        free(w->records[i]);
+    free(w->records);
+    if (w->ref && w->ref_parts)
+        rep_parts_free(w->ref_parts, w->ref->frames[0].buffer_count);
+    rep_run_close(w->ref);
+    rep_stab_report_free(w->s);
+}
+
+static eng_result stab_begin(stab_walk *w, const rep_options *o, const char *report_dir, const rep_run *run,
+                             const rep_run *gold, eng_error *err)
+{
+    memset(w, 0, sizeof *w);
+    w->s = rep_xcalloc(1, sizeof *w->s);
+    w->on = 1;
+    w->golden_on = gold != NULL;
+    w->s->run.frame_count = run->frame_count;
+    if (gold)
+        w->s->golden.frame_count = gold->frame_count;
+    eng_result res = ENG_OK;
+    if (o->reference_dir) {
+        w->s->reference_dir = rep_xstrdup(o->reference_dir);
+        res = rep_run_open(o->reference_dir, &w->ref, err);
+        if (res == ENG_OK && w->ref->frame_count != 1 && w->ref->frame_count != run->frame_count)
+            res = eng_fail(err, ENG_ERR_INVALID, "%s: the reference has %d frames, the run %d (a reference has 1 or as many)",
+                           w->ref->manifest_path, w->ref->frame_count, run->frame_count);
+        if (res == ENG_OK && w->ref->frame_count == 1)
+            res = rep_run_read_frame(w->ref, 0, &w->ref_parts, err);
+    }
+    if (res == ENG_OK && report_dir) {
+        w->tmp = rep_xprintf("%s/stability.tmp.%ld", report_dir, (long)getpid());
+        char *frames = rep_path_join(w->tmp, "frames");
+        if ((res = rep_remove_tree(w->tmp, err)) == ENG_OK)
+            res = rep_mkdirs(frames, err);
+        free(frames);
+    }
+    return res;
+}
+
+/* Feeds frame i of the run (and of the golden) to the stability measurement. */
+static eng_result stab_frame(stab_walk *w, int i, const rep_frame_info *rf, const rep_part *rp,
+                             const rep_frame_info *gf, const rep_part *gp, eng_error *err)
+{
+    eng_result res = ENG_OK;
+    if (w->golden_on && gf && !rep_stab_frame(&w->s->golden, gf, gp, gf->buffer_count, NULL, 0, NULL, NULL))
+        w->golden_on = 0;
+    if (!w->on || !rf)
+        return ENG_OK;
+    rep_part *refp = w->ref_parts, *own = NULL;
+    int refn = w->ref ? w->ref->frames[0].buffer_count : 0;
+    if (w->ref && !refp) {
+        if ((res = rep_run_read_frame(w->ref, i, &own, err)) != ENG_OK)
+            return res;
+        refp = own;
+        refn = w->ref->frames[i].buffer_count;
+    }
+    float **fl = NULL;
+    int fn = 0;
+    if (!rep_stab_frame(&w->s->run, rf, rp, rf->buffer_count, refp, refn, w->tmp ? &fl : NULL, &fn)) {
+        w->on = 0;
+    } else if (w->tmp) {
+        char *rec = NULL;
+        res = rep_stab_write_frame(w->tmp, rf, &w->s->run, fl, fn, &rec, err);
+        if (res == ENG_OK) {
+            w->records = rep_xrealloc(w->records, (size_t)(w->record_count + 1) * sizeof *w->records);
+            w->records[w->record_count++] = rec;
+        }
+    }
+    for (int k = 0; k < fn; k++)
+        free(fl[k]);
+    free(fl);
+    if (own)
+        rep_parts_free(own, refn);
+    return res;
+}
+
+/* Ends the measurement: verdicts, the stability run put in place; hands the result to r. */
+static eng_result stab_end(stab_walk *w, rep_report *r, const rep_run *run, const rep_tolerances *tols,
+                           const char *report_dir, eng_error *err)
+{
+    eng_result res = ENG_OK;
+    if (!w->on || w->s->run.frames != run->frame_count)
+        return ENG_OK; /* the run has no eye G-buffer (in some frame): no stability */
+    rep_stab_finish(&w->s->run);
+    if (w->golden_on) {
+        rep_stab_finish(&w->s->golden);
+        w->s->has_golden = 1;
+    }
+    rep_stab_judge(w->s, tols);
+    if (w->tmp) {
+        char *final = rep_path_join(report_dir, "stability");
+        res = rep_stab_write_manifest(w->tmp, run->sequence_name, &w->s->run, w->records, w->record_count, err);
+        if (res == ENG_OK)
+            res = rep_remove_tree(final, err);
+        if (res == ENG_OK && rename(w->tmp, final) != 0)
+            res = eng_fail(err, ENG_ERR_IO, "%s: cannot rename to %s", w->tmp, final);
+        if (res == ENG_OK) {
+            free(w->tmp);
+            w->tmp = NULL;
+            w->s->out_dir = final;
+        } else {
+            free(final);
+        }
+    }
+    if (res == ENG_OK) {
+        r->stab = w->s;
+        w->s = NULL;
+    }
+    return res;
+}
+
 /* Fills r; returns ENG_OK or the error that makes an input unreadable. */
-static eng_result walk(const rep_options *o, rep_report *r, eng_error *err)
+static eng_result walk(const rep_options *o, const char *report_dir, rep_report *r, eng_error *err)
 {
     rep_run *run = NULL, *gold = NULL;
+    stab_walk sw;
+    memset(&sw, 0, sizeof sw);
     rep_tolerances *tols = NULL;
     char *tol_default = NULL;
     eng_result res = rep_run_open(o->run_dir, &run, err);
@@ -152,6 +293,8 @@ static eng_result walk(const rep_options *o, rep_report *r, eng_error *err)
             r->frames = gold->frame_count;
         digest_difference(r, run, gold);
     }
+    if ((res = stab_begin(&sw, o, report_dir, run, gold, err)) != ENG_OK)
+        goto done;
     for (int i = 0; i < r->frames && res == ENG_OK; i++) {
         rep_part *rp = NULL, *gp = NULL;
         const rep_frame_info *rf = i < run->frame_count ? &run->frames[i] : NULL;
@@ -169,13 +312,17 @@ static eng_result walk(const rep_options *o, rep_report *r, eng_error *err)
                 one_side(r, rf, REP_PROB_FRAME_EXTRA);
             else
                 compare_frame(r, tols, rf, rp, gf, gp);
+            res = stab_frame(&sw, i, rf, rp, gf, gp, err);
         }
         if (rf)
             rep_parts_free(rp, rf->buffer_count);
         if (gf)
             rep_parts_free(gp, gf->buffer_count);
     }
+    if (res == ENG_OK)
+        res = stab_end(&sw, r, run, tols, report_dir, err);
 done:
+    stab_walk_free(&sw);
     free(tol_default);
     rep_tol_free(tols);
     rep_run_close(gold);
@@ -199,7 +346,10 @@ rep_exit rep_replay(const rep_options *o, FILE *summary, eng_error *err)
     r.run_dir = o->run_dir;
     r.golden_dir = o->golden_dir;
     r.digest_frame = -1;
-    eng_result res = walk(o, &r, err);
+    /* An unreadable run folder that does not exist gets no report folder created inside it. */
+    char *dir = o->report_dir ? rep_xstrdup(o->report_dir) : rep_path_join(o->run_dir, "replay");
+    int writable = o->report_dir || rep_is_dir(o->run_dir);
+    eng_result res = walk(o, writable ? dir : NULL, &r, err);
     if (res != ENG_OK) {
         r.exit = REP_UNREADABLE;
         r.error = *err;
@@ -207,9 +357,7 @@ rep_exit rep_replay(const rep_options *o, FILE *summary, eng_error *err)
         r.exit = rep_report_exit(&r);
     }
 
-    /* An unreadable run folder that does not exist gets no report folder created inside it. */
-    char *dir = o->report_dir ? rep_xstrdup(o->report_dir) : rep_path_join(o->run_dir, "replay");
-    if (o->report_dir || rep_is_dir(o->run_dir)) {
+    if (writable) {
         eng_error werr;
         if (rep_report_write(&r, dir, &werr) != ENG_OK && r.exit != REP_UNREADABLE) {
             r.exit = REP_UNREADABLE;

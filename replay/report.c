@@ -11,6 +11,7 @@
  * by rep_report and freed by rep_report_free.
  */
 #include "rep_internal.h"
+#include "stability_internal.h"
 
 #include <cjson/cJSON.h>
 #include <math.h>
@@ -41,6 +42,8 @@ void rep_report_free(rep_report *r)
     free(r->entries);
     free(r->digest_buffer);
     free(r->tol_path);
+    rep_stab_report_free(r->stab);
+    r->stab = NULL;
     r->entries = NULL;
     r->digest_buffer = NULL;
     r->tol_path = NULL;
@@ -61,6 +64,8 @@ rep_exit rep_report_exit(const rep_report *r)
         if (e > x)
             x = e;
     }
+    if (r->stab && r->stab->failed && x < REP_FAIL)
+        x = REP_FAIL;
     return x;
 }
 
@@ -232,12 +237,17 @@ char *rep_report_text(const rep_report *r, int quiet)
         rep_sb_printf(&sb, "replay: UNREADABLE — %s\n", r->error.msg);
         return sb.s;
     }
+    if (r->stab && (!quiet || r->stab->failed))
+        rep_stab_text(&sb, r);
     size_t cnt[REP_V_COUNT] = {0};
     for (size_t i = 0; i < r->count; i++)
         cnt[r->entries[i].verdict]++;
     rep_sb_printf(&sb, "replay: %s — ", rep_exit_word(r->exit));
     if (cnt[REP_V_SIZE])
         rep_sb_printf(&sb, "%zu size mismatch, ", cnt[REP_V_SIZE]);
+    if (r->stab && r->stab->failed)
+        rep_sb_printf(&sb, "stability: %d buffer%s over %s limits, ", r->stab->failed, r->stab->failed == 1 ? "" : "s",
+                      r->stab->failed == 1 ? "its" : "their");
     if (r->golden_dir)
         rep_sb_printf(&sb, "%zu failed, %zu warned, %zu within tolerance, %zu bit-exact (%zu buffers, %d frames)\n",
                       cnt[REP_V_FAIL], cnt[REP_V_WARN], cnt[REP_V_WITHIN], cnt[REP_V_BITEXACT], r->count, r->frames);
@@ -419,6 +429,8 @@ char *rep_report_json(const rep_report *r)
         }
         cJSON_AddItemToArray(bufs, b);
     }
+    if (r->stab)
+        cJSON_AddItemToObject(root, "stability", (cJSON *)rep_stab_json(r));
     char *text = cJSON_Print(root);
     cJSON_Delete(root);
     if (!text) {

@@ -20,6 +20,7 @@
 #define _XOPEN_SOURCE 700
 
 #include "rep_internal.h"
+#include "stability_internal.h"
 
 #include <errno.h>
 #include <limits.h>
@@ -731,7 +732,7 @@ eng_result rep_report_html_write(const rep_report *r, const rep_run *run, const 
     }
     char *imgdir = rep_path_join(dir, "img");
     eng_result res = rep_remove_tree(imgdir, err);
-    if (res == ENG_OK && nj > 0)
+    if (res == ENG_OK && (nj > 0 || r->stab))
         res = rep_mkdirs(imgdir, err);
     if (res == ENG_OK)
         run_jobs(&pg, jobs, nj);
@@ -747,6 +748,7 @@ eng_result rep_report_html_write(const rep_report *r, const rep_run *run, const 
         for (size_t i = 0; i < listed; i++)
             card(&sb, &pg, order[i], &sets[order[i] - r->entries]);
         rep_sb_printf(&sb, "</section>\n");
+        rep_stab_html(&sb, r, dir);
         if (npreviews) {
             rep_sb_printf(&sb, "<section id=\"previews\"><h2>Final image, first and last frame</h2><div class=\"previews\">\n");
             for (int i = 0; i < npreviews; i++) {

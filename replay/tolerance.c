@@ -7,6 +7,13 @@
  * keys "default" leaves out from the built-in defaults. The file is validated strictly: a
  * typo'd key or a negative threshold silently falling back to a default would make a
  * regression test pass that should fail. rep_tolerances owns its patterns and path.
+ *
+ * A block may also hold "stability": an object of upper limits on the buffer's temporal
+ * stability over the sequence (stability.c): static_mean, static_p99, reprojected_mean,
+ * reprojected_p99, temporal_std_mean, temporal_std_p99 (absolute limits), and golden_margin
+ * (the run may flicker at most the golden run's own value × (1 + golden_margin)). A rule's
+ * stability object replaces the default's whole: limits do not merge key by key, so what a
+ * rule checks is what it says.
  */
 #define _POSIX_C_SOURCE 200809L
 
@@ -42,6 +49,48 @@ void rep_tol_builtin(rep_tol *t)
     t->hardfail = 1e-2;
     t->rmse_warn = INFINITY;
     t->rmse_fail = INFINITY;
+    t->stab.set = 0;
+    t->stab.static_mean = t->stab.static_p99 = t->stab.reprojected_mean = t->stab.reprojected_p99 = INFINITY;
+    t->stab.temporal_std_mean = t->stab.temporal_std_p99 = INFINITY;
+    t->stab.golden_margin = -1;
+}
+
+static const char *const STAB_KEYS[] = {"static_mean",       "static_p99",        "reprojected_mean",
+                                        "reprojected_p99",   "temporal_std_mean", "temporal_std_p99",
+                                        "golden_margin"};
+#define STAB_KEY_COUNT (sizeof STAB_KEYS / sizeof STAB_KEYS[0])
+
+static double *stab_field(rep_tol_stab *s, size_t k)
+{
+    double *f[STAB_KEY_COUNT] = {&s->static_mean,       &s->static_p99,        &s->reprojected_mean,
+                                 &s->reprojected_p99,   &s->temporal_std_mean, &s->temporal_std_p99,
+                                 &s->golden_margin};
+    return f[k];
+}
+
+static eng_result parse_stability(const char *path, const char *where, const cJSON *obj, rep_tol_stab *s,
+                                  eng_error *err)
+{
+    if (!cJSON_IsObject(obj))
+        return eng_fail(err, ENG_ERR_INVALID, "%s: %s: \"stability\" must be an object", path, where);
+    rep_tol b;
+    rep_tol_builtin(&b);
+    *s = b.stab;
+    s->set = 1;
+    if (!obj->child)
+        return eng_fail(err, ENG_ERR_INVALID, "%s: %s: \"stability\" sets no limit", path, where);
+    for (const cJSON *v = obj->child; v; v = v->next) {
+        size_t k = 0;
+        while (k < STAB_KEY_COUNT && strcmp(STAB_KEYS[k], v->string) != 0)
+            k++;
+        if (k == STAB_KEY_COUNT)
+            return eng_fail(err, ENG_ERR_INVALID, "%s: %s: stability: unknown key \"%s\"", path, where, v->string);
+        if (!cJSON_IsNumber(v) || !isfinite(v->valuedouble) || v->valuedouble < 0)
+            return eng_fail(err, ENG_ERR_INVALID, "%s: %s: stability: \"%s\" must be a finite number >= 0", path,
+                            where, v->string);
+        *stab_field(s, k) = v->valuedouble;
+    }
+    return ENG_OK;
 }
 
 /* Overrides t with the keys of one JSON block. allow_match: the block is a rule. */
@@ -58,6 +107,12 @@ static eng_result parse_block(const char *path, const char *where, const cJSON *
             if (!cJSON_IsBool(v))
                 return eng_fail(err, ENG_ERR_INVALID, "%s: %s: \"exact\" must be true or false", path, where);
             t->exact = cJSON_IsTrue(v);
+            continue;
+        }
+        if (strcmp(key, "stability") == 0) {
+            eng_result r = parse_stability(path, where, v, &t->stab, err);
+            if (r != ENG_OK)
+                return r;
             continue;
         }
         size_t k = 0;
