@@ -2,7 +2,8 @@
  *
  * It renders the scene the engine renders (eng_pose: the same draws, lights, camera and
  * Embree scene at the same frame time) with an unbiased-in-the-limit estimator on Embree:
- * path tracing with next-event estimation to the punctual lights, plus probabilistic
+ * path tracing with next-event estimation to the punctual lights, combined (balance
+ * heuristic) with light vertices connected to the eye path, plus probabilistic
  * progressive photon mapping for the caustic paths a path tracer cannot sample from a point
  * light. Each frame announces three buffers to its listeners, like the engine does:
  *   reference.direct    light that reached the camera after exactly one surface (the

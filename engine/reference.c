@@ -11,10 +11,20 @@
  *
  * Estimators and the path classes they cover (light side first; a vertex is "D" when the
  * scattering there uses a diffuse or glossy lobe, "S" when it uses a delta lobe):
- *   1. Path tracing from the camera with next-event estimation (Veach 1997 §10.4.1 / pbrt's
- *      "PathIntegrator"): at every D vertex x_k of an eye path, a shadow ray to each light.
- *      Covers every path L D (D|S)* E whose first vertex after the light is D. The NEE at the
- *      camera's first vertex is "direct" (L D E: one surface); all the rest is "indirect".
+ *   1a. Path tracing from the camera with next-event estimation (Veach 1997 §10.4.1, pbrt's
+ *       PathIntegrator): at every D vertex x_k of an eye path, a shadow ray to each light.
+ *   1b. Light vertices (Keller 1997 instant radiosity; bidirectional path tracing with one
+ *       light vertex, Veach 1997 §10.2): at every D vertex x_k, one ray sampled from a light
+ *       (light ∝ power, direction uniform over its sphere or cone); if its first surface x' is
+ *       D, x' is connected to x_k by a shadow ray. It samples the surfaces near a light in
+ *       proportion to their irradiance, where 1a's BSDF sampling makes fireflies (the Cornell
+ *       box ceiling 0.19 m above its light).
+ *       1a and 1b both make every path L D D (D|S)* E, the last D from the light being x_k;
+ *       they are combined by the balance heuristic (Veach 1997 §9.2.2) in area measure at x'.
+ *       Paths L D (S) ... and the camera's first vertex (L D E) only 1a makes (weight 1).
+ *       Together they cover every path L D (D|S)* E whose first vertex after the light is D.
+ *       The NEE at the camera's first vertex is "direct" (L D E: one surface); the rest
+ *       "indirect".
  *   2. Probabilistic progressive photon mapping for caustics (Knaus & Zwicker 2011, "Progressive
  *      Photon Mapping: A Probabilistic Approach", Eq. 15–16; Hachisuka et al. 2008): one photon
  *      pass per sample; photons leave the lights toward the bounding sphere of the surfaces
@@ -26,15 +36,18 @@
  *      "indirect" (at least two surfaces).
  * The classes are disjoint and together hold every path with at least one D vertex: split a
  * path at its first D vertex counted from the light (estimator 1 when it is the first vertex,
- * 2 otherwise); paths L S* E carry no energy to a pinhole from a punctual light. Photons are
- * never stored at their first hit (that is estimator 1's), and an eye path never hits a light.
- * The photon pass's bias (the kernel radius) vanishes as r_s → 0; the rest is unbiased.
+ * 2 otherwise); paths L S* E carry no energy to a pinhole from a punctual light. Photons and
+ * light vertices whose first surface is S are dropped by 1b and stored only after it by 2, and
+ * an eye path never hits a light. The photon pass's bias (the kernel radius) vanishes as
+ * r_s → 0; 1a and 1b are unbiased. Paths are at most max_depth eye vertices long (1b adds one
+ * vertex only where 1a could still continue).
  * Refraction carries no η² factor (bsdf.c: photons carry power); for an eye path that both
  * enters and leaves a dielectric the factors cancel, so the estimate is exact whenever the
  * camera and the D surfaces lie in air, as in every scene the project ships.
  *
  * Determinism: a random number is mix64 of (stream, pixel or photon index, sample, frame,
- * seed, dimension) — no generator state. Pixels are independent and each pixel's sums are
+ * seed, dimension) — no generator state; an eye vertex uses 9 dimensions (6 to scatter, 3 for
+ * its light vertex). Pixels are independent and each pixel's sums are
  * taken in sample order; a pass's photons are sorted by (photon index, hit index) before the
  * hash grid is built (stable counting sort), and a gather visits buckets and photons in a
  * fixed order. So results are bit-identical for any thread count (tests/test_reference.c).
@@ -171,6 +184,7 @@ static void scatter_numbers(uint64_t key, uint32_t dim0, float u[4], float cosdi
 }
 
 #define DIMS_PER_BOUNCE 6u
+#define EYE_DIMS_PER_VERTEX 9u /* scattering (6) and the light vertex of estimator 1b (3) */
 #define EYE_DIM0 2u    /* dims 0, 1: the position inside the pixel */
 #define PHOTON_DIM0 4u /* dims 0..3: the emitted direction (and disk position) */
 
@@ -226,6 +240,32 @@ static int has_delta(const scn_material *m)
 {
     float metallic = clamp01(m->metallic), transmission = clamp01(m->transmission);
     return (metallic > 0.0f && m->roughness < BSDF_MIRROR_ROUGHNESS) || (metallic < 1.0f && transmission > 0.0f);
+}
+
+/* Solid-angle density with which bsdf_scatter picks wo through the non-delta lobes
+ * (lobe-choice probability × lobe pdf, Russian roulette left out): metallic·D(h)(n·h)/(4|wo·h|)
+ * (Walter et al. 2007 Eq. 38 with the Jacobian of Eq. 14) + (1 − metallic)(1 − transmission)·
+ * cos/π. ns is turned toward wi. */
+static float pdf_mix(const scn_material *m, const float ns[3], const float wi[3], const float wo[3])
+{
+    float co = dot3(ns, wo);
+    if (!(co > 0.0f) || !(dot3(ns, wi) > 0.0f))
+        return 0.0f;
+    float metallic = clamp01(m->metallic), transmission = clamp01(m->transmission);
+    float p = (1.0f - metallic) * (1.0f - transmission) * co / (float)ENG_PI;
+    if (metallic > 0.0f && m->roughness >= BSDF_MIRROR_ROUGHNESS) {
+        float alpha = m->roughness * m->roughness;
+        if (alpha < BSDF_MIN_ALPHA)
+            alpha = BSDF_MIN_ALPHA;
+        float h[3] = {wi[0] + wo[0], wi[1] + wo[1], wi[2] + wo[2]};
+        normalize3(h);
+        float nh = dot3(ns, h), oh = dot3(wo, h);
+        if (nh > 0.0f && oh > 0.0f) {
+            float a2 = alpha * alpha, q = nh * nh * (a2 - 1.0f) + 1.0f;
+            p += metallic * a2 / ((float)ENG_PI * q * q) * nh / (4.0f * oh);
+        }
+    }
+    return p;
 }
 
 /* ---------------------------------------------------------------- lights */
@@ -345,6 +385,12 @@ typedef struct frame_ctx {
     float far_dist;           /* longer than any segment inside the scene's bounds */
     const photon_grid *grid;  /* this pass's caustic photons, or NULL */
     const emit_plan *plan;
+    /* Light vertices of estimator 1b: light l is picked with probability light_q[l] (its
+     * power share), then a direction uniform over its sphere (point), its outer cone (spot),
+     * or a point uniform on the disk of the scene's bounding sphere (directional). */
+    float light_q[8];
+    float light_cos_max[8];   /* −1 (point) or cos(outer cone) (spot) */
+    float scene_centre[3], scene_rad;
 } frame_ctx;
 
 static void bounds_sphere(const eng_frame_scene *fs, int delta_only, float centre[3], float *rad, int *found)
@@ -432,6 +478,61 @@ static void scatter_normal(const rt_hit *h, const float wi[3], float n[3])
 {
     float cg = dot3(h->geom_normal, wi), cs = dot3(h->normal, wi);
     memcpy(n, ((cg >= 0.0f) == (cs >= 0.0f)) ? h->normal : h->geom_normal, 3 * sizeof(float));
+}
+
+/* Area density (1/m² at x, geometric normal ng) with which estimator 1b's light sampling
+ * lands on x as the first surface light l reaches: q_l · p_ω · |cos|/d² for point and spot
+ * lights, q_l · |cos|/(πR²) for directional ones (0 outside a spot's cone). */
+static float light_vertex_pdf(const frame_ctx *c, uint32_t l, const float x[3], const float ng[3])
+{
+    const eng_light_pose *lp = &c->fs->lights[l];
+    float q = c->light_q[l];
+    if (!(q > 0.0f))
+        return 0.0f;
+    if (lp->type == SCN_LIGHT_DIRECTIONAL)
+        return q * fabsf(dot3(ng, lp->direction)) / ((float)ENG_PI * c->scene_rad * c->scene_rad);
+    float d[3] = {x[0] - lp->position[0], x[1] - lp->position[1], x[2] - lp->position[2]};
+    float d2 = dot3(d, d);
+    if (!(d2 > 0.0f))
+        return 0.0f;
+    float len = sqrtf(d2);
+    float cos_max = c->light_cos_max[l];
+    if (lp->type == SCN_LIGHT_SPOT && dot3(lp->direction, d) < cos_max * len)
+        return 0.0f;
+    float p_omega = 1.0f / ((float)(2.0 * ENG_PI) * (1.0f - cos_max));
+    return q * p_omega * fabsf(dot3(ng, d)) / (len * d2);
+}
+
+/* A ray leaving a light as estimator 1b samples it (light choice u0, direction u1, u2). */
+static uint32_t sample_light_ray(const frame_ctx *c, float u0, float u1, float u2, float org[3], float dir[3])
+{
+    const eng_frame_scene *fs = c->fs;
+    uint32_t l = 0;
+    float acc = c->light_q[0];
+    while (l + 1 < fs->light_count && !(u0 < acc))
+        acc += c->light_q[++l];
+    const eng_light_pose *lp = &fs->lights[l];
+    float t[3], b[3];
+    if (lp->type == SCN_LIGHT_DIRECTIONAL) {
+        basis(lp->direction, t, b);
+        float r = c->scene_rad * sqrtf(u1), phi = (float)(2.0 * ENG_PI) * u2;
+        for (int i = 0; i < 3; i++) {
+            org[i] = c->scene_centre[i] + r * cosf(phi) * t[i] + r * sinf(phi) * b[i] - c->far_dist * lp->direction[i];
+            dir[i] = lp->direction[i];
+        }
+        return l;
+    }
+    static const float up[3] = {0.0f, 0.0f, 1.0f};
+    const float *axis = lp->type == SCN_LIGHT_SPOT ? lp->direction : up;
+    basis(axis, t, b);
+    float ct = 1.0f - u1 * (1.0f - c->light_cos_max[l]);
+    float st = sqrtf(fmaxf(0.0f, 1.0f - ct * ct)), phi = (float)(2.0 * ENG_PI) * u2;
+    for (int i = 0; i < 3; i++) {
+        org[i] = lp->position[i];
+        dir[i] = st * cosf(phi) * t[i] + st * sinf(phi) * b[i] + ct * axis[i];
+    }
+    normalize3(dir);
+    return l;
 }
 
 /* Traces photon g of pass `pass`; stores its caustic photons in out. Returns how many. */
@@ -636,12 +737,22 @@ static void gather(const frame_ctx *c, const scn_material *m, const float p[3], 
         out[k] = (float)(sum[k] * norm);
 }
 
-/* Estimator 1's shadow rays at a D vertex: Σ_l f·E_l·cos·V. ng is the geometric normal. */
+/* Estimator 1a's shadow rays at a D vertex: Σ_l w_l·f·E_l·cos·V. ng is the geometric normal.
+ * When the eye path reached p from a D vertex prev by sampling that vertex's non-delta lobes
+ * with solid-angle density prev_pdf (prev NULL otherwise), estimator 1b could have made the
+ * same path, and w_l is the balance heuristic (Veach 1997 §9.2.2) p_A/(p_A + p_B,l) in area
+ * measure at p; otherwise w_l = 1. */
 static void next_event(const frame_ctx *c, const scn_material *m, const float p[3], const float ng[3],
-                       const float ns[3], const float wi[3], float out[3])
+                       const float ns[3], const float wi[3], const float *prev, float prev_pdf, float out[3])
 {
     out[0] = out[1] = out[2] = 0.0f;
     float gi = dot3(ng, wi);
+    float p_a = 0.0f;
+    if (prev) {
+        float d[3] = {prev[0] - p[0], prev[1] - p[1], prev[2] - p[2]};
+        float d2 = dot3(d, d);
+        p_a = d2 > 0.0f ? prev_pdf * fabsf(dot3(ng, d)) / (sqrtf(d2) * d2) : 0.0f;
+    }
     for (uint32_t l = 0; l < c->fs->light_count; l++) {
         const eng_light_pose *lp = &c->fs->lights[l];
         float wl[3], dist, e[3], f[3];
@@ -652,6 +763,11 @@ static void next_event(const frame_ctx *c, const scn_material *m, const float p[
             continue;
         if (!eval_f(m, ns, wi, wl, f))
             continue;
+        float w = 1.0f;
+        if (prev) {
+            float p_b = light_vertex_pdf(c, l, p, ng);
+            w = p_a + p_b > 0.0f ? p_a / (p_a + p_b) : 0.0f;
+        }
         float eps = gl >= 0.0f ? offset_eps(p) : -offset_eps(p);
         float from[3], to[3];
         for (int i = 0; i < 3; i++) {
@@ -661,8 +777,67 @@ static void next_event(const frame_ctx *c, const scn_material *m, const float p[
         if (rt_occluded(c->rt, from, to))
             continue;
         for (int i = 0; i < 3; i++)
-            out[i] += f[i] * e[i] * cosl;
+            out[i] += w * f[i] * e[i] * cosl;
     }
+}
+
+/* Estimator 1b at a D vertex x1 (geometric normal ng1, shading normal ns1 toward wi1): a
+ * light vertex x2, the first surface a ray sampled from a light meets, connected to x1 with a
+ * shadow ray (instant-radiosity style, Keller 1997; the light-tracing half of bidirectional
+ * path tracing with one light vertex, Veach 1997 §10.2). Path L x2 x1: f1·cos1·G·f2·E·cos2 / (p_A
+ * + p_B), the balance heuristic with 1a's BSDF sampling at x1, both in area measure at x2.
+ * The light vertex's class is 1a's (its first vertex after the light is D), never a caustic. */
+static void light_vertex(const frame_ctx *c, uint64_t key, uint32_t dim0, const scn_material *m1, const float x1[3],
+                         const float ng1[3], const float ns1[3], const float wi1[3], float out[3])
+{
+    out[0] = out[1] = out[2] = 0.0f;
+    float org[3], dir[3];
+    uint32_t l = sample_light_ray(c, rnd(key, dim0), rnd(key, dim0 + 1), rnd(key, dim0 + 2), org, dir);
+    rt_hit h;
+    if (!rt_intersect(c->rt, org, dir, 0.0f, INFINITY, &h))
+        return;
+    scn_material m2 = eng_material_of(c->fs->scene, h.material);
+    if (!bsdf_stores_photons(&m2))
+        return; /* a specular first surface: a caustic path, estimator 2's */
+    const float *x2 = h.position, *ng2 = h.geom_normal;
+    float d[3] = {x1[0] - x2[0], x1[1] - x2[1], x1[2] - x2[2]};
+    float d2 = dot3(d, d);
+    if (!(d2 > 0.0f))
+        return;
+    float len = sqrtf(d2);
+    float w21[3] = {d[0] / len, d[1] / len, d[2] / len}, w12[3] = {-w21[0], -w21[1], -w21[2]};
+    /* x1's side: what trace_eye's scattering would accept. */
+    float f1[3];
+    if (!eval_f(m1, ns1, wi1, w12, f1) || (dot3(ng1, w12) >= 0.0f) != (dot3(ng1, wi1) >= 0.0f))
+        return;
+    /* x2's side: what next_event at x2 would accept, seen from x1. */
+    float n2[3];
+    scatter_normal(&h, w21, n2);
+    float s2 = dot3(n2, w21) >= 0.0f ? 1.0f : -1.0f;
+    float ns2[3] = {s2 * n2[0], s2 * n2[1], s2 * n2[2]};
+    float wl[3], dist, e[3], f2[3];
+    if (!light_at(&c->fs->lights[l], x2, wl, &dist, e))
+        return;
+    float cosl = dot3(ns2, wl), gl = dot3(ng2, wl), gi = dot3(ng2, w21);
+    if (!(cosl > 0.0f) || (gl >= 0.0f) != (gi >= 0.0f) || !eval_f(&m2, ns2, w21, wl, f2))
+        return;
+    float p_b = light_vertex_pdf(c, l, x2, ng2);
+    float g2 = fabsf(gi) / d2;
+    float p_a = pdf_mix(m1, ns1, wi1, w12) * g2;
+    if (!(p_b > 0.0f))
+        return;
+    float e1 = dot3(ng1, wi1) >= 0.0f ? offset_eps(x1) : -offset_eps(x1);
+    float e2 = gi >= 0.0f ? offset_eps(x2) : -offset_eps(x2);
+    float from[3], to[3];
+    for (int i = 0; i < 3; i++) {
+        from[i] = x1[i] + e1 * ng1[i];
+        to[i] = x2[i] + e2 * ng2[i];
+    }
+    if (rt_occluded(c->rt, from, to))
+        return;
+    float k = dot3(ns1, w12) * g2 * cosl / (p_a + p_b);
+    for (int i = 0; i < 3; i++)
+        out[i] = f1[i] * f2[i] * e[i] * k;
 }
 
 /* ---------------------------------------------------------------- eye paths */
@@ -708,6 +883,8 @@ static void trace_eye(const frame_ctx *c, int x, int y, uint32_t sample, double 
     camera_ray(c, x + (double)rnd(key, 0), y + (double)rnd(key, 1), org, dir, &tnear, &tfar);
     float thr[3] = {1.0f, 1.0f, 1.0f}, eta = 1.0f;
     const scn_scene *scene = c->fs->scene;
+    float prev[3] = {0.0f, 0.0f, 0.0f}, prev_pdf = 0.0f; /* the last D vertex, if the path left it by a D lobe */
+    int prev_ok = 0;
     for (int depth = 0; depth < c->max_depth; depth++) {
         rt_hit h;
         scn_material m;
@@ -734,11 +911,13 @@ static void trace_eye(const frame_ctx *c, int x, int y, uint32_t sample, double 
         const float wi[3] = {-dir[0], -dir[1], -dir[2]};
         float n[3];
         scatter_normal(&h, wi, n);
-        if (bsdf_stores_photons(&m)) {
-            float s = dot3(n, wi) >= 0.0f ? 1.0f : -1.0f;
-            float ns[3] = {s * n[0], s * n[1], s * n[2]};
+        uint32_t dim = EYE_DIM0 + EYE_DIMS_PER_VERTEX * (uint32_t)depth;
+        int d_vertex = bsdf_stores_photons(&m), last = depth + 1 == c->max_depth;
+        float s = dot3(n, wi) >= 0.0f ? 1.0f : -1.0f;
+        float ns[3] = {s * n[0], s * n[1], s * n[2]};
+        if (d_vertex) {
             float l[3];
-            next_event(c, &m, h.position, h.geom_normal, ns, wi, l);
+            next_event(c, &m, h.position, h.geom_normal, ns, wi, prev_ok ? prev : NULL, prev_pdf, l);
             double *dst = depth == 0 ? direct : indirect;
             for (int i = 0; i < 3; i++)
                 dst[i] += (double)(thr[i] * l[i]);
@@ -747,14 +926,26 @@ static void trace_eye(const frame_ctx *c, int x, int y, uint32_t sample, double 
                 for (int i = 0; i < 3; i++)
                     indirect[i] += (double)(thr[i] * l[i]);
             }
+            /* Paths one surface longer than this vertex: only if 1a could make them too. */
+            if (!last) {
+                light_vertex(c, key, dim + DIMS_PER_BOUNCE, &m, h.position, h.geom_normal, ns, wi, l);
+                for (int i = 0; i < 3; i++)
+                    indirect[i] += (double)(thr[i] * l[i]);
+            }
         }
-        if (depth + 1 == c->max_depth)
+        if (last)
             return;
         float u[4], cosdir[4], wo[3], w[3], density;
-        scatter_numbers(key, EYE_DIM0 + DIMS_PER_BOUNCE * (uint32_t)depth, u, cosdir);
+        scatter_numbers(key, dim, u, cosdir);
         bsdf_sample rs = {u, cosdir};
-        if (bsdf_scatter(&m, n, wi, &eta, &rs, wo, w, &density) == BSDF_ABSORBED)
+        bsdf_lobe lobe = bsdf_scatter(&m, n, wi, &eta, &rs, wo, w, &density);
+        if (lobe == BSDF_ABSORBED)
             return;
+        prev_ok = d_vertex && (lobe == BSDF_DIFFUSE || lobe == BSDF_GLOSSY);
+        if (prev_ok) {
+            memcpy(prev, h.position, sizeof prev);
+            prev_pdf = pdf_mix(&m, ns, wi, wo);
+        }
         for (int i = 0; i < 3; i++)
             thr[i] *= w[i];
         if (!nonzero3(thr))
@@ -766,6 +957,28 @@ static void trace_eye(const frame_ctx *c, int x, int y, uint32_t sample, double 
             dir[i] = wo[i];
         }
     }
+}
+
+/* Estimator 1b's light choice: probabilities ∝ the power each light sends over what is
+ * sampled (4πI, the outer cone's solid angle × I, or E × the scene disk's area). */
+static void light_plan(frame_ctx *c)
+{
+    int found;
+    bounds_sphere(c->fs, 0, c->scene_centre, &c->scene_rad, &found);
+    double power[8] = {0}, total = 0.0;
+    for (uint32_t l = 0; l < c->fs->light_count && l < 8; l++) {
+        const eng_light_pose *lp = &c->fs->lights[l];
+        double mean = (lp->radiance_scale[0] + lp->radiance_scale[1] + lp->radiance_scale[2]) / 3.0;
+        c->light_cos_max[l] = lp->type == SCN_LIGHT_SPOT ? cosf(lp->outer_cone) : -1.0f;
+        if (lp->type == SCN_LIGHT_SPOT && !(c->light_cos_max[l] < 1.0f))
+            c->light_cos_max[l] = 1.0f - 1e-6f;
+        double extent = lp->type == SCN_LIGHT_DIRECTIONAL ? ENG_PI * (double)c->scene_rad * c->scene_rad
+                                                          : 2.0 * ENG_PI * (1.0 - (double)c->light_cos_max[l]);
+        power[l] = mean > 0.0 ? mean * extent : 0.0;
+        total += power[l];
+    }
+    for (uint32_t l = 0; l < c->fs->light_count && l < 8; l++)
+        c->light_q[l] = total > 0.0 ? (float)(power[l] / total) : 0.0f;
 }
 
 /* ---------------------------------------------------------------- public API */
@@ -843,8 +1056,8 @@ int ref_settings_json(const ref_renderer *r, char *out, size_t size)
     return snprintf(out, size,
                     "{\"spp\": %d, \"max_depth\": %d, \"photons_per_pass\": %d, \"radius\": %.9g, "
                     "\"alpha\": %.9g, \"seed\": %u, \"caustics\": %s, \"estimators\": "
-                    "\"path tracing with next-event estimation (L D (D|S)* E) + probabilistic progressive "
-                    "photon mapping of caustic photons (L S+ D (D|S)* E)\"}",
+                    "\"path tracing with next-event estimation + light vertices, balance heuristic "
+                    "(L D (D|S)* E); probabilistic progressive photon mapping of caustics (L S+ D (D|S)* E)\"}",
                     d->spp, d->max_depth, d->photons, (double)d->radius, (double)d->alpha, d->seed,
                     d->no_caustics ? "false" : "true");
 }
@@ -894,6 +1107,7 @@ eng_result ref_render_frame(ref_renderer *r, int frame, eng_error *err)
         }
         c.far_dist = 2.0f * sqrtf(diag) + 1.0f;
     }
+    light_plan(&c);
     emit_plan plan;
     make_plan(c.fs, d->photons, &plan);
     c.plan = &plan;
