@@ -12,6 +12,7 @@
  *     the glass sphere the caustic estimate at N and 4N samples agrees (the shrinking radius
  *     keeps it consistent);
  *   - determinism: 1 and 2 threads give bit-identical buffers; full = direct + indirect. */
+#include "cap.h"
 #include "eng_internal.h"
 #include "ref.h"
 
@@ -490,12 +491,38 @@ START_TEST(bad_settings)
 }
 END_TEST
 
+/* The capture's optional renderer record: settings must be a JSON object. */
+START_TEST(capture_renderer_settings)
+{
+    setup s;
+    setup_open(&s, CORNELL_DIR "cornell-glass-ci.json", NULL, 16, 1);
+    eng_error err = {{0}};
+    cap_desc cd;
+    memset(&cd, 0, sizeof cd);
+    cd.run_dir = ISPM_BINARY_DIR "/tests/test_reference.work/run";
+    cd.sequence = &s.seq;
+    cd.scene = s.scene;
+    cd.overwrite = 1;
+    cd.renderer = "reference";
+    cd.renderer_settings = "[1, 2]";
+    cap_capture *cap = NULL;
+    ck_assert_int_eq(cap_create(&cd, &cap, &err), ENG_ERR_INVALID);
+    ck_assert_ptr_null(cap);
+    ck_assert_msg(strstr(err.msg, "test_reference.work/run") != NULL, "%s", err.msg);
+    cd.renderer_settings = "{\"spp\": 4}";
+    ck_assert_msg(cap_create(&cd, &cap, &err) == ENG_OK, "%s", err.msg);
+    cap_destroy(cap);
+    setup_close(&s);
+}
+END_TEST
+
 static Suite *reference_suite(void)
 {
     Suite *s = suite_create("reference");
     TCase *tc = tcase_create("reference");
     tcase_set_timeout(tc, 600);
     tcase_add_test(tc, bad_settings);
+    tcase_add_test(tc, capture_renderer_settings);
     tcase_add_test(tc, threads_bit_identical);
     tcase_add_test(tc, cornell_floor_direct);
     tcase_add_test(tc, furnace_sphere);
