@@ -41,6 +41,12 @@ typedef struct cap_desc {
      * two is removed, to be rendered again. A folder that holds no part of a run (killed
      * before run.json was written, or never recorded) gets a new run. Ignores overwrite. */
     int resume;
+    /* A run made by another renderer than the engine (ispm reference): its name and the text
+     * of a JSON object of its settings, recorded as "renderer": {"name", "settings"} in the
+     * manifest. NULL (the default) records nothing, so engine runs are unchanged. A settings
+     * text that is not a JSON object is ENG_ERR_INVALID. Copied by cap_create. */
+    const char *renderer;
+    const char *renderer_settings;
 } cap_desc;
 
 typedef struct cap_capture cap_capture;

@@ -82,6 +82,8 @@ struct cap_capture {
     const seq_sequence *seq;
     const scn_scene *scene;
     char *gl_version, *gl_renderer, *tool_version, *git_revision, *command_line;
+    char *renderer;            /* NULL: the engine */
+    cJSON *renderer_settings;  /* a JSON object, or NULL */
     int det_count;  /* pairs */
     char **det;     /* 2*det_count strings; a value may be NULL */
     int frame_count;
@@ -326,8 +328,19 @@ eng_result cap_create(const cap_desc *desc, cap_capture **out, eng_error *err)
     if (desc->sequence->frame_count < 1)
         return eng_fail(err, ENG_ERR_INVALID, "%s: the sequence has %d frames", desc->run_dir,
                         desc->sequence->frame_count);
+    cJSON *renderer_settings = NULL;
+    if (desc->renderer && desc->renderer_settings) {
+        renderer_settings = cJSON_Parse(desc->renderer_settings);
+        if (!cJSON_IsObject(renderer_settings)) {
+            cJSON_Delete(renderer_settings);
+            return eng_fail(err, ENG_ERR_INVALID, "%s: the renderer's settings are not a JSON object",
+                            desc->run_dir);
+        }
+    }
 
     cap_capture *c = cap__xcalloc(1, sizeof *c);
+    c->renderer = dup_or_null(desc->renderer);
+    c->renderer_settings = renderer_settings;
     c->run_dir = cap__xstrdup(desc->run_dir);
     c->frames_dir = cap__join(desc->run_dir, "frames");
     int resume = desc->resume;
@@ -383,6 +396,8 @@ void cap_destroy(cap_capture *c)
     free(c->tool_version);
     free(c->git_revision);
     free(c->command_line);
+    free(c->renderer);
+    cJSON_Delete(c->renderer_settings);
     free(c->run_dir);
     free(c->frames_dir);
     free(c);
@@ -747,6 +762,14 @@ static cJSON *manifest_json(const cap_capture *c)
     jadd(gl, "version", jstr(c->gl_version));
     jadd(gl, "renderer", jstr(c->gl_renderer));
     jadd(root, "gl", gl);
+
+    if (c->renderer) {
+        cJSON *rd = jok(cJSON_CreateObject());
+        jadd(rd, "name", jstr(c->renderer));
+        jadd(rd, "settings", c->renderer_settings ? jok(cJSON_Duplicate(c->renderer_settings, 1))
+                                                  : cJSON_CreateNull());
+        jadd(root, "renderer", rd);
+    }
 
     cJSON *frames = jok(cJSON_CreateArray());
     for (int i = 0; i < c->frame_count; i++)

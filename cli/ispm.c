@@ -15,6 +15,8 @@
 
 enum { EXIT_OK = 0, EXIT_RUNTIME = 1, EXIT_INPUT = 2 };
 
+int cmd_reference(int argc, char **argv, const char *command_line); /* cmd_reference.c */
+
 static void usage(FILE *f)
 {
     fprintf(f,
@@ -26,6 +28,7 @@ static void usage(FILE *f)
             "  record SEQUENCE -o RUN     render every frame of a sequence, capture every pass to RUN\n"
             "  replay RUN [--golden DIR]  compare a run buffer by buffer against a golden\n"
             "  bless RUN DIR              make a complete run the golden in DIR\n"
+            "  reference SEQUENCE -o RUN  render ground truth (path tracing + photon mapping) to RUN\n"
             "  bench CONFIG -o OUTDIR     speed vs accuracy of engine settings against a reference run\n"
             "\n"
             "Run 'ispm <command> --help' for a command's options and exit codes.\n");
@@ -341,6 +344,8 @@ int main(int argc, char **argv)
         return cmd_replay(argc, argv);
     if (!strcmp(cmd, "bless"))
         return cmd_bless(argc, argv);
+    if (!strcmp(cmd, "reference"))
+        return cmd_reference(argc, argv, line);
     if (!strcmp(cmd, "bench"))
         return cmd_bench(argc, argv, line);
     fprintf(stderr, "ispm: unknown command '%s'\n", cmd);
