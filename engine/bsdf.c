@@ -64,25 +64,11 @@ static void normalize3(float v[3])
     }
 }
 
-/* Orthonormal basis about unit n (Duff et al., "Building an Orthonormal Basis, Revisited",
- * JCGT 2017): branch on the sign only, so it is the same on every machine. */
-static void basis(const float n[3], float t[3], float b[3])
-{
-    float sign = n[2] >= 0.0f ? 1.0f : -1.0f;
-    float a = -1.0f / (sign + n[2]);
-    float c = n[0] * n[1] * a;
-    t[0] = 1.0f + sign * n[0] * n[0] * a;
-    t[1] = sign * c;
-    t[2] = -sign * n[0];
-    b[0] = c;
-    b[1] = sign + n[1] * n[1] * a;
-    b[2] = -n[1];
-}
 
 static void to_world(const float local[3], const float n[3], float out[3])
 {
     float t[3], b[3];
-    basis(n, t, b);
+    bsdf_basis(n, t, b);
     for (int i = 0; i < 3; i++)
         out[i] = local[0] * t[i] + local[1] * b[i] + local[2] * n[i];
 }

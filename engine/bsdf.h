@@ -6,6 +6,8 @@
 
 #include "eng_internal.h"
 
+#include <math.h>
+
 typedef enum bsdf_lobe {
     BSDF_ABSORBED = 0, /* Russian roulette ended the path (or the sample left below the surface) */
     BSDF_DIFFUSE,      /* Lambertian, cosine-sampled */
@@ -53,5 +55,33 @@ int bsdf_stores_photons(const scn_material *m);
  * the medium of index n1 at cosine cos_i (>= 0) onto a medium n2; 1 under total internal
  * reflection. */
 float bsdf_fresnel_dielectric(float cos_i, float n1, float n2);
+
+/* Orthonormal basis about unit n (Duff et al., "Building an Orthonormal Basis, Revisited",
+ * JCGT 2017): branch on the sign only, so it is the same on every machine. */
+static inline void bsdf_basis(const float n[3], float t[3], float b[3])
+{
+    float sign = n[2] >= 0.0f ? 1.0f : -1.0f;
+    float a = -1.0f / (sign + n[2]);
+    float c = n[0] * n[1] * a;
+    t[0] = 1.0f + sign * n[0] * n[0] * a;
+    t[1] = sign * c;
+    t[2] = -sign * n[0];
+    b[0] = c;
+    b[1] = sign + n[1] * n[1] * a;
+    b[2] = -n[1];
+}
+
+/* Distance by which a ray leaves the surface it starts on: relative to the magnitude of the
+ * coordinates so that float rounding of the hit point cannot put the origin behind it
+ * (photon_trace.c, reference.c). */
+static inline float bsdf_offset_eps(const float p[3])
+{
+    float m = fabsf(p[0]);
+    if (fabsf(p[1]) > m)
+        m = fabsf(p[1]);
+    if (fabsf(p[2]) > m)
+        m = fabsf(p[2]);
+    return 1e-4f * (1.0f + m);
+}
 
 #endif

@@ -33,18 +33,6 @@ static float dot3(const float a[3], const float b[3])
     return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
 }
 
-/* Distance by which a ray leaves the surface it starts on: relative to the magnitude of the
- * coordinates so that float rounding of the hit point cannot put the origin behind it. */
-static float offset_eps(const float p[3])
-{
-    float m = fabsf(p[0]);
-    if (fabsf(p[1]) > m)
-        m = fabsf(p[1]);
-    if (fabsf(p[2]) > m)
-        m = fabsf(p[2]);
-    return 1e-4f * (1.0f + m);
-}
-
 static int has_power(const float p[3])
 {
     return p[0] > 0.0f || p[1] > 0.0f || p[2] > 0.0f;
@@ -70,7 +58,7 @@ static int trace_path(const eng_rt *rt, const scn_scene *scene, const eng_random
         dir[i] /= len;
     /* The bounce-map photon sits on the surface it left; no normal is known there, so the
      * first ray skips a short distance instead of offsetting its origin. */
-    float tnear = offset_eps(org);
+    float tnear = bsdf_offset_eps(org);
     int stored = 0;
     for (uint32_t k = 0; 2 + k <= PT_MAX_BOUNCE; k++) {
         rt_hit h;
@@ -107,7 +95,7 @@ static int trace_path(const eng_rt *rt, const scn_scene *scene, const eng_random
         rho *= density;
         if (!has_power(power))
             break;
-        float eps = offset_eps(h.position);
+        float eps = bsdf_offset_eps(h.position);
         float side = dot3(h.geom_normal, wo) >= 0.0f ? eps : -eps;
         for (int i = 0; i < 3; i++) {
             org[i] = h.position[i] + side * h.geom_normal[i];

@@ -117,32 +117,6 @@ static void normalize3(float v[3])
             v[i] /= l;
 }
 
-/* Distance a ray leaves its surface by, relative to the coordinates' magnitude (as
- * photon_trace.c), so that float rounding of the hit point cannot put the origin behind it. */
-static float offset_eps(const float p[3])
-{
-    float m = fabsf(p[0]);
-    if (fabsf(p[1]) > m)
-        m = fabsf(p[1]);
-    if (fabsf(p[2]) > m)
-        m = fabsf(p[2]);
-    return 1e-4f * (1.0f + m);
-}
-
-/* Orthonormal basis about unit n (Duff et al., JCGT 2017), as bsdf.c. */
-static void basis(const float n[3], float t[3], float b[3])
-{
-    float sign = n[2] >= 0.0f ? 1.0f : -1.0f;
-    float a = -1.0f / (sign + n[2]);
-    float c = n[0] * n[1] * a;
-    t[0] = 1.0f + sign * n[0] * n[0] * a;
-    t[1] = sign * c;
-    t[2] = -sign * n[0];
-    b[0] = c;
-    b[1] = sign + n[1] * n[1] * a;
-    b[2] = -n[1];
-}
-
 /* ---------------------------------------------------------------- random numbers */
 
 /* splitmix64's finaliser (Steele et al. 2014): a bijective 64-bit mix. */
@@ -514,7 +488,7 @@ static uint32_t sample_light_ray(const frame_ctx *c, float u0, float u1, float u
     const eng_light_pose *lp = &fs->lights[l];
     float t[3], b[3];
     if (lp->type == SCN_LIGHT_DIRECTIONAL) {
-        basis(lp->direction, t, b);
+        bsdf_basis(lp->direction, t, b);
         float r = c->scene_rad * sqrtf(u1), phi = (float)(2.0 * ENG_PI) * u2;
         for (int i = 0; i < 3; i++) {
             org[i] = c->scene_centre[i] + r * cosf(phi) * t[i] + r * sinf(phi) * b[i] - c->far_dist * lp->direction[i];
@@ -524,7 +498,7 @@ static uint32_t sample_light_ray(const frame_ctx *c, float u0, float u1, float u
     }
     static const float up[3] = {0.0f, 0.0f, 1.0f};
     const float *axis = lp->type == SCN_LIGHT_SPOT ? lp->direction : up;
-    basis(axis, t, b);
+    bsdf_basis(axis, t, b);
     float ct = 1.0f - u1 * (1.0f - c->light_cos_max[l]);
     float st = sqrtf(fmaxf(0.0f, 1.0f - ct * ct)), phi = (float)(2.0 * ENG_PI) * u2;
     for (int i = 0; i < 3; i++) {
@@ -547,7 +521,7 @@ static int trace_photon(const frame_ctx *c, uint32_t g, uint32_t pass, photon_bu
     uint64_t key = path_key(STREAM_PHOTON, g, pass, c->frame, c->seed);
     float org[3], dir[3], power[3];
     float t[3], b[3];
-    basis(pl->axis[l], t, b);
+    bsdf_basis(pl->axis[l], t, b);
     if (lp->type == SCN_LIGHT_DIRECTIONAL) {
         /* Uniform on the disk of the sphere's radius facing the light (power = E·πR²/N). */
         float r = pl->rad * sqrtf(rnd(key, 0)), phi = (float)(2.0 * ENG_PI) * rnd(key, 1);
@@ -619,7 +593,7 @@ static int trace_photon(const frame_ctx *c, uint32_t g, uint32_t pass, photon_bu
             power[i] *= w[i];
         if (!nonzero3(power))
             break;
-        float eps = offset_eps(h.position);
+        float eps = bsdf_offset_eps(h.position);
         float side = dot3(h.geom_normal, wo) >= 0.0f ? eps : -eps;
         for (int i = 0; i < 3; i++) {
             org[i] = h.position[i] + side * h.geom_normal[i];
@@ -768,7 +742,7 @@ static void next_event(const frame_ctx *c, const scn_material *m, const float p[
             float p_b = light_vertex_pdf(c, l, p, ng);
             w = p_a + p_b > 0.0f ? p_a / (p_a + p_b) : 0.0f;
         }
-        float eps = gl >= 0.0f ? offset_eps(p) : -offset_eps(p);
+        float eps = gl >= 0.0f ? bsdf_offset_eps(p) : -bsdf_offset_eps(p);
         float from[3], to[3];
         for (int i = 0; i < 3; i++) {
             from[i] = p[i] + eps * ng[i];
@@ -826,8 +800,8 @@ static void light_vertex(const frame_ctx *c, uint64_t key, uint32_t dim0, const 
     float p_a = pdf_mix(m1, ns1, wi1, w12) * g2;
     if (!(p_b > 0.0f))
         return;
-    float e1 = dot3(ng1, wi1) >= 0.0f ? offset_eps(x1) : -offset_eps(x1);
-    float e2 = gi >= 0.0f ? offset_eps(x2) : -offset_eps(x2);
+    float e1 = dot3(ng1, wi1) >= 0.0f ? bsdf_offset_eps(x1) : -bsdf_offset_eps(x1);
+    float e2 = gi >= 0.0f ? bsdf_offset_eps(x2) : -bsdf_offset_eps(x2);
     float from[3], to[3];
     for (int i = 0; i < 3; i++) {
         from[i] = x1[i] + e1 * ng1[i];
@@ -899,7 +873,7 @@ static void trace_eye(const frame_ctx *c, int x, int y, uint32_t sample, double 
                     hit = 1;
                     break;
                 }
-                tnear = h.t + offset_eps(h.position);
+                tnear = h.t + bsdf_offset_eps(h.position);
             }
             if (!hit)
                 return;
@@ -950,7 +924,7 @@ static void trace_eye(const frame_ctx *c, int x, int y, uint32_t sample, double 
             thr[i] *= w[i];
         if (!nonzero3(thr))
             return;
-        float eps = offset_eps(h.position);
+        float eps = bsdf_offset_eps(h.position);
         float side = dot3(h.geom_normal, wo) >= 0.0f ? eps : -eps;
         for (int i = 0; i < 3; i++) {
             org[i] = h.position[i] + side * h.geom_normal[i];
