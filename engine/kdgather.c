@@ -2,7 +2,8 @@
  * that ISPM's scatter is measured against: the photon map is balanced into a k-d tree once
  * per frame, then every eye G-buffer pixel gathers the photons within a constant radius
  * (Appendix A, "Radiance estimates" step 2, the constant-radius variant) and sums step 3(a),
- * L_o += f(s, ω_i, ω_o) · Φ_i · max(0, ω_i · n) · κ(x − s).
+ * L_o += f(s, ω_i, ω_o) · Φ_i · κ(x − s) for photons with ω_i · n > 0 (no cosine: see
+ * shaders/splat.frag.glsl on Eq. 1).
  *
  * The kernel and BSDF are those of shaders/splat.frag.glsl, evaluated in the same float
  * operations in the same order (ISPM §5 calls scatter and gather "mathematically identical";
@@ -247,7 +248,7 @@ static void gather_pixel(const eng_photon_map *map, const float *r_xy, float com
             }
         }
         for (int c = 0; c < 3; c++)
-            acc[c] += f[c] * cos_i * ph->power[c] * kappa;
+            acc[c] += f[c] * ph->power[c] * kappa;
         acc[3] += 1.0f;
     }
 }

@@ -509,7 +509,7 @@ START_TEST(photon_volumes_equal_a_cpu_gather)
             if (kap <= 0.0f || c <= 0.0f)
                 continue;
             for (int ch = 0; ch < 3; ch++)
-                sum[ch] += alb->data[3 * i + ch] / PI_D * c * ph[k].power[ch] * kap;
+                sum[ch] += alb->data[3 * i + ch] / PI_D * ph[k].power[ch] * kap; /* front-facing photons, no cosine */
         }
         for (int ch = 0; ch < 3; ch++) {
             double got = sp->data[3 * i + ch];

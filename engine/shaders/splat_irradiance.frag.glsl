@@ -3,8 +3,9 @@
 // as splat.frag.glsl (ISPM 003_… §5 Eq. 1), but the diffuse BSDF is left out so the filters
 // work on irradiance, and applied after them (002_… §7.4 Eq. 7.9; 003 §5.2: "we do not perform
 // shading and then interpolate pixel color"). Outputs, additively blended:
-//   0  E = Σ max(0, ω_i·n) Φ_i κ  (W/m²), A = number of kernels covering the pixel
-//   1  the glossy part Σ f_glossy max(0, ω_i·n) Φ_i κ (radiance), which depends on ω_i and
+//   0  E = Σ Φ_i κ over photons arriving from the front (W/m²; no cosine, see splat.frag.glsl),
+//      A = number of kernels covering the pixel
+//   1  the glossy part Σ f_glossy Φ_i κ (radiance), which depends on ω_i and
 //      so cannot be factored out of the sum; it is upsampled but not filtered.
 #define PI 3.14159265358979323846
 
@@ -40,7 +41,7 @@ void main()
     if (cos_i <= 0.0)
         discard;
     vec4 mat = texelFetch(u_material, px, 0);
-    vec3 e = cos_i * v_power * kappa;
+    vec3 e = v_power * kappa;
     o_irradiance = vec4(e, 1.0);
     vec3 g = vec3(0.0);
     if (mat.y > 0.0)
