@@ -298,7 +298,8 @@ eng_result kd_gather(const eng_photon_map *map, int w, int h, const float *posit
                         list[kept++] = list[k];
                 }
                 n = kept;
-                qsort(list, n, sizeof *list, cmp_u32);
+                if (n > 1)
+                    qsort(list, n, sizeof *list, cmp_u32);
                 gather_pixel(map, r_xy, compression, list, n, p, normal + 3 * i, albedo + 3 * i, material + 4 * i,
                              eye, out + 4 * i);
             }
