@@ -194,6 +194,8 @@ const char *eng_indirect_name(eng_indirect m)
     switch (m) {
     case ENG_INDIRECT_NONE: return "none";
     case ENG_INDIRECT_KDGATHER: return "kd-gather";
+    case ENG_INDIRECT_QUADS: return "quads";
+    case ENG_INDIRECT_TILEGATHER: return "tile-gather";
     case ENG_INDIRECT_ISPM:
     case ENG_INDIRECT_DEFAULT: return "ispm";
     }

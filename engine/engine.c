@@ -9,6 +9,7 @@
  * Owns: the GL context, GPU copies of the scene's primitives, the passes, the Embree scene. */
 #define _POSIX_C_SOURCE 200809L /* clock_gettime */
 #include "eng_internal.h"
+#include "indirect.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -39,8 +40,8 @@ struct eng_engine {
     eng_bounce_photon *bounce;
     size_t bounce_count, bounce_capacity;
     eng_photon_map pmap;
-    pass_splat *splat;
-    GLuint gather_tex; /* k-d gather's result, uploaded for the composite */
+    const ind_method *method; /* indirect.h: the `indirect` setting's method, NULL for none */
+    void *method_state;
     /* Reconstruction filters (DESIGN.md step 7), on when any of splat_subsample > 1,
      * temporal, atrous_iterations is set: G-buffers at 1/2^l resolution (gbuffer_lo[l-1]),
      * upsampling to level l (upsample[l]), temporal accumulation, À-Trous, BSDF resolve. */
@@ -163,13 +164,8 @@ eng_result eng_create(const eng_desc *desc, eng_engine **out, eng_error *err)
         r = pass_direct_create(e->width, e->height, &e->direct, err);
     if (r == ENG_OK)
         r = pass_composite_create(e->width, e->height, &e->composite, err);
-    if (r == ENG_OK && e->settings.indirect == ENG_INDIRECT_KDGATHER) {
-        /* The k-d gather needs the photon map only: no photon volumes, no filters. */
-        r = rmap_create((uint64_t)e->settings.random_seed, (uint32_t)e->settings.random_map_size, &e->rmaps, err);
-        if (r == ENG_OK)
-            r = pass_lightmaps_create(&e->rmaps, &e->lightmaps, err);
-    }
-    if (r == ENG_OK && e->settings.indirect == ENG_INDIRECT_ISPM) {
+    e->method = ind_method_of(e->settings.indirect);
+    if (r == ENG_OK && e->method) {
         r = rmap_create((uint64_t)e->settings.random_seed, (uint32_t)e->settings.random_map_size, &e->rmaps, err);
         if (r == ENG_OK)
             r = pass_lightmaps_create(&e->rmaps, &e->lightmaps, err);
@@ -186,7 +182,7 @@ eng_result eng_create(const eng_desc *desc, eng_engine **out, eng_error *err)
                 r = pass_gbuffer_create(w, h, &e->gbuffer_lo[e->levels - 1], err);
         }
         if (r == ENG_OK)
-            r = pass_splat_create(w, h, e->filtered, &e->splat, err);
+            r = e->method->create(w, h, e->filtered, &e->method_state, err);
         if (r == ENG_OK && st->temporal)
             r = pass_temporal_create(e->width, e->height, &e->temporal, err);
         if (r == ENG_OK && st->atrous_iterations > 0)
@@ -224,9 +220,8 @@ void eng_destroy(eng_engine *e)
         for (int i = 0; i < 8; i++)
             light_maps_release(&e->lmaps[i]);
         pass_lightmaps_destroy(e->lightmaps);
-        pass_splat_destroy(e->splat);
-        if (e->gather_tex)
-            glDeleteTextures(1, &e->gather_tex);
+        if (e->method && e->method_state)
+            e->method->destroy(e->method_state);
         for (int l = 0; l < 3; l++) {
             pass_gbuffer_destroy(e->gbuffer_lo[l]);
             pass_upsample_destroy(e->upsample[l]);
@@ -610,59 +605,26 @@ static int announce_photon_map(eng_engine *e, int frame)
     return rc;
 }
 
-/* Indirect light by the k-d gather baseline (kdgather.c, 003_… Appendix A) instead of photon
- * volumes: the eye G-buffer read back, gathered on the CPU, uploaded for the composite. Timed
- * as "gather", read-back and upload included since the method cannot do without them; then
- * announced as gather.indirect, gather.count and indirect.radiance. *tex gets the texture. */
-static eng_result gather_pass(eng_engine *e, int frame, const glu_target *gb, GLuint *tex, eng_error *err)
+/* Runs the indirect method against gb (indirect.h), timed as the method's pass, and announces
+ * the extra buffers it lists; *out gets its target. */
+static eng_result run_method(eng_engine *e, int frame, const glu_target *gb, const glu_target **out, eng_error *err)
 {
-    const int w = gb->width, h = gb->height;
-    const size_t npix = (size_t)w * (size_t)h;
-    const int p4[] = {0, 1, 2, 3}, p3[] = {0, 1, 2};
+    ind_input in = {&e->fs, gb, &e->pmap, &e->settings};
+    ind_output o;
+    memset(&o, 0, sizeof o);
     double t0 = now_ms();
-    float *buf = xmalloc(npix * 18 * sizeof(float));
-    float *pos = buf, *nrm = pos + 4 * npix, *alb = nrm + 3 * npix, *mat = alb + 3 * npix, *out = mat + 4 * npix;
-    glu_read(gb, 0, 0, 4, p4, pos);
-    glu_read(gb, 1, 0, 3, p3, nrm);
-    glu_read(gb, 2, 0, 3, p3, alb);
-    glu_read(gb, 3, 0, 4, p4, mat);
-    eng_result r = kd_gather(&e->pmap, w, h, pos, nrm, alb, mat, e->fs.camera.eye, &e->settings, out, err);
-    if (r != ENG_OK) {
-        free(buf);
-        return r;
-    }
-    if (!e->gather_tex) {
-        glGenTextures(1, &e->gather_tex);
-        glBindTexture(GL_TEXTURE_2D, e->gather_tex);
-        glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA32F, w, h, 0, GL_RGBA, GL_FLOAT, NULL);
-        glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
-        glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
-        glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
-        glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
-    }
-    /* Announced rows are top first, GL's row 0 is the bottom: upload flipped (into pos, no
-     * longer needed). */
-    for (int y = 0; y < h; y++)
-        memcpy(pos + 4 * (size_t)(h - 1 - y) * w, out + 4 * (size_t)y * w, 4 * (size_t)w * sizeof(float));
-    glBindTexture(GL_TEXTURE_2D, e->gather_tex);
-    glPixelStorei(GL_UNPACK_ALIGNMENT, 4);
-    glTexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, w, h, GL_RGBA, GL_FLOAT, pos);
-    glBindTexture(GL_TEXTURE_2D, 0);
+    eng_result r = e->method->run(e->method_state, &in, &o, err);
     glFinish();
-    add_time(e, "gather", now_ms() - t0);
-    *tex = e->gather_tex;
-    float *rgb = nrm, *count = alb; /* 3·npix and npix floats fit in what nrm and alb held */
-    for (size_t i = 0; i < npix; i++) {
-        memcpy(rgb + 3 * i, out + 4 * i, 3 * sizeof(float));
-        count[i] = out[4 * i + 3];
+    add_time(e, e->method->pass, now_ms() - t0);
+    if (r != ENG_OK)
+        return r;
+    for (int i = 0; i < o.extra_count; i++) {
+        const ind_extra *x = &o.extra[i];
+        if (seq_wants(e->seq, x->name) &&
+            announce(e, frame, x->name, x->width, x->height, x->channels, x->channel_names, x->data))
+            return eng_fail(err, ENG_ERR_ABORTED, "frame %d: capture failed at %s", frame, x->name);
     }
-    int aborted = (seq_wants(e->seq, "gather.indirect") && announce(e, frame, "gather.indirect", w, h, 3, CH_RGB, rgb)) ||
-                  (seq_wants(e->seq, "gather.count") && announce(e, frame, "gather.count", w, h, 1, CH_Y, count)) ||
-                  (seq_wants(e->seq, "indirect.radiance") &&
-                   announce(e, frame, "indirect.radiance", w, h, 3, CH_RGB, rgb));
-    free(buf);
-    if (aborted)
-        return eng_fail(err, ENG_ERR_ABORTED, "frame %d: capture failed in the gather pass", frame);
+    *out = o.target;
     return ENG_OK;
 }
 
@@ -691,13 +653,19 @@ static eng_result filtered_indirect(eng_engine *e, int frame, const glu_target *
         snprintf(name, sizeof name, "gbuffer.level%d.depth", l);
         aborted = aborted || read_and_announce(e, frame, name, lvl[l], 4, 0, 1, p2, CH_Z);
     }
-    t0 = now_ms();
-    const glu_target *sp = pass_splat_run(e->splat, &e->fs, lvl[e->levels], &e->pmap, s);
-    glFinish();
-    add_time(e, "splat", now_ms() - t0);
-    aborted = aborted || read_and_announce(e, frame, "splat.irradiance", sp, 0, 0, 3, p012, CH_RGB) ||
-              read_and_announce(e, frame, "splat.count", sp, 0, 0, 1, p3, CH_Y) ||
-              read_and_announce(e, frame, "splat.glossy", sp, 1, 0, 3, p012, CH_RGB);
+    const glu_target *sp = NULL;
+    if (aborted)
+        return eng_fail(err, ENG_ERR_ABORTED, "frame %d: capture failed in the filter passes", frame);
+    eng_result r = run_method(e, frame, lvl[e->levels], &sp, err);
+    if (r != ENG_OK)
+        return r;
+    const char *pre = e->method->prefix;
+    snprintf(name, sizeof name, "%s.irradiance", pre);
+    aborted = read_and_announce(e, frame, name, sp, 0, 0, 3, p012, CH_RGB);
+    snprintf(name, sizeof name, "%s.count", pre);
+    aborted = aborted || read_and_announce(e, frame, name, sp, 0, 0, 1, p3, CH_Y);
+    snprintf(name, sizeof name, "%s.glossy", pre);
+    aborted = aborted || read_and_announce(e, frame, name, sp, 1, 0, 3, p012, CH_RGB);
     GLuint irradiance = sp->color[0], glossy = sp->color[1];
     for (int l = e->levels - 1; l >= 0 && !aborted; l--) {
         t0 = now_ms();
@@ -803,8 +771,7 @@ eng_result eng_render_frame(eng_engine *e, int frame, eng_error *err)
     }
 
     /* Light G-buffers, bounce maps and the CPU photon trace (ISPM §3 1b–d). */
-    int ispm = e->settings.indirect == ENG_INDIRECT_ISPM;
-    if (ispm || e->settings.indirect == ENG_INDIRECT_KDGATHER) {
+    if (e->method) {
         uint32_t salt = e->settings.random == ENG_RANDOM_PER_FRAME ? (uint32_t)frame + 1u : 0u;
         eng_result r = light_passes(e, frame, salt, err);
         if (r != ENG_OK)
@@ -870,29 +837,28 @@ eng_result eng_render_frame(eng_engine *e, int frame, eng_error *err)
     if (read_and_announce(e, frame, "direct.radiance", direct, 0, 0, 3, p012, CH_RGB))
         return eng_fail(err, ENG_ERR_ABORTED, "frame %d: capture failed at direct.radiance", frame);
 
-    /* Indirect light: photon volumes (ISPM §3 step 4), reconstructed by the filters. */
+    /* Indirect light: the photon estimate of the `indirect` method (ISPM §3 step 4), at full
+     * resolution, or reconstructed by the filters. */
     GLuint indirect_tex = 0;
-    if (ispm && e->filtered) {
+    if (e->method && e->filtered) {
         eng_result r = filtered_indirect(e, frame, gb, &indirect_tex, err);
         if (r != ENG_OK)
             return r;
-    } else if (ispm) {
-        t0 = now_ms();
-        const glu_target *sp = pass_splat_run(e->splat, &e->fs, gb, &e->pmap, &e->settings);
-        glFinish();
-        add_time(e, "splat", now_ms() - t0);
-        indirect_tex = sp->color[0];
-        const int p3[] = {3};
-        if (read_and_announce(e, frame, "splat.indirect", sp, 0, 0, 3, p012, CH_RGB) ||
-            read_and_announce(e, frame, "splat.count", sp, 0, 0, 1, p3, CH_Y) ||
-            read_and_announce(e, frame, "indirect.radiance", sp, 0, 0, 3, p012, CH_RGB))
-            return eng_fail(err, ENG_ERR_ABORTED, "frame %d: capture failed in the splat pass", frame);
-    }
-
-    if (e->settings.indirect == ENG_INDIRECT_KDGATHER) {
-        eng_result r = gather_pass(e, frame, gb, &indirect_tex, err);
+    } else if (e->method) {
+        const glu_target *sp = NULL;
+        eng_result r = run_method(e, frame, gb, &sp, err);
         if (r != ENG_OK)
             return r;
+        indirect_tex = sp->color[0];
+        const int p3[] = {3};
+        char name[64];
+        snprintf(name, sizeof name, "%s.indirect", e->method->prefix);
+        int aborted = read_and_announce(e, frame, name, sp, 0, 0, 3, p012, CH_RGB);
+        snprintf(name, sizeof name, "%s.count", e->method->prefix);
+        aborted = aborted || read_and_announce(e, frame, name, sp, 0, 0, 1, p3, CH_Y) ||
+                  read_and_announce(e, frame, "indirect.radiance", sp, 0, 0, 3, p012, CH_RGB);
+        if (aborted)
+            return eng_fail(err, ENG_ERR_ABORTED, "frame %d: capture failed in the %s pass", frame, e->method->pass);
     }
 
     /* Composite and display transform. */

@@ -17,6 +17,8 @@
  * the result is bit-identical for any thread count. Owns nothing between calls. */
 #include "eng_internal.h"
 #include "kdtree.h"
+#include "gather_kernel.h"
+#include "indirect.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -189,75 +191,13 @@ static int cmp_u32(const void *a, const void *b)
     return (x > y) - (x < y);
 }
 
-/* shaders/ggx.glsl, in the same float operations. */
-static float ggx_d(float noh, float a2)
-{
-    float d = noh * noh * (a2 - 1.0f) + 1.0f;
-    return a2 / ((float)ENG_PI * d * d);
-}
-
-static float smith_g1(float c, float a2)
-{
-    return 2.0f * c / (c + sqrtf(a2 + (1.0f - a2) * c * c));
-}
-
-static float dot3f(const float a[3], const float b[3])
-{
-    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-}
-
-/* One pixel: shaders/splat.frag.glsl's main() summed over the photons in `list` (sorted by
- * photon index). acc gets R, G, B and the number of photons that passed every discard. */
-static void gather_pixel(const eng_photon_map *map, const float *r_xy, float compression, const uint32_t *list,
-                         size_t n, const float s[3], const float nrm[3], const float albedo[3], const float mat[4],
-                         const float eye[3], float acc[4])
-{
-    const float PI_F = (float)ENG_PI;
-    float v[3] = {eye[0] - s[0], eye[1] - s[1], eye[2] - s[2]};
-    float vlen = sqrtf(dot3f(v, v));
-    for (int c = 0; c < 3; c++)
-        v[c] = v[c] / vlen;
-    float nov = fmaxf(dot3f(nrm, v), 1e-4f);
-    float a = fmaxf(mat[0] * mat[0], 1e-2f), a2 = a * a;
-    for (size_t k = 0; k < n; k++) {
-        const eng_photon *ph = &map->photons[list[k]];
-        float rxy = r_xy[list[k]], rz = rxy * compression;
-        float d[3] = {s[0] - ph->position[0], s[1] - ph->position[1], s[2] - ph->position[2]};
-        float len = sqrtf(dot3f(d, d));
-        float t = len > 0.0f ? len / rxy * (1.0f + fabsf(dot3f(d, ph->normal)) / len * (rxy - rz) / rz) : 0.0f;
-        if (t >= 1.0f)
-            continue;
-        float kappa = 2.0f / (PI_F * rxy * rxy) * (1.0f - t * t);
-        float cos_i = dot3f(ph->direction, nrm);
-        if (cos_i <= 0.0f)
-            continue;
-        float f[3];
-        for (int c = 0; c < 3; c++)
-            f[c] = albedo[c] * (1.0f - mat[1]) * (1.0f - mat[2]) / PI_F;
-        if (mat[1] > 0.0f) {
-            float h[3] = {ph->direction[0] + v[0], ph->direction[1] + v[1], ph->direction[2] + v[2]};
-            float hl = sqrtf(dot3f(h, h));
-            for (int c = 0; c < 3; c++)
-                h[c] = h[c] / hl;
-            float voh = fmaxf(dot3f(v, h), 0.0f);
-            float spec = ggx_d(fmaxf(dot3f(nrm, h), 0.0f), a2) * smith_g1(cos_i, a2) * smith_g1(nov, a2) /
-                         (4.0f * cos_i * nov);
-            for (int c = 0; c < 3; c++) {
-                float fr = albedo[c] + (1.0f - albedo[c]) * powf(1.0f - voh, 5.0f);
-                f[c] += mat[1] * fr * spec;
-            }
-        }
-        for (int c = 0; c < 3; c++)
-            acc[c] += f[c] * ph->power[c] * kappa;
-        acc[3] += 1.0f;
-    }
-}
-
-eng_result kd_gather(const eng_photon_map *map, int w, int h, const float *position, const float *normal,
-                     const float *albedo, const float *material, const float eye[3], const eng_settings *s,
-                     float *out, eng_error *err)
+static eng_result gather(const eng_photon_map *map, int w, int h, const float *position, const float *normal,
+                         const float *albedo, const float *material, const float eye[3], const eng_settings *s,
+                         float *out, float *glossy, eng_error *err)
 {
     memset(out, 0, (size_t)w * (size_t)h * 4 * sizeof(float));
+    if (glossy)
+        memset(glossy, 0, (size_t)w * (size_t)h * 4 * sizeof(float));
     if (map->count == 0)
         return ENG_OK;
     kd_tree tree;
@@ -300,8 +240,12 @@ eng_result kd_gather(const eng_photon_map *map, int w, int h, const float *posit
                 n = kept;
                 if (n > 1)
                     qsort(list, n, sizeof *list, cmp_u32);
-                gather_pixel(map, r_xy, compression, list, n, p, normal + 3 * i, albedo + 3 * i, material + 4 * i,
-                             eye, out + 4 * i);
+                /* shaders/splat.frag.glsl's main() summed over the photons in index order. */
+                gk_pixel px;
+                gk_pixel_init(&px, p, normal + 3 * i, albedo + 3 * i, material + 4 * i, eye);
+                float *acc = out + 4 * i, *gl = glossy ? glossy + 4 * i : NULL;
+                for (size_t k = 0; k < n; k++)
+                    gk_add(&px, &map->photons[list[k]], r_xy[list[k]], compression, acc, gl);
             }
         }
         free(list);
@@ -310,3 +254,74 @@ eng_result kd_gather(const eng_photon_map *map, int w, int h, const float *posit
     kd_tree_free(&tree);
     return ENG_OK;
 }
+
+eng_result kd_gather(const eng_photon_map *map, int w, int h, const float *position, const float *normal,
+                     const float *albedo, const float *material, const float eye[3], const eng_settings *s,
+                     float *out, eng_error *err)
+{
+    return gather(map, w, h, position, normal, albedo, material, eye, s, out, NULL, err);
+}
+
+/* ---------------------------------------------------------------- the method (indirect.h) */
+
+typedef struct kd_state {
+    int width, height, irradiance;
+    ind_cpu_target target;
+    ind_gbuffer gb;
+    float *out, *glossy;
+} kd_state;
+
+static void kd_destroy(void *state)
+{
+    kd_state *k = state;
+    if (!k)
+        return;
+    ind_cpu_target_destroy(&k->target);
+    ind_gbuffer_free(&k->gb);
+    free(k->out);
+    free(k->glossy);
+    free(k);
+}
+
+static eng_result kd_create(int width, int height, int irradiance, void **state, eng_error *err)
+{
+    kd_state *k = calloc(1, sizeof *k);
+    if (!k)
+        return eng_fail(err, ENG_ERR_NOMEM, "kd-gather: out of memory");
+    k->width = width;
+    k->height = height;
+    k->irradiance = irradiance;
+    size_t n = (size_t)width * (size_t)height * 4;
+    k->out = malloc(n * sizeof(float));
+    k->glossy = irradiance ? malloc(n * sizeof(float)) : NULL;
+    if (!k->out || (irradiance && !k->glossy)) {
+        kd_destroy(k);
+        return eng_fail(err, ENG_ERR_NOMEM, "kd-gather: out of memory for a %dx%d image", width, height);
+    }
+    eng_result r = ind_cpu_target_create(&k->target, width, height, irradiance, err);
+    if (r != ENG_OK) {
+        kd_destroy(k);
+        return r;
+    }
+    *state = k;
+    return ENG_OK;
+}
+
+/* Read-back, gather and upload all count as the method's time: it cannot do without them. */
+static eng_result kd_run(void *state, const ind_input *in, ind_output *out, eng_error *err)
+{
+    kd_state *k = state;
+    ind_gbuffer_read(in->gbuf, &k->gb);
+    eng_result r = gather(in->map, k->width, k->height, k->gb.position, k->gb.normal, k->gb.albedo, k->gb.material,
+                          in->fs->camera.eye, in->s, k->out, k->glossy, err);
+    if (r != ENG_OK)
+        return r;
+    ind_cpu_target_upload(&k->target, 0, k->out);
+    if (k->irradiance)
+        ind_cpu_target_upload(&k->target, 1, k->glossy);
+    out->target = &k->target.target;
+    out->extra_count = 0;
+    return ENG_OK;
+}
+
+const ind_method ind_kdgather_method = {"kd-gather", "gather", "gather", kd_create, kd_run, kd_destroy};

@@ -190,8 +190,13 @@ static eng_result parse_settings(parser *P, const cJSON *obj, eng_settings *s)
             s->indirect = ENG_INDIRECT_ISPM;
         else if (cJSON_IsString(it) && !strcmp(it->valuestring, "kd-gather"))
             s->indirect = ENG_INDIRECT_KDGATHER;
+        else if (cJSON_IsString(it) && !strcmp(it->valuestring, "quads"))
+            s->indirect = ENG_INDIRECT_QUADS;
+        else if (cJSON_IsString(it) && !strcmp(it->valuestring, "tile-gather"))
+            s->indirect = ENG_INDIRECT_TILEGATHER;
         else
-            return bad(P, "settings.indirect: %s is not one of \"ispm\", \"kd-gather\", \"none\"",
+            return bad(P, "settings.indirect: %s is not one of \"ispm\", \"quads\", \"tile-gather\", "
+                          "\"kd-gather\", \"none\"",
                        show(it, v, sizeof v));
     }
     if ((it = cJSON_GetObjectItemCaseSensitive(obj, "random"))) {

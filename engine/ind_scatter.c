@@ -1,0 +1,23 @@
+/* ind_scatter.c — `"indirect": "ispm"`: photon volumes scattered by the rasteriser (ISPM 003_…
+ * §5; pass_splat.c draws them, shaders/splat*.frag.glsl evaluate Eq. 1). Buffers "splat.*". */
+#include "indirect.h"
+
+static eng_result scatter_create(int width, int height, int irradiance, void **state, eng_error *err)
+{
+    pass_splat *p = NULL;
+    eng_result r = pass_splat_create(width, height, irradiance, &p, err);
+    *state = p;
+    return r;
+}
+
+static eng_result scatter_run(void *state, const ind_input *in, ind_output *out, eng_error *err)
+{
+    (void)err;
+    out->target = pass_splat_run(state, in->fs, in->gbuf, in->map, in->s);
+    out->extra_count = 0;
+    return ENG_OK;
+}
+
+static void scatter_destroy(void *state) { pass_splat_destroy(state); }
+
+const ind_method ind_scatter_method = {"ispm", "splat", "splat", scatter_create, scatter_run, scatter_destroy};

@@ -1,0 +1,88 @@
+/* indirect.h — one interface for the indirect-light methods (issue 12): each turns the eye
+ * G-buffer and the photon map into the photon estimate of Eq. 1 (003_… §5) at every pixel,
+ * one file each, chosen by the `indirect` setting:
+ *
+ *   ind_scatter.c     "ispm"         photon volumes rasterised (003 §5)
+ *   ind_quads.c       "quads"        camera-independent photon quads (001 §3.3)
+ *   ind_tilegather.c  "tile-gather"  screen tiles, each evaluating its photon list (002 §6.3)
+ *   kdgather.c        "kd-gather"    per-pixel k-d tree gather, the baseline (003 App. A)
+ *
+ * The frame loop (engine.c) only sees this table: it creates the method once, runs it once
+ * per frame, announces the returned target's attachments under the method's buffer prefix
+ * (`<prefix>.indirect`/`.count`, or `.irradiance`/`.count`/`.glossy` in irradiance mode) and
+ * any extra buffers the method lists, and times it as the method's pass. Methods of other
+ * kinds (photon trace, eye specular) follow the same pattern in their own headers. */
+#ifndef ISPM_INDIRECT_H
+#define ISPM_INDIRECT_H
+
+#include "eng_internal.h"
+
+/* What a method is given each frame. */
+typedef struct ind_input {
+    const eng_frame_scene *fs;   /* camera (eye, view_proj) */
+    const glu_target *gbuf;      /* eye G-buffer at the method's resolution (pass_gbuffer layout) */
+    const eng_photon_map *map;
+    const eng_settings *s;
+} ind_input;
+
+/* A CPU-side buffer a method wants announced besides its target (e.g. gather.tile_count). */
+#define IND_MAX_EXTRA 2
+typedef struct ind_extra {
+    const char *name; /* full buffer name */
+    int width, height, channels;
+    const char *const *channel_names;
+    const float *data; /* top row first, owned by the method until its next run */
+} ind_extra;
+
+/* What it returns: a target of its own whose attachment 0 holds RGB and, in A, the number of
+ * kernels that reached the pixel. Radiance mode: RGB = outgoing radiance (W/m²/sr).
+ * Irradiance mode (the reconstruction filters): RGB = Σ Φ_i κ (W/m², no BSDF) and attachment
+ * 1 the glossy radiance (002 §7.4). */
+typedef struct ind_output {
+    const glu_target *target;
+    int extra_count;
+    ind_extra extra[IND_MAX_EXTRA];
+} ind_output;
+
+typedef struct ind_method {
+    const char *name;   /* the `indirect` setting's value */
+    const char *prefix; /* buffer name prefix: "splat", "gather", "quads" */
+    const char *pass;   /* pass name in the timings */
+    /* width×height: the G-buffer it will run against; irradiance: see ind_output. */
+    eng_result (*create)(int width, int height, int irradiance, void **state, eng_error *err);
+    eng_result (*run)(void *state, const ind_input *in, ind_output *out, eng_error *err);
+    void (*destroy)(void *state); /* accepts NULL */
+} ind_method;
+
+extern const ind_method ind_scatter_method;
+extern const ind_method ind_quads_method;
+extern const ind_method ind_tilegather_method;
+extern const ind_method ind_kdgather_method;
+
+/* The method of a setting, or NULL for ENG_INDIRECT_NONE. */
+const ind_method *ind_method_of(eng_indirect m);
+
+/* CPU helpers shared by the CPU methods (kdgather.c). ------------------------------------ */
+
+/* A CPU method's output target: 1 or 2 RGBA32F attachments of w×h. */
+typedef struct ind_cpu_target {
+    glu_target target;
+    float *upload; /* w×h×4 scratch for flipping rows */
+} ind_cpu_target;
+eng_result ind_cpu_target_create(ind_cpu_target *t, int width, int height, int irradiance, eng_error *err);
+void ind_cpu_target_destroy(ind_cpu_target *t);
+/* Uploads w×h RGBA (top row first) into attachment `index`. */
+void ind_cpu_target_upload(ind_cpu_target *t, int index, const float *rgba);
+
+/* The eye G-buffer read back for a CPU method: top row first. */
+typedef struct ind_gbuffer {
+    int width, height;
+    float *position; /* 4 per pixel, w = coverage */
+    float *normal;   /* 3 */
+    float *albedo;   /* 3 */
+    float *material; /* 4: roughness, metallic, transmission, ior */
+} ind_gbuffer;
+void ind_gbuffer_read(const glu_target *gb, ind_gbuffer *out); /* (re)allocates out's arrays */
+void ind_gbuffer_free(ind_gbuffer *g);
+
+#endif
