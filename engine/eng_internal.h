@@ -196,7 +196,7 @@ typedef struct pass_splat pass_splat;
  * radiance (splat_irradiance.frag.glsl). width×height must be the G-buffer's it runs against. */
 eng_result pass_splat_create(int width, int height, int irradiance, pass_splat **out, eng_error *err);
 const glu_target *pass_splat_run(pass_splat *p, const eng_frame_scene *fs, const glu_target *gbuf,
-                                 const eng_photon_map *map, const eng_settings *s);
+                                 const eng_photon_map *map, const float *radius, const eng_settings *s);
 void pass_splat_destroy(pass_splat *p);
 /* ISPM §5.1 Eq. 2–3 on the CPU, the same kernel shaders/splat.frag.glsl evaluates: d = s − x
  * (surface point minus photon), n_p the photon's surface normal. Returns κ in 1/m²; 0 outside

@@ -40,6 +40,8 @@ struct eng_engine {
     eng_bounce_photon *bounce;
     size_t bounce_count, bounce_capacity;
     eng_photon_map pmap;
+    float *radius; /* per photon r_xy (indirect.h) */
+    size_t radius_capacity;
     const ind_method *method; /* indirect.h: the `indirect` setting's method, NULL for none */
     void *method_state;
     /* Reconstruction filters (DESIGN.md step 7), on when any of splat_subsample > 1,
@@ -246,6 +248,7 @@ void eng_destroy(eng_engine *e)
     rmap_destroy(&e->rmaps);
     photon_map_free(&e->pmap);
     free(e->bounce);
+    free(e->radius);
     free(e->gpu);
     free(e->world);
     free(e->prev_world);
@@ -609,7 +612,7 @@ static int announce_photon_map(eng_engine *e, int frame)
  * the extra buffers it lists; *out gets its target. */
 static eng_result run_method(eng_engine *e, int frame, const glu_target *gb, const glu_target **out, eng_error *err)
 {
-    ind_input in = {&e->fs, gb, &e->pmap, &e->settings};
+    ind_input in = {&e->fs, gb, &e->pmap, e->radius, &e->settings};
     ind_output o;
     memset(&o, 0, sizeof o);
     double t0 = now_ms();
@@ -784,6 +787,12 @@ eng_result eng_render_frame(eng_engine *e, int frame, eng_error *err)
         add_time(e, "photons", now_ms() - t0);
         if (r != ENG_OK)
             return r;
+        if (e->pmap.count > e->radius_capacity) {
+            free(e->radius);
+            e->radius = xmalloc(e->pmap.count * sizeof *e->radius);
+            e->radius_capacity = e->pmap.count;
+        }
+        ind_photon_radii(&e->pmap, &e->settings, e->radius);
         e->stats.photons_emitted = tstats.emitted;
         memcpy(e->stats.photons_stored, tstats.stored, sizeof e->stats.photons_stored);
         if (announce_photon_map(e, frame))

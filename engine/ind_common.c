@@ -19,6 +19,12 @@ const ind_method *ind_method_of(eng_indirect m)
     return NULL;
 }
 
+void ind_photon_radii(const eng_photon_map *map, const eng_settings *s, float *radius)
+{
+    for (size_t i = 0; i < map->count; i++)
+        radius[i] = splat_radius(s->kernel_radius, map->photons[i].path_density);
+}
+
 static void *xmalloc(size_t size)
 {
     void *p = malloc(size ? size : 1);

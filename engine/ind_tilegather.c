@@ -32,10 +32,9 @@ typedef struct tg_state {
     float *out, *glossy;
     gk_pixel *px;
     float *tile_count; /* tiles_x × tiles_y, top row first */
-    /* Per photon, grown as needed: kernel radius and screen rectangle (x0, y0, x1, y1
+    /* Per photon, grown as needed: screen rectangle (x0, y0, x1, y1
      * inclusive, rows top first; x0 > x1 when off screen). */
     size_t photon_capacity;
-    float *rxy;
     int32_t *rect;
     /* Tile lists: offsets (tiles + 1) into entries. */
     uint32_t *offset;
@@ -65,7 +64,6 @@ static void tg_destroy(void *state)
     free(t->glossy);
     free(t->px);
     free(t->tile_count);
-    free(t->rxy);
     free(t->rect);
     free(t->offset);
     free(t->cursor);
@@ -168,9 +166,7 @@ static eng_result tg_run(void *state, const ind_input *in, ind_output *out, eng_
     /* Kernel radii and screen rectangles. */
     const size_t n = map->count;
     if (n > t->photon_capacity) {
-        free(t->rxy);
         free(t->rect);
-        t->rxy = xmalloc(n * sizeof *t->rxy);
         t->rect = xmalloc(n * 4 * sizeof *t->rect);
         t->photon_capacity = n;
     }
@@ -178,8 +174,7 @@ static eng_result tg_run(void *state, const ind_input *in, ind_output *out, eng_
 #pragma omp parallel for num_threads(threads) schedule(static)
     for (size_t i = 0; i < n; i++) {
         const eng_photon *ph = &map->photons[i];
-        float r = splat_radius(s->kernel_radius, ph->path_density);
-        t->rxy[i] = r;
+        float r = in->radius[i];
         int32_t *rc = t->rect + 4 * i;
         if (!screen_rect(vp, ph->position, r * 1.001f, w, h, rc)) {
             rc[0] = 1;
@@ -229,7 +224,7 @@ static eng_result tg_run(void *state, const ind_input *in, ind_output *out, eng_
             uint32_t i = t->entries[e];
             const eng_photon *ph = &map->photons[i];
             const int32_t *rc = t->rect + 4 * (size_t)i;
-            const float r = t->rxy[i], r2 = r * r * 1.001f;
+            const float r = in->radius[i], r2 = r * r * 1.001f;
             const int ya = rc[1] > y0 ? rc[1] : y0, yb = rc[3] < y1 ? rc[3] : y1;
             const int xa = rc[0] > x0 ? rc[0] : x0, xb = rc[2] < x1 ? rc[2] : x1;
             for (int y = ya; y <= yb; y++)

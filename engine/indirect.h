@@ -22,6 +22,8 @@ typedef struct ind_input {
     const eng_frame_scene *fs;   /* camera (eye, view_proj) */
     const glu_target *gbuf;      /* eye G-buffer at the method's resolution (pass_gbuffer layout) */
     const eng_photon_map *map;
+    const float *radius;         /* per photon: kernel radius r_xy (m), r_z = normal_compression·r_xy;
+                                  * the engine computes it once per frame (ind_photon_radii) */
     const eng_settings *s;
 } ind_input;
 
@@ -58,6 +60,11 @@ extern const ind_method ind_scatter_method;
 extern const ind_method ind_quads_method;
 extern const ind_method ind_tilegather_method;
 extern const ind_method ind_kdgather_method;
+
+/* Fills radius[i] (map->count floats) with photon i's kernel radius r_xy: the path-density
+ * scaling of ISPM §4.3 (splat_radius). Every method reads this array, so a kernel scaling is
+ * defined in one place for all of them. */
+void ind_photon_radii(const eng_photon_map *map, const eng_settings *s, float *radius);
 
 /* The method of a setting, or NULL for ENG_INDIRECT_NONE. */
 const ind_method *ind_method_of(eng_indirect m);

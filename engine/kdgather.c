@@ -191,9 +191,9 @@ static int cmp_u32(const void *a, const void *b)
     return (x > y) - (x < y);
 }
 
-static eng_result gather(const eng_photon_map *map, int w, int h, const float *position, const float *normal,
-                         const float *albedo, const float *material, const float eye[3], const eng_settings *s,
-                         float *out, float *glossy, eng_error *err)
+static eng_result gather(const eng_photon_map *map, const float *radii, int w, int h, const float *position,
+                         const float *normal, const float *albedo, const float *material, const float eye[3],
+                         const eng_settings *s, float *out, float *glossy, eng_error *err)
 {
     memset(out, 0, (size_t)w * (size_t)h * 4 * sizeof(float));
     if (glossy)
@@ -211,7 +211,7 @@ static eng_result gather(const eng_photon_map *map, int w, int h, const float *p
     }
     float radius = 0.0f;
     for (size_t i = 0; i < map->count; i++) {
-        r_xy[i] = splat_radius(s->kernel_radius, map->photons[i].path_density);
+        r_xy[i] = radii ? radii[i] : splat_radius(s->kernel_radius, map->photons[i].path_density);
         radius = fmaxf(radius, r_xy[i]);
     }
     const float compression = s->normal_compression;
@@ -259,7 +259,7 @@ eng_result kd_gather(const eng_photon_map *map, int w, int h, const float *posit
                      const float *albedo, const float *material, const float eye[3], const eng_settings *s,
                      float *out, eng_error *err)
 {
-    return gather(map, w, h, position, normal, albedo, material, eye, s, out, NULL, err);
+    return gather(map, NULL, w, h, position, normal, albedo, material, eye, s, out, NULL, err);
 }
 
 /* ---------------------------------------------------------------- the method (indirect.h) */
@@ -312,7 +312,7 @@ static eng_result kd_run(void *state, const ind_input *in, ind_output *out, eng_
 {
     kd_state *k = state;
     ind_gbuffer_read(in->gbuf, &k->gb);
-    eng_result r = gather(in->map, k->width, k->height, k->gb.position, k->gb.normal, k->gb.albedo, k->gb.material,
+    eng_result r = gather(in->map, in->radius, k->width, k->height, k->gb.position, k->gb.normal, k->gb.albedo, k->gb.material,
                           in->fs->camera.eye, in->s, k->out, k->glossy, err);
     if (r != ENG_OK)
         return r;

@@ -115,7 +115,7 @@ eng_result pass_splat_create(int width, int height, int irradiance, pass_splat *
 }
 
 const glu_target *pass_splat_run(pass_splat *p, const eng_frame_scene *fs, const glu_target *gbuf,
-                                 const eng_photon_map *map, const eng_settings *s)
+                                 const eng_photon_map *map, const float *radius, const eng_settings *s)
 {
     glu_target *t = &p->target;
     /* Share the eye G-buffer's depth buffer for the depth test. */
@@ -144,7 +144,7 @@ const glu_target *pass_splat_run(pass_splat *p, const eng_frame_scene *fs, const
             memcpy(d->normal, ph->normal, sizeof d->normal);
             memcpy(d->power, ph->power, sizeof d->power);
             memcpy(d->direction, ph->direction, sizeof d->direction);
-            d->radius[0] = splat_radius(s->kernel_radius, ph->path_density);
+            d->radius[0] = radius[i];
             d->radius[1] = d->radius[0] * s->normal_compression;
             d->pad[0] = d->pad[1] = 0.0f;
         }
