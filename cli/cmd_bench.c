@@ -708,8 +708,79 @@ typedef struct pair_stats {
     double max_abs, max_rel; /* max_rel over values above 1e-3 of the scatter's peak */
 } pair_stats;
 
+/* A method's speed against the k-d gather at the same settings (issue 12: "speedup vs
+ * kd-gather"), and how far its first frame's indirect light is from the k-d gather's. */
+typedef struct speedup {
+    int point, baseline;
+    double frame, pass;           /* kd-gather ms / method ms */
+    double pass_ms, base_pass_ms; /* the indirect pass of each */
+    double max_abs, max_rel;      /* first frame's indirect.radiance, max_rel as pair_stats */
+} speedup;
+
+/* The pass an indirect method's time is reported under (engine/indirect.h). */
+static const char *indirect_pass(eng_indirect m)
+{
+    switch (m) {
+    case ENG_INDIRECT_QUADS: return "quads";
+    case ENG_INDIRECT_TILEGATHER:
+    case ENG_INDIRECT_KDGATHER: return "gather";
+    case ENG_INDIRECT_NONE: return NULL;
+    case ENG_INDIRECT_ISPM:
+    case ENG_INDIRECT_DEFAULT: break;
+    }
+    return "splat";
+}
+
+static int same_but_indirect(const bench_point *a, const bench_point *b);
+
+static double pass_of(const bench_point *p, const pass_names *passes, const char *name)
+{
+    for (int s = 0; name && s < passes->count; s++)
+        if (!strcmp(passes->name[s], name))
+            return p->pass_ms[s];
+    return 0.0;
+}
+
+/* Every non-k-d-gather point paired with the k-d gather point of the same other settings;
+ * returns how many (out has room for n). */
+static int find_speedups(const bench_point *pts, int n, const pass_names *passes, speedup *out)
+{
+    int count = 0;
+    for (int i = 0; i < n; i++) {
+        eng_indirect mi = pts[i].seq->settings.indirect;
+        if (mi == ENG_INDIRECT_KDGATHER || mi == ENG_INDIRECT_NONE)
+            continue;
+        for (int j = 0; j < n; j++) {
+            if (pts[j].seq->settings.indirect != ENG_INDIRECT_KDGATHER || !same_but_indirect(&pts[i], &pts[j]))
+                continue;
+            speedup *u = &out[count++];
+            u->point = i;
+            u->baseline = j;
+            u->frame = pts[i].frame_ms > 0.0 ? pts[j].frame_ms / pts[i].frame_ms : 0.0;
+            u->pass_ms = pass_of(&pts[i], passes, indirect_pass(mi));
+            u->base_pass_ms = pass_of(&pts[j], passes, "gather");
+            u->pass = u->pass_ms > 0.0 ? u->base_pass_ms / u->pass_ms : 0.0;
+            u->max_abs = u->max_rel = 0.0;
+            const size_t plane = (size_t)pts[i].seq->width * (size_t)pts[i].seq->height * 3;
+            const float *a = pts[j].first_indirect, *b = pts[i].first_indirect;
+            double peak = 0.0;
+            for (size_t k = 0; a && b && k < plane; k++)
+                peak = fmax(peak, fabs(a[k]));
+            for (size_t k = 0; a && b && k < plane; k++) {
+                double d = fabs((double)b[k] - (double)a[k]);
+                u->max_abs = fmax(u->max_abs, d);
+                if (fabs(a[k]) > 1e-3 * peak)
+                    u->max_rel = fmax(u->max_rel, d / fabs(a[k]));
+            }
+            break;
+        }
+    }
+    return count;
+}
+
 static char *make_json(const bench_config *c, const char *command_line, const bench_point *pts, int n,
-                       const columns *cols, const pass_names *passes, const pair_stats *pair)
+                       const columns *cols, const pass_names *passes, const pair_stats *pair, const speedup *ups,
+                       int nups)
 {
     cJSON *root = cJSON_CreateObject();
     cJSON_AddStringToObject(root, "format", "ispm-bench");
@@ -757,6 +828,20 @@ static char *make_json(const bench_config *c, const char *command_line, const be
         cJSON_AddNumberToObject(sg, "gather_point", pair->gather);
         cJSON_AddNumberToObject(sg, "max_abs", pair->max_abs);
         cJSON_AddNumberToObject(sg, "max_rel", pair->max_rel);
+    }
+    cJSON *su = cJSON_AddArrayToObject(root, "speedup_vs_kd_gather");
+    for (int k = 0; k < nups; k++) {
+        cJSON *o = cJSON_CreateObject();
+        cJSON_AddNumberToObject(o, "point", ups[k].point);
+        cJSON_AddNumberToObject(o, "kd_gather_point", ups[k].baseline);
+        cJSON_AddStringToObject(o, "label", pts[ups[k].point].label);
+        cJSON_AddNumberToObject(o, "frame_speedup", ups[k].frame);
+        cJSON_AddNumberToObject(o, "pass_speedup", ups[k].pass);
+        cJSON_AddNumberToObject(o, "pass_ms", ups[k].pass_ms);
+        cJSON_AddNumberToObject(o, "kd_gather_pass_ms", ups[k].base_pass_ms);
+        cJSON_AddNumberToObject(o, "max_abs", ups[k].max_abs);
+        cJSON_AddNumberToObject(o, "max_rel", ups[k].max_rel);
+        cJSON_AddItemToArray(su, o);
     }
     char *text = cJSON_Print(root);
     cJSON_Delete(root);
@@ -1080,6 +1165,8 @@ int cmd_bench(int argc, char **argv, const char *command_line)
                 column_add(&cols, it->string);
         }
         pair_stats pair;
+        speedup *ups = rep_xcalloc((size_t)n, sizeof *ups);
+        int nups = find_speedups(pts, n, &passes, ups);
         r = write_comparison(outdir, pts, n, ref.indirect, &pair, &err);
         if (r == ENG_OK)
             r = write_charts(&c, outdir, pts, n, &passes, &err);
@@ -1089,13 +1176,24 @@ int cmd_bench(int argc, char **argv, const char *command_line)
             free(csv);
         }
         if (r == ENG_OK) {
-            char *json = make_json(&c, command_line, pts, n, &cols, &passes, &pair);
+            char *json = make_json(&c, command_line, pts, n, &cols, &passes, &pair, ups, nups);
             r = rep_write_atomic(old_json, json, strlen(json), &err);
             free(json);
         }
         if (r == ENG_OK && !quiet && pair.scatter >= 0)
             fprintf(stderr, "ispm bench: scatter (point %d) vs k-d gather (point %d): max |diff| %.3g, max relative %.3g\n",
                     pair.scatter, pair.gather, pair.max_abs, pair.max_rel);
+        /* Ratios measured side by side in this run: the k-d gather's time over the method's. */
+        for (int k = 0; r == ENG_OK && k < nups; k++) {
+            const speedup *u = &ups[k];
+            const char *label = pts[u->point].label;
+            const char *sp = strchr(label, ' ');
+            printf("speedup vs kd-gather: %.*s %s %.1fx frame (%.1f vs %.1f ms), %.1fx pass (%.1f vs %.1f ms), "
+                   "max relative difference %.2g\n",
+                   sp ? (int)(sp - label) : (int)strlen(label), label, sp ? sp + 1 : "", u->frame, pts[u->point].frame_ms,
+                   pts[u->baseline].frame_ms, u->pass, u->pass_ms, u->base_pass_ms, u->max_rel);
+        }
+        free(ups);
     }
     if (r != ENG_OK) {
         fprintf(stderr, "ispm bench: %s\n", err.msg);
