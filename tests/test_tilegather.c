@@ -1,0 +1,232 @@
+/* test_tilegather.c — Check suite of the tile-based gather (engine/ind_tilegather.c, 002_…
+ * §6.3): it must sum exactly the photons the k-d gather sums, in the same order, so the two
+ * agree bit for bit — on the Cornell box, on metallic surfaces (the scalar path of the SIMD
+ * loop), in the reconstruction filters' irradiance mode, with the camera inside photon
+ * kernels (the near-plane stress sequence: rectangles behind the eye), for any thread count,
+ * and with the SIMD evaluation switched off. gather.tile_count is announced per tile. */
+#define _POSIX_C_SOURCE 200809L /* setenv */
+#include "eng.h"
+
+#include <check.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+typedef struct kept {
+    char name[96];
+    int w, h, n;
+    float *data;
+} kept;
+
+typedef struct keeper {
+    int count;
+    kept bufs[32];
+} keeper;
+
+/* Keeps what the methods produce (and the photon map, to check both gathered the same). */
+static int keep_buffer(void *user, int frame, const eng_buffer *b)
+{
+    (void)frame;
+    keeper *k = user;
+    if (strncmp(b->name, "gather.", 7) && strcmp(b->name, "indirect.radiance") && strcmp(b->name, "photons.map"))
+        return 0;
+    ck_assert_int_lt(k->count, 32);
+    kept *d = &k->bufs[k->count++];
+    snprintf(d->name, sizeof d->name, "%s", b->name);
+    d->w = b->width;
+    d->h = b->height;
+    d->n = b->channel_count;
+    size_t sz = (size_t)b->width * b->height * b->channel_count * sizeof(float);
+    d->data = malloc(sz);
+    memcpy(d->data, b->data, sz);
+    return 0;
+}
+
+static const kept *find(const keeper *k, const char *name)
+{
+    for (int i = 0; i < k->count; i++)
+        if (!strcmp(k->bufs[i].name, name))
+            return &k->bufs[i];
+    return NULL;
+}
+
+static void keeper_clear(keeper *k)
+{
+    for (int i = 0; i < k->count; i++)
+        free(k->bufs[i].data);
+    memset(k, 0, sizeof *k);
+}
+
+/* Renders `frame` of the sequence file `rel` (under the source tree) with extra settings
+ * (a JSON fragment inserted at the front of its settings object) into k. */
+static void render(const char *rel, const char *settings, int frame, keeper *k)
+{
+    char path[1024];
+    snprintf(path, sizeof path, "%s/%s", ISPM_SOURCE_DIR, rel);
+    FILE *f = fopen(path, "rb");
+    ck_assert_msg(f != NULL, "%s", path);
+    static char text[65536], json[70000];
+    size_t len = fread(text, 1, sizeof text - 1, f);
+    fclose(f);
+    text[len] = 0;
+    char *at = strstr(text, "\"settings\"");
+    ck_assert(at != NULL);
+    at = strchr(at, '{');
+    ck_assert(at != NULL);
+    snprintf(json, sizeof json, "%.*s%s, %s", (int)(at + 1 - text), text, settings, at + 1);
+    seq_sequence *seq = calloc(1, sizeof *seq);
+    eng_error err;
+    ck_assert_msg(seq_parse(path, json, strlen(json), seq, &err) == ENG_OK, "%s", err.msg);
+    scn_scene *scene = NULL;
+    ck_assert_msg(scn_load_gltf(seq->scene_path, &scene, &err) == ENG_OK, "%s", err.msg);
+    eng_engine *eng = NULL;
+    eng_desc d = {scene, seq};
+    ck_assert_msg(eng_create(&d, &eng, &err) == ENG_OK, "%s", err.msg);
+    eng_listener l = {k, NULL, keep_buffer, NULL};
+    ck_assert_int_eq(eng_add_listener(eng, &l), ENG_OK);
+    ck_assert_msg(eng_render_frame(eng, frame, &err) == ENG_OK, "%s", err.msg);
+    eng_destroy(eng);
+    scn_destroy(scene);
+    free(seq);
+}
+
+/* Every buffer of b is in a with the same size and bits (a may have more: tile_count). */
+static void assert_same(const keeper *a, const keeper *b, const char *what)
+{
+    ck_assert_int_ge(b->count, 1);
+    for (int i = 0; i < b->count; i++) {
+        const kept *y = &b->bufs[i], *x = find(a, y->name);
+        ck_assert_msg(x != NULL, "%s: %s missing", what, y->name);
+        ck_assert_msg(x->w == y->w && x->h == y->h && x->n == y->n, "%s: %s size", what, y->name);
+        size_t n = (size_t)x->w * x->h * x->n, differ = 0, first = 0;
+        for (size_t j = 0; j < n; j++)
+            if (memcmp(&x->data[j], &y->data[j], sizeof(float)) && !differ++)
+                first = j;
+        ck_assert_msg(differ == 0, "%s: %s: %zu values differ, first at %zu: %.9g vs %.9g", what, y->name, differ,
+                      first, differ ? x->data[first] : 0.0, differ ? y->data[first] : 0.0);
+    }
+}
+
+/* The sum of a buffer's values (> 0 proves the image is not black). */
+static double total(const kept *k)
+{
+    double s = 0.0;
+    for (size_t j = 0; j < (size_t)k->w * k->h * k->n; j++)
+        s += k->data[j];
+    return s;
+}
+
+static void compare(const char *rel, const char *extra, int frame, const char *irr_or_ind)
+{
+    static keeper kt, kk;
+    char st[512];
+    snprintf(st, sizeof st, "\"indirect\": \"tile-gather\"%s%s", *extra ? ", " : "", extra);
+    render(rel, st, frame, &kt);
+    snprintf(st, sizeof st, "\"indirect\": \"kd-gather\"%s%s", *extra ? ", " : "", extra);
+    render(rel, st, frame, &kk);
+    char name[64];
+    snprintf(name, sizeof name, "%s", strcmp(irr_or_ind, "indirect") ? "gather.irradiance" : "indirect.radiance");
+    ck_assert_msg(find(&kk, name) && total(find(&kk, name)) > 0.0, "%s: %s is black", rel, name);
+    assert_same(&kt, &kk, rel);
+    keeper_clear(&kt);
+    keeper_clear(&kk);
+}
+
+START_TEST(equals_kd_gather_on_the_cornell_box)
+{
+    compare("scenes/cornell-box/cornell-box-ci.json", "", 1, "indirect");
+}
+END_TEST
+
+/* The ring is metallic: those pixels take the scalar path beside the SIMD lanes. */
+START_TEST(equals_kd_gather_on_metal)
+{
+    compare("scenes/caustic-ring/caustic-ring-ci.json", "", 1, "indirect");
+}
+END_TEST
+
+/* Irradiance (Σ Φκ) and the glossy part for the filters, at half resolution. */
+START_TEST(equals_kd_gather_in_irradiance_mode)
+{
+    compare("scenes/caustic-ring/caustic-ring-ci.json", "\"splat_subsample\": 2", 1, "irradiance");
+}
+END_TEST
+
+/* The camera 1.5 cm from the back wall: kernels reach behind the eye (whole-screen rectangles)
+ * and cover many pixels each. */
+START_TEST(equals_kd_gather_at_the_near_plane)
+{
+    compare("scenes/stress/near-plane.json", "", 5, "indirect");
+}
+END_TEST
+
+START_TEST(bit_identical_for_any_thread_count_and_without_simd)
+{
+    static keeper a, b;
+    const char *rel = "scenes/cornell-box/cornell-box-ci.json";
+    render(rel, "\"indirect\": \"tile-gather\", \"threads\": 2", 3, &a);
+    const int threads[] = {1, 3, 5};
+    for (int i = 0; i < 3; i++) {
+        char st[128];
+        snprintf(st, sizeof st, "\"indirect\": \"tile-gather\", \"threads\": %d", threads[i]);
+        render(rel, st, 3, &b);
+        assert_same(&a, &b, st);
+        keeper_clear(&b);
+    }
+    setenv("ISPM_TILEGATHER_SCALAR", "1", 1);
+    render(rel, "\"indirect\": \"tile-gather\", \"threads\": 2", 3, &b);
+    unsetenv("ISPM_TILEGATHER_SCALAR");
+    assert_same(&a, &b, "scalar evaluation");
+    keeper_clear(&a);
+    keeper_clear(&b);
+}
+END_TEST
+
+/* One value per 16×16 tile: the length of its photon list, whole numbers, all photons placed
+ * somewhere, more entries than photons (kernels straddle tiles). */
+START_TEST(tile_count_per_tile)
+{
+    static keeper k;
+    render("scenes/cornell-box/cornell-box-ci.json", "\"indirect\": \"tile-gather\"", 0, &k);
+    const kept *tc = find(&k, "gather.tile_count"), *pm = find(&k, "photons.map");
+    ck_assert(tc && pm);
+    ck_assert_int_eq(tc->w, 10); /* 160 / 16 */
+    ck_assert_int_eq(tc->h, 10);
+    ck_assert_int_eq(tc->n, 1);
+    size_t photons = 0;
+    for (size_t i = 0; i < (size_t)pm->w * pm->h; i++)
+        photons += pm->data[14 * i + 13] != 0.0f;
+    double sum = 0.0;
+    for (int i = 0; i < tc->w * tc->h; i++) {
+        ck_assert(tc->data[i] >= 0.0f && tc->data[i] == floorf(tc->data[i]));
+        sum += tc->data[i];
+    }
+    ck_assert_msg(sum > (double)photons, "%g list entries for %zu photons", sum, photons);
+    keeper_clear(&k);
+}
+END_TEST
+
+static Suite *tilegather_suite(void)
+{
+    Suite *s = suite_create("tilegather");
+    TCase *tc = tcase_create("core");
+    tcase_set_timeout(tc, 600);
+    tcase_add_test(tc, equals_kd_gather_on_the_cornell_box);
+    tcase_add_test(tc, equals_kd_gather_on_metal);
+    tcase_add_test(tc, equals_kd_gather_in_irradiance_mode);
+    tcase_add_test(tc, equals_kd_gather_at_the_near_plane);
+    tcase_add_test(tc, bit_identical_for_any_thread_count_and_without_simd);
+    tcase_add_test(tc, tile_count_per_tile);
+    suite_add_tcase(s, tc);
+    return s;
+}
+
+int main(void)
+{
+    SRunner *sr = srunner_create(tilegather_suite());
+    srunner_run_all(sr, CK_NORMAL);
+    int failed = srunner_ntests_failed(sr);
+    srunner_free(sr);
+    return failed ? EXIT_FAILURE : EXIT_SUCCESS;
+}
