@@ -120,6 +120,8 @@ static double total(const kept *k)
 static void compare(const char *rel, const char *extra, int frame, const char *irr_or_ind)
 {
     static keeper kt, kk;
+    keeper_clear(&kt); /* a failed check leaves the last test's buffers (the suites run unforked) */
+    keeper_clear(&kk);
     char st[512];
     snprintf(st, sizeof st, "\"indirect\": \"tile-gather\"%s%s", *extra ? ", " : "", extra);
     render(rel, st, frame, &kt);
