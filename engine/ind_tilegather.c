@@ -357,24 +357,6 @@ static eng_result tg_run(void *state, const ind_input *in, ind_output *out, eng_
      * and each tile's box of visible points. */
     const float *eye = in->fs->camera.eye;
 #pragma omp parallel for num_threads(threads) schedule(static)
-    for (int y = 0; y < h; y++)
-        for (int x = 0; x < w; x++) {
-            size_t i = (size_t)y * (size_t)w + (size_t)x;
-            const float *sp = t->gb.position + 4 * i, *nr = t->gb.normal + 3 * i, *al = t->gb.albedo + 3 * i,
-                        *mt = t->gb.material + 4 * i;
-            int covered = sp[3] != 0.0f;
-            if (covered)
-                gk_pixel_init(&t->px[i], sp, nr, al, mt, eye);
-            float *pl = t->plane + i;
-            for (int c = 0; c < 3; c++) {
-                pl[(P_SX + c) * npix] = covered ? sp[c] : FAR;
-                pl[(P_NX + c) * npix] = covered ? nr[c] : 0.0f;
-                /* gk_add's f[c] for the diffuse part, the same operations */
-                pl[(P_FR + c) * npix] = covered ? al[c] * (1.0f - mt[1]) * (1.0f - mt[2]) / (float)ENG_PI : 0.0f;
-            }
-            pl[P_METAL * npix] = covered && mt[1] > 0.0f ? 1.0f : 0.0f;
-        }
-#pragma omp parallel for num_threads(threads) schedule(static)
     for (size_t k = 0; k < tiles; k++) {
         float *b = t->tile_box + 6 * k;
         b[0] = b[1] = b[2] = INFINITY;
@@ -382,8 +364,21 @@ static eng_result tg_run(void *state, const ind_input *in, ind_output *out, eng_
         const int x0 = (int)(k % (size_t)tx) * TILE, y0 = (int)(k / (size_t)tx) * TILE;
         for (int y = y0; y < y0 + TILE && y < h; y++)
             for (int x = x0; x < x0 + TILE && x < w; x++) {
-                const float *sp = t->gb.position + 4 * ((size_t)y * (size_t)w + (size_t)x);
-                if (sp[3] == 0.0f)
+                size_t i = (size_t)y * (size_t)w + (size_t)x;
+                const float *sp = t->gb.position + 4 * i, *nr = t->gb.normal + 3 * i, *al = t->gb.albedo + 3 * i,
+                            *mt = t->gb.material + 4 * i;
+                int covered = sp[3] != 0.0f;
+                if (covered)
+                    gk_pixel_init(&t->px[i], sp, nr, al, mt, eye);
+                float *pl = t->plane + i;
+                for (int c = 0; c < 3; c++) {
+                    pl[(P_SX + c) * npix] = covered ? sp[c] : FAR;
+                    pl[(P_NX + c) * npix] = covered ? nr[c] : 0.0f;
+                    /* gk_add's f[c] for the diffuse part, the same operations */
+                    pl[(P_FR + c) * npix] = covered ? al[c] * (1.0f - mt[1]) * (1.0f - mt[2]) / (float)ENG_PI : 0.0f;
+                }
+                pl[P_METAL * npix] = covered && mt[1] > 0.0f ? 1.0f : 0.0f;
+                if (!covered)
                     continue;
                 for (int a = 0; a < 3; a++) {
                     b[a] = fminf(b[a], sp[a]);
@@ -392,7 +387,7 @@ static eng_result tg_run(void *state, const ind_input *in, ind_output *out, eng_
             }
     }
 
-    /* Screen rectangles. Where κ > 0 (t < 1 in gather_kernel.h): t >= |d·n_p|/r_z and
+    /* Screen rectangles (made below, with the counts). Where κ > 0 (t < 1 in gather_kernel.h): t >= |d·n_p|/r_z and
      * t >= |d_tangent|/r_xy, so the support lies in the cylinder of radius r_xy and half-height
      * r_z about n_p, whose box has half-extent r_xy·√(1 − n_k²) + r_z·|n_k| along axis k
      * (widened by 0.1 % and 1e-6 m, never beyond the sphere's). */
@@ -403,25 +398,11 @@ static eng_result tg_run(void *state, const ind_input *in, ind_output *out, eng_
         t->photon_capacity = n;
     }
     const float *vp = in->fs->camera.view_proj;
-#pragma omp parallel for num_threads(threads) schedule(static)
-    for (size_t i = 0; i < n; i++) {
-        const eng_photon *ph = &map->photons[i];
-        const float r = in->radius[i], rz = r * s->normal_compression;
-        float ext[3];
-        for (int k = 0; k < 3; k++) {
-            float nk = ph->normal[k], q = 1.0f - nk * nk;
-            ext[k] = fminf((r * sqrtf(q > 0.0f ? q : 0.0f) + rz * fabsf(nk)) * 1.001f + 1e-6f, reach(r));
-        }
-        int32_t *rc = t->rect + 4 * i;
-        if (!screen_rect(vp, ph->position, ext, w, h, rc)) {
-            rc[0] = 1;
-            rc[2] = 0;
-        }
-    }
 
-    /* Tile lists in photon order: a stable counting sort over photon chunks (each chunk
-     * counts, then fills, its own slots of every tile), photon-tile pairs whose sphere misses
-     * the tile's box left out. The lists do not depend on the number of chunks. */
+    /* Tile lists in photon order: a stable counting sort over photon chunks (each chunk makes
+     * its photons' rectangles and counts, then fills, its own slots of every tile), photon-tile
+     * pairs whose sphere misses the tile's box left out. The lists do not depend on the number
+     * of chunks. */
     int chunks = threads < MAX_CHUNKS ? threads : MAX_CHUNKS;
     if (chunks < 1)
         chunks = 1;
@@ -430,7 +411,18 @@ static eng_result tg_run(void *state, const ind_input *in, ind_output *out, eng_
         uint32_t *cnt = t->chunk_count + (size_t)c * tiles;
         memset(cnt, 0, tiles * sizeof *cnt);
         for (size_t i = n * (size_t)c / (size_t)chunks; i < n * (size_t)(c + 1) / (size_t)chunks; i++) {
-            const int32_t *rc = t->rect + 4 * i;
+            const eng_photon *ph = &map->photons[i];
+            const float r = in->radius[i], rz = r * s->normal_compression;
+            float ext[3];
+            for (int k = 0; k < 3; k++) {
+                float nk = ph->normal[k], q = 1.0f - nk * nk;
+                ext[k] = fminf((r * sqrtf(q > 0.0f ? q : 0.0f) + rz * fabsf(nk)) * 1.001f + 1e-6f, reach(r));
+            }
+            int32_t *rc = t->rect + 4 * i;
+            if (!screen_rect(vp, ph->position, ext, w, h, rc)) {
+                rc[0] = 1;
+                rc[2] = 0;
+            }
             const float rr = reach(in->radius[i]);
             for (int j = rc[1] / TILE; rc[0] <= rc[2] && j <= rc[3] / TILE; j++)
                 for (int k = rc[0] / TILE; k <= rc[2] / TILE; k++)
