@@ -112,6 +112,9 @@ typedef struct eng_frame_scene {
     float bounds_min[3], bounds_max[3]; /* world AABB of all geometry this frame */
 } eng_frame_scene;
 
+/* malloc that ends the process with a message when out of memory (engine.c). */
+void *eng_xmalloc(size_t size);
+
 /* Resolved material values for a draw (the glTF default material for -1). */
 scn_material eng_material_of(const scn_scene *scene, int32_t index);
 

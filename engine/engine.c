@@ -452,7 +452,7 @@ static const char *const CH_Y[] = {"Y"};
 
 #define PHOTON_ROW 1024 /* photons.map is PHOTON_ROW photons wide */
 
-static void *xmalloc(size_t size)
+void *eng_xmalloc(size_t size)
 {
     void *p = malloc(size ? size : 1);
     if (!p) {
@@ -514,7 +514,7 @@ static eng_result light_passes(eng_engine *e, int frame, uint32_t salt, eng_erro
     }
     if (need > e->bounce_capacity) {
         free(e->bounce);
-        e->bounce = xmalloc(need * sizeof *e->bounce);
+        e->bounce = eng_xmalloc(need * sizeof *e->bounce);
         e->bounce_capacity = need;
     }
     e->bounce_count = 0;
@@ -529,10 +529,10 @@ static eng_result light_passes(eng_engine *e, int frame, uint32_t salt, eng_erro
             return r;
         int faces = lm->views.faces;
         size_t npix = (size_t)size * (size_t)size;
-        float *pos = xmalloc(npix * 4 * sizeof(float));
-        float *pw = xmalloc(npix * 4 * sizeof(float));
-        float *dir = xmalloc(npix * 4 * sizeof(float));
-        float *bounce = xmalloc(npix * 8 * sizeof(float));
+        float *pos = eng_xmalloc(npix * 4 * sizeof(float));
+        float *pw = eng_xmalloc(npix * 4 * sizeof(float));
+        float *dir = eng_xmalloc(npix * 4 * sizeof(float));
+        float *bounce = eng_xmalloc(npix * 8 * sizeof(float));
         static const int p4[] = {0, 1, 2, 3};
         static const int p3[] = {0, 1, 2};
         int aborted = 0;
@@ -789,7 +789,7 @@ eng_result eng_render_frame(eng_engine *e, int frame, eng_error *err)
             return r;
         if (e->pmap.count > e->radius_capacity) {
             free(e->radius);
-            e->radius = xmalloc(e->pmap.count * sizeof *e->radius);
+            e->radius = eng_xmalloc(e->pmap.count * sizeof *e->radius);
             e->radius_capacity = e->pmap.count;
         }
         ind_photon_radii(&e->pmap, &e->settings, e->radius);

@@ -25,23 +25,13 @@ void ind_photon_radii(const eng_photon_map *map, const eng_settings *s, float *r
         radius[i] = splat_radius(s->kernel_radius, map->photons[i].path_density);
 }
 
-static void *xmalloc(size_t size)
-{
-    void *p = malloc(size ? size : 1);
-    if (!p) {
-        fprintf(stderr, "ispm: out of memory\n");
-        abort();
-    }
-    return p;
-}
-
 eng_result ind_cpu_target_create(ind_cpu_target *t, int width, int height, int irradiance, eng_error *err)
 {
     memset(t, 0, sizeof *t);
     eng_result r = glu_target_create(&t->target, irradiance ? 2 : 1, width, height, 0, err);
     if (r != ENG_OK)
         return r;
-    t->upload = xmalloc((size_t)width * (size_t)height * 4 * sizeof(float));
+    t->upload = eng_xmalloc((size_t)width * (size_t)height * 4 * sizeof(float));
     return ENG_OK;
 }
 
@@ -72,10 +62,10 @@ void ind_gbuffer_read(const glu_target *gb, ind_gbuffer *g)
         size_t n = (size_t)gb->width * (size_t)gb->height;
         g->width = gb->width;
         g->height = gb->height;
-        g->position = xmalloc(n * 4 * sizeof(float));
-        g->normal = xmalloc(n * 3 * sizeof(float));
-        g->albedo = xmalloc(n * 3 * sizeof(float));
-        g->material = xmalloc(n * 4 * sizeof(float));
+        g->position = eng_xmalloc(n * 4 * sizeof(float));
+        g->normal = eng_xmalloc(n * 3 * sizeof(float));
+        g->albedo = eng_xmalloc(n * 3 * sizeof(float));
+        g->material = eng_xmalloc(n * 4 * sizeof(float));
     }
     glu_read(gb, 0, 0, 4, p4, g->position);
     glu_read(gb, 1, 0, 3, p3, g->normal);

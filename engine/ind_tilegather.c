@@ -59,16 +59,6 @@ typedef struct tg_state {
     size_t entry_capacity;
 } tg_state;
 
-static void *xmalloc(size_t size)
-{
-    void *p = malloc(size ? size : 1);
-    if (!p) {
-        fprintf(stderr, "ispm: out of memory\n");
-        abort();
-    }
-    return p;
-}
-
 static void tg_destroy(void *state)
 {
     tg_state *t = state;
@@ -103,14 +93,14 @@ static eng_result tg_create(int width, int height, int irradiance, void **state,
     t->tiles_x = (width + TILE - 1) / TILE;
     t->tiles_y = (height + TILE - 1) / TILE;
     size_t n = (size_t)width * (size_t)height, tiles = (size_t)t->tiles_x * (size_t)t->tiles_y;
-    t->out = xmalloc(n * 4 * sizeof(float));
-    t->glossy = irradiance ? xmalloc(n * 4 * sizeof(float)) : NULL;
-    t->px = xmalloc(n * sizeof *t->px);
-    t->plane = xmalloc(PLANES * n * sizeof(float));
-    t->tile_box = xmalloc(tiles * 6 * sizeof(float));
-    t->tile_count = xmalloc(tiles * sizeof(float));
-    t->offset = xmalloc((tiles + 1) * sizeof(uint32_t));
-    t->chunk_count = xmalloc(MAX_CHUNKS * tiles * sizeof(uint32_t));
+    t->out = eng_xmalloc(n * 4 * sizeof(float));
+    t->glossy = irradiance ? eng_xmalloc(n * 4 * sizeof(float)) : NULL;
+    t->px = eng_xmalloc(n * sizeof *t->px);
+    t->plane = eng_xmalloc(PLANES * n * sizeof(float));
+    t->tile_box = eng_xmalloc(tiles * 6 * sizeof(float));
+    t->tile_count = eng_xmalloc(tiles * sizeof(float));
+    t->offset = eng_xmalloc((tiles + 1) * sizeof(uint32_t));
+    t->chunk_count = eng_xmalloc(MAX_CHUNKS * tiles * sizeof(uint32_t));
     eng_result r = ind_cpu_target_create(&t->target, width, height, irradiance, err);
     if (r != ENG_OK) {
         tg_destroy(t);
@@ -394,7 +384,7 @@ static eng_result tg_run(void *state, const ind_input *in, ind_output *out, eng_
     const size_t n = map->count;
     if (n > t->photon_capacity) {
         free(t->rect);
-        t->rect = xmalloc(n * 4 * sizeof *t->rect);
+        t->rect = eng_xmalloc(n * 4 * sizeof *t->rect);
         t->photon_capacity = n;
     }
     const float *vp = in->fs->camera.view_proj;
@@ -444,7 +434,7 @@ static eng_result tg_run(void *state, const ind_input *in, ind_output *out, eng_
     size_t total = t->offset[tiles];
     if (total > t->entry_capacity) {
         free(t->entries);
-        t->entries = xmalloc(total * sizeof *t->entries);
+        t->entries = eng_xmalloc(total * sizeof *t->entries);
         t->entry_capacity = total;
     }
 #pragma omp parallel for num_threads(threads) schedule(static, 1)
