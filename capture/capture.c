@@ -68,7 +68,8 @@ typedef struct cap_frame {
     float view_proj[16];
     float eye[3];
     uint64_t photons_emitted;
-    uint64_t photons_stored[16];
+    uint64_t photons_stored[ENG_PHOTON_BOUNCES];
+    uint64_t photons_truncated;
 } cap_frame;
 
 /* A buffer of the frame in progress: its record and its pixel copy. */
@@ -551,6 +552,7 @@ static int on_frame_end(void *user, const eng_frame_stats *stats)
     memcpy(f->eye, stats->camera_eye, sizeof f->eye);
     f->photons_emitted = stats->photons_emitted;
     memcpy(f->photons_stored, stats->photons_stored, sizeof f->photons_stored);
+    f->photons_truncated = stats->photons_truncated;
     f->buffer_count = c->pending_count;
     f->buffers = cap__xcalloc((size_t)c->pending_count, sizeof *f->buffers);
     for (int i = 0; i < c->pending_count; i++) {
@@ -666,13 +668,15 @@ static cJSON *frame_json(const cap_frame *f, int index)
         /* Photon attrition (ISPM Fig. 10): stored[k] counts photons at bounce index k + 2. */
         cJSON *ph = jok(cJSON_CreateObject());
         jadd(ph, "emitted", cJSON_CreateNumber((double)f->photons_emitted));
-        int last = 15;
+        int last = ENG_PHOTON_BOUNCES - 1;
         while (last > 2 && f->photons_stored[last] == 0)
             last--;
         cJSON *st = jok(cJSON_CreateArray());
         for (int b = 2; b <= last; b++)
             jpush(st, cJSON_CreateNumber((double)f->photons_stored[b]));
         jadd(ph, "stored", st);
+        /* Paths cut by the trace's safety limit (ENG_PHOTON_MAX_HITS) while alive. */
+        jadd(ph, "truncated", cJSON_CreateNumber((double)f->photons_truncated));
         jadd(o, "photons", ph);
     }
     cJSON *bufs = jok(cJSON_CreateArray());
@@ -745,6 +749,7 @@ static cJSON *manifest_json(const cap_capture *c)
     jadd(st, "random", jstr(eng_random_name(s.random)));
     jadd(st, "random_map_size", cJSON_CreateNumber(s.random_map_size));
     jadd(st, "random_seed", cJSON_CreateNumber(s.random_seed));
+    jadd(st, "stratified_cycle", cJSON_CreateNumber(s.stratified_cycle));
     jadd(st, "splat_subsample", cJSON_CreateNumber(s.splat_subsample));
     jadd(st, "temporal", cJSON_CreateBool(s.temporal));
     jadd(st, "temporal_alpha", jfloat(s.temporal_alpha));
@@ -967,9 +972,13 @@ static eng_result frame_from_json(const char *path, int index, const cJSON *o, c
     if (ph) {
         const cJSON *em = cJSON_GetObjectItemCaseSensitive(ph, "emitted");
         const cJSON *st = cJSON_GetObjectItemCaseSensitive(ph, "stored");
-        if (!cJSON_IsNumber(em) || !cJSON_IsArray(st) || cJSON_GetArraySize(st) > 14)
-            return eng_fail(err, ENG_ERR_INVALID, "%s: \"photons\" is not {\"emitted\", \"stored\"}", path);
+        const cJSON *tr = cJSON_GetObjectItemCaseSensitive(ph, "truncated");
+        if (!cJSON_IsNumber(em) || !cJSON_IsArray(st) || cJSON_GetArraySize(st) > ENG_PHOTON_BOUNCES - 2 ||
+            (tr && !cJSON_IsNumber(tr)))
+            return eng_fail(err, ENG_ERR_INVALID, "%s: \"photons\" is not {\"emitted\", \"stored\"[, \"truncated\"]}",
+                            path);
         f->photons_emitted = (uint64_t)em->valuedouble;
+        f->photons_truncated = tr ? (uint64_t)tr->valuedouble : 0;
         for (int b = 0; b < cJSON_GetArraySize(st); b++)
             f->photons_stored[b + 2] = (uint64_t)cJSON_GetArrayItem(st, b)->valuedouble;
     }

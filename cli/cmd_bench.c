@@ -271,7 +271,7 @@ static eng_result config_load(const char *path, bench_config *c, eng_error *err)
 static const char *const SETTING_KEYS[] = {
     "indirect", "photon_count", "bounces", "kernel_radius", "normal_compression", "splat_subsample", "temporal",
     "temporal_alpha", "atrous_iterations", "atrous_detail", "atrous_gamma", "random", "random_map_size",
-    "random_seed", "shadow_map_size", "pcf_radius", "shadow_bias", "exposure", "threads", NULL};
+    "random_seed", "stratified_cycle", "shadow_map_size", "pcf_radius", "shadow_bias", "exposure", "threads", NULL};
 
 /* The value the engine uses for a settings key, as text; 0 for a key it does not know. */
 static int setting_text(const eng_settings *s, const char *key, char *out, size_t size)
@@ -296,6 +296,7 @@ static int setting_text(const eng_settings *s, const char *key, char *out, size_
     INT_KEY(atrous_iterations)
     INT_KEY(random_map_size)
     INT_KEY(random_seed)
+    INT_KEY(stratified_cycle)
     INT_KEY(shadow_map_size)
     INT_KEY(pcf_radius)
     INT_KEY(threads)

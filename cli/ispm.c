@@ -102,9 +102,11 @@ static int progress_frame_end(void *user, const eng_frame_stats *st)
     if (st->photons_emitted) {
         n += snprintf(line + n, sizeof line - (size_t)n, " ms  photons: %llu bounced, stored",
                       (unsigned long long)st->photons_emitted);
-        for (int b = 2; b < 16 && n > 0 && (size_t)n < sizeof line; b++)
+        for (int b = 2; b < ENG_PHOTON_BOUNCES && n > 0 && (size_t)n < sizeof line; b++)
             if (st->photons_stored[b])
                 n += snprintf(line + n, sizeof line - (size_t)n, " %llu", (unsigned long long)st->photons_stored[b]);
+        if (st->photons_truncated && n > 0 && (size_t)n < sizeof line)
+            snprintf(line + n, sizeof line - (size_t)n, ", %llu truncated", (unsigned long long)st->photons_truncated);
         fprintf(stderr, "%s\n", line);
         return 0;
     }

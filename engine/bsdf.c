@@ -1,6 +1,8 @@
 /* bsdf.c — how a photon scatters at a surface: lobe choice, importance sampling, Russian
- * roulette and the path-density factor. Used by the CPU tracer (photon_trace.c); the GLSL
- * bounce-map shader implements the same formulas, so they are kept few and simple.
+ * roulette and the path-density factor. Used by the CPU tracer (photon_trace.c). The
+ * bounce-map shader calls its GLSL twin, shaders/bsdf_sample.glsl, which follows this file
+ * line for line on the constants and lobe order of shaders/bsdf_constants.glsl (read by both);
+ * tests/test_bsdf.c runs both on the same random numbers. Formulas are kept few and simple.
  *
  * Material model (glTF metallic-roughness + KHR_materials_transmission/ior, base colour only):
  *   lobe choice  u0 < metallic → metal; else (u0 − metallic)/(1 − metallic) < transmission →
@@ -149,7 +151,7 @@ bsdf_lobe bsdf_scatter(const scn_material *m, const float n[3], const float wi[3
     if (!(cos_i > 0.0f))
         return absorbed(wo, weight, density_factor);
 
-    float pick = u[0];
+    float pick = u[BSDF_U_LOBE];
     if (pick < metallic) {
         const float *f0 = m->base_color;
         if (m->roughness < BSDF_MIRROR_ROUGHNESS) {
@@ -157,14 +159,14 @@ bsdf_lobe bsdf_scatter(const scn_material *m, const float n[3], const float wi[3
             for (int i = 0; i < 3; i++)
                 weight[i] = schlick1(f0[i], cos_i);
             *density_factor = max3(weight);
-            return roulette(BSDF_MIRROR, u[1], weight, wo, density_factor);
+            return roulette(BSDF_MIRROR, u[BSDF_U_ROULETTE], weight, wo, density_factor);
         }
         float alpha = m->roughness * m->roughness;
         if (alpha < BSDF_MIN_ALPHA)
             alpha = BSDF_MIN_ALPHA;
-        float u2 = u[2];
+        float u2 = u[BSDF_U_DIR0];
         float theta = atanf(alpha * sqrtf(u2) / sqrtf(1.0f - u2));
-        float phi = (float)(2.0 * ENG_PI) * u[3];
+        float phi = BSDF_TWO_PI * u[BSDF_U_DIR1];
         float local[3] = {sinf(theta) * cosf(phi), sinf(theta) * sinf(phi), cosf(theta)};
         float h[3];
         to_world(local, ns, h);
@@ -179,8 +181,8 @@ bsdf_lobe bsdf_scatter(const scn_material *m, const float n[3], const float wi[3
         float k = g * hdotwi / (cos_i * cos_h); /* wo·h = wi·h */
         for (int i = 0; i < 3; i++)
             weight[i] = schlick1(f0[i], hdotwi) * k;
-        *density_factor = max3(f0) / 10.0f;
-        return roulette(BSDF_GLOSSY, u[1], weight, wo, density_factor);
+        *density_factor = max3(f0) / BSDF_DENSITY_GLOSSY;
+        return roulette(BSDF_GLOSSY, u[BSDF_U_ROULETTE], weight, wo, density_factor);
     }
     float rest = metallic < 1.0f ? (pick - metallic) / (1.0f - metallic) : 1.0f;
     if (rest < transmission) {
@@ -188,11 +190,11 @@ bsdf_lobe bsdf_scatter(const scn_material *m, const float n[3], const float wi[3
         float n1 = entering ? *eta : m->ior;
         float n2 = entering ? m->ior : 1.0f;
         float r = bsdf_fresnel_dielectric(cos_i, n1, n2);
-        if (u[2] < r) {
+        if (u[BSDF_U_DIR0] < r) {
             reflect(wi, ns, wo);
             weight[0] = weight[1] = weight[2] = 1.0f;
             *density_factor = r;
-            return roulette(BSDF_REFLECT, u[1], weight, wo, density_factor);
+            return roulette(BSDF_REFLECT, u[BSDF_U_ROULETTE], weight, wo, density_factor);
         }
         /* Refraction (002_… §4.5): ωr = −e·wi + (e·cosθi − cosθt)·ns, e = n1/n2. */
         float e = n1 / n2;
@@ -204,12 +206,37 @@ bsdf_lobe bsdf_scatter(const scn_material *m, const float n[3], const float wi[3
             weight[i] = m->base_color[i];
         *density_factor = (1.0f - r) * max3(weight);
         *eta = n2;
-        return roulette(BSDF_REFRACT, u[1], weight, wo, density_factor);
+        return roulette(BSDF_REFRACT, u[BSDF_U_ROULETTE], weight, wo, density_factor);
     }
     to_world(rnd->cosdir, ns, wo);
     normalize3(wo);
     for (int i = 0; i < 3; i++)
         weight[i] = m->base_color[i];
-    *density_factor = max3(weight) / 1000.0f;
-    return roulette(BSDF_DIFFUSE, u[1], weight, wo, density_factor);
+    *density_factor = max3(weight) / BSDF_DENSITY_DIFFUSE;
+    return roulette(BSDF_DIFFUSE, u[BSDF_U_ROULETTE], weight, wo, density_factor);
+}
+
+void bsdf_stratify(const float u[4], const float offset[4], float out_u[4], float out_cosdir[4])
+{
+    for (int d = 0; d < 4; d++) {
+        float s = u[d] + offset[d];
+        out_u[d] = s >= 1.0f ? s - 1.0f : s;
+    }
+    float a = 2.0f * out_u[BSDF_U_DIR0] - 1.0f, b = 2.0f * out_u[BSDF_U_DIR1] - 1.0f, r, phi;
+    if (a == 0.0f && b == 0.0f) {
+        r = 0.0f;
+        phi = 0.0f;
+    } else if (fabsf(a) > fabsf(b)) {
+        r = a;
+        phi = (BSDF_PI / 4.0f) * (b / a);
+    } else {
+        r = b;
+        phi = BSDF_PI / 2.0f - (BSDF_PI / 4.0f) * (a / b);
+    }
+    float x = r * cosf(phi), y = r * sinf(phi);
+    float z = sqrtf(fmaxf(0.0f, 1.0f - x * x - y * y));
+    out_cosdir[0] = x;
+    out_cosdir[1] = y;
+    out_cosdir[2] = z;
+    out_cosdir[3] = z / BSDF_PI;
 }

@@ -5,24 +5,24 @@
 #define ISPM_BSDF_H
 
 #include "eng_internal.h"
+/* Constants, lobe ids and lobe order shared with the GLSL twin (valid C and GLSL). */
+#include "shaders/bsdf_constants.glsl"
 
 #include <math.h>
 
 typedef enum bsdf_lobe {
-    BSDF_ABSORBED = 0, /* Russian roulette ended the path (or the sample left below the surface) */
-    BSDF_DIFFUSE,      /* Lambertian, cosine-sampled */
-    BSDF_GLOSSY,       /* GGX metal */
-    BSDF_MIRROR,       /* smooth metal (roughness < BSDF_MIRROR_ROUGHNESS): delta reflection */
-    BSDF_REFLECT,      /* glass: Fresnel or total internal reflection (delta) */
-    BSDF_REFRACT       /* glass: refraction (delta) */
+    BSDF_ABSORBED = BSDF_LOBE_ABSORBED, /* Russian roulette ended the path (or the sample left below the surface) */
+    BSDF_DIFFUSE = BSDF_LOBE_DIFFUSE,   /* Lambertian, cosine-sampled */
+    BSDF_GLOSSY = BSDF_LOBE_GLOSSY,     /* GGX metal */
+    BSDF_MIRROR = BSDF_LOBE_MIRROR,     /* smooth metal (roughness < BSDF_MIRROR_ROUGHNESS): delta reflection */
+    BSDF_REFLECT = BSDF_LOBE_REFLECT,   /* glass: Fresnel or total internal reflection (delta) */
+    BSDF_REFRACT = BSDF_LOBE_REFRACT    /* glass: refraction (delta) */
 } bsdf_lobe;
 
-#define BSDF_MIRROR_ROUGHNESS 0.01f
-#define BSDF_MIN_ALPHA 1e-3f
-
-/* Random numbers one scattering event consumes: u = 4 uniforms in [0,1) (u[0] lobe choice,
- * u[1] Russian roulette, u[2..3] GGX half-vector or the Fresnel choice in u[2]) and cosdir = a
- * cosine-weighted direction about +Z with its pdf (an eng_random_maps cosine entry). */
+/* Random numbers one scattering event consumes: u = 4 uniforms in [0,1) (u[BSDF_U_LOBE] lobe
+ * choice, u[BSDF_U_ROULETTE] Russian roulette, u[BSDF_U_DIR0..1] GGX half-vector or the
+ * Fresnel choice in u[BSDF_U_DIR0]) and cosdir = a cosine-weighted direction about +Z with its
+ * pdf (an eng_random_maps cosine entry, or bsdf_stratify's). */
 typedef struct bsdf_sample {
     const float *u;      /* 4 floats */
     const float *cosdir; /* 4 floats */
@@ -43,6 +43,14 @@ typedef struct bsdf_sample {
  * path ends. */
 bsdf_lobe bsdf_scatter(const scn_material *m, const float n[3], const float wi[3], float *eta,
                        const bsdf_sample *rnd, float wo[3], float weight[3], float *density_factor);
+
+/* Stratified sampling across frames (002_558366c451cd32fd.txt §4.2): a Cranley–Patterson
+ * rotation of one event's random numbers, out_u[d] = frac(u[d] + offset[d]), and the
+ * cosine-weighted direction made from the rotated out_u[BSDF_U_DIR0..1] by the concentric
+ * map (Shirley–Chiu, lifted to the hemisphere; pdf cosθ/π), both in float so that the
+ * bounce-map shader (bsdf_sample.glsl, bsdf_stratify) computes the same. The frame's offsets
+ * come from rmap_stratum. */
+void bsdf_stratify(const float u[4], const float offset[4], float out_u[4], float out_cosdir[4]);
 
 /* Does the material have a diffuse or glossy lobe with non-zero probability? The photon map
  * keeps photons only on such surfaces: the final gather estimates radiance from photons with

@@ -166,12 +166,12 @@ void eng_settings_defaults(eng_settings *s)
     if (s->threads == 0) s->threads = 2;
     if (s->indirect == ENG_INDIRECT_DEFAULT) s->indirect = ENG_INDIRECT_ISPM;
     if (s->photon_count == 0) s->photon_count = 32768;
-    if (s->bounces == 0) s->bounces = 3;
     if (s->kernel_radius == 0.0f) s->kernel_radius = 0.1f;
     if (s->normal_compression == 0.0f) s->normal_compression = 0.25f;
     if (s->random == ENG_RANDOM_DEFAULT) s->random = ENG_RANDOM_MAPS;
     if (s->random_map_size == 0) s->random_map_size = 65536;
     if (s->random_seed == 0) s->random_seed = 1;
+    if (s->stratified_cycle == 0) s->stratified_cycle = 16;
     if (s->splat_subsample == 0) s->splat_subsample = 1;
     if (s->temporal_alpha == 0.0f) s->temporal_alpha = 0.95f;
     if (s->atrous_detail == ENG_DETAIL_DEFAULT) s->atrous_detail = ENG_DETAIL_CLIPPED;
@@ -206,6 +206,7 @@ const char *eng_random_name(eng_random_mode m)
 {
     switch (m) {
     case ENG_RANDOM_PER_FRAME: return "per-frame";
+    case ENG_RANDOM_STRATIFIED: return "stratified";
     case ENG_RANDOM_MAPS:
     case ENG_RANDOM_DEFAULT: return "maps";
     }

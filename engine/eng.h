@@ -205,7 +205,9 @@ typedef enum eng_atrous_detail {
 typedef enum eng_random_mode {
     ENG_RANDOM_DEFAULT = 0,   /* = maps */
     ENG_RANDOM_MAPS,          /* precomputed random maps seeded by scene quantities (ISPM §4.1) */
-    ENG_RANDOM_PER_FRAME      /* the same maps, seeds salted with the frame index (for comparison) */
+    ENG_RANDOM_PER_FRAME,     /* the same maps, seeds salted with the frame index (for comparison) */
+    ENG_RANDOM_STRATIFIED     /* the maps' numbers rotated to one stratum per frame of a cycle of
+                               * stratified_cycle frames (002 §4.2); repeats every cycle */
 } eng_random_mode;
 
 const char *eng_indirect_name(eng_indirect m);
@@ -223,12 +225,14 @@ typedef struct eng_settings {
     /* Indirect light (ISPM). */
     eng_indirect indirect;
     int photon_count;         /* bounce-map photons over all lights; default 32768 */
-    int bounces;              /* photon-map bounces stored per path after the bounce map; default 3 */
+    int bounces;              /* optional cap on photon-map photons stored per path after the bounce
+                               * map; 0 (default) = no cap: Russian roulette ends paths (003 §4) */
     float kernel_radius;      /* photon volume radius r_xy in metres at unit path-density scale; default 0.1 */
     float normal_compression; /* r_z / r_xy of the kernel ellipsoid (ISPM §5.1); default 0.25 */
     eng_random_mode random;
     int random_map_size;      /* entries per random table, a power of two; default 65536 */
     int random_seed;          /* seed of the random tables; default 1 */
+    int stratified_cycle;     /* frames per stratification cycle (random = stratified); default 16 */
     /* Reconstruction filters (DESIGN.md step 7). With all of them off (the defaults) the
      * splat writes outgoing radiance directly, as before; with any on, it writes irradiance
      * (splat.irradiance) that the filters work on and the BSDF is applied last (002 Eq. 7.9). */
@@ -302,6 +306,12 @@ typedef struct eng_pass_time {
 
 #define ENG_MAX_PASSES 32
 
+/* Safety limit on the surface hits of one photon path after the bounce map (Russian roulette
+ * ends paths; this only bounds pathological ones, e.g. between two perfect mirrors), and the
+ * number of bounce indices a photon can be stored with (2 .. ENG_PHOTON_MAX_HITS + 1). */
+#define ENG_PHOTON_MAX_HITS 64
+#define ENG_PHOTON_BOUNCES (ENG_PHOTON_MAX_HITS + 2)
+
 typedef struct eng_frame_stats {
     int frame;
     double time;
@@ -310,7 +320,10 @@ typedef struct eng_frame_stats {
     /* Photon attrition (ISPM Fig. 10): bounce-map photons that survived the first bounce, and
      * photon-map photons stored at bounce index b (b = 2 is the second surface of a path). */
     uint64_t photons_emitted;
-    uint64_t photons_stored[16];
+    uint64_t photons_stored[ENG_PHOTON_BOUNCES];
+    /* Paths the trace cut at ENG_PHOTON_MAX_HITS surface hits while they still carried power
+     * (the estimate's only bias besides the kernels; should be ~0). */
+    uint64_t photons_truncated;
     /* The eye camera of this frame: world → clip (column-major, GL conventions) and its
      * position, so tools can project world-space data (e.g. photons) into the image. */
     float camera_view_proj[16];

@@ -185,8 +185,10 @@ typedef struct pass_lightmaps pass_lightmaps;
 eng_result pass_lightmaps_create(const eng_random_maps *rm, pass_lightmaps **out, eng_error *err);
 /* Renders light `light`'s G-buffer and bounce map at size² texels per face into lm
  * (targets are (re)allocated when the size or face count changes). */
+typedef struct eng_rmap_frame eng_rmap_frame;
+/* rf: how this frame reads the random maps (rmap_frame), the same for the CPU trace. */
 eng_result pass_lightmaps_run(pass_lightmaps *p, const eng_frame_scene *fs, uint32_t light, int size,
-                              uint32_t salt, light_maps *lm, eng_error *err);
+                              const eng_rmap_frame *rf, light_maps *lm, eng_error *err);
 void light_maps_release(light_maps *lm);
 void pass_lightmaps_destroy(pass_lightmaps *p);
 
@@ -288,6 +290,23 @@ uint32_t rmap_hash3(const float p[3], uint32_t salt);
 /* Same for a light position and a bounce-map pixel (x, y, face): the bounce map's seed. */
 uint32_t rmap_hash_pixel(const float light[3], uint32_t x, uint32_t y, uint32_t face, uint32_t salt);
 
+/* How one frame reads the random maps, the same for the bounce-map shader and the CPU trace:
+ * the salt of its seeds, and with stratified sampling across frames (002_… §4.2) the
+ * Cranley–Patterson offsets of its stratum (bsdf_stratify). */
+typedef struct eng_rmap_frame {
+    uint32_t salt;     /* 0 = precomputed random maps; frame-dependent for per-frame random */
+    int stratified;    /* 1: rotate every event's numbers by offset (bsdf_stratify) */
+    float offset[4];   /* per random dimension, in [0,1) */
+} eng_rmap_frame;
+
+/* The frame's eng_rmap_frame under settings s (random, stratified_cycle). Stratified: frame f
+ * is stratum k = f mod K of a cycle of K = s->stratified_cycle frames, with offsets
+ * frac(k·g_d / K) for g = (1, 1, 1, g₃), g₃ the integer coprime to K nearest K/φ: over a cycle
+ * every dimension visits the K strata [j/K, (j+1)/K) once, and the direction pair (d = 2, 3)
+ * follows a rank-1 (Fibonacci-like) lattice, so it covers the unit square evenly rather than
+ * along its diagonal. Offsets are exact multiples of 1/K; frames f and f + K read the same. */
+void rmap_frame(const eng_settings *s, int frame, eng_rmap_frame *out);
+
 /* A photon leaving the first bounce (bounce map, ISPM Table 1): outgoing direction and power,
  * at the surface point of the light's G-buffer. Power 0 = absorbed. */
 typedef struct eng_bounce_photon {
@@ -315,15 +334,19 @@ typedef struct eng_photon_map {
 } eng_photon_map;
 
 typedef struct eng_trace_settings {
-    int max_bounces;     /* surfaces stored per path after the bounce map (>= 1) */
+    int max_bounces;     /* optional cap on photons stored per path after the bounce map; 0 = none
+                          * (Russian roulette alone ends a path, up to the safety limit) */
     int threads;
     uint32_t salt;       /* 0 = precomputed random maps; frame-dependent for per-frame random */
+    int stratified;      /* eng_rmap_frame's: 1 = rotate the numbers by offset */
+    float offset[4];
 } eng_trace_settings;
 
 typedef struct eng_trace_stats {
     uint64_t emitted;               /* bounce-map photons with power > 0 */
-    uint64_t stored[16];            /* photons stored at bounce index b (b = 2..) */
-    double stored_power[16][3];     /* their total power per channel */
+    uint64_t truncated;             /* paths still alive after ENG_PHOTON_MAX_HITS surface hits */
+    uint64_t stored[ENG_PHOTON_BOUNCES];        /* photons stored at bounce index b (b = 2..) */
+    double stored_power[ENG_PHOTON_BOUNCES][3]; /* their total power per channel */
 } eng_trace_stats;
 
 /* A ray hit (rt.c): distance along the unit ray, world position, interpolated shading
@@ -346,11 +369,14 @@ int rt_intersect(const eng_rt *rt, const float org[3], const float dir[3], float
 
 /* CPU photon trace (photon_trace.c, ISPM §4.3): traces every bounce-map photon with power > 0
  * through the scene posed in rt and fills out (its previous contents are replaced; out may
- * start zeroed) with up to s->max_bounces photons per path, in input order and, within a
- * path, in hit order. The result is bit-identical for any s->threads. stats (may be NULL)
- * gets the emitted count and stored count/power per bounce index. fs->scene resolves the
- * materials of the draws rt was built from. ENG_ERR_INVALID on bad settings (max_bounces
- * outside 1..14, random maps not created), ENG_ERR_NOMEM when out of memory. */
+ * start zeroed) with the photons of every path (at most s->max_bounces per path when that is
+ * > 0), in input order and, within a path, in hit order. A path ends by Russian roulette, by
+ * leaving the scene, at the cap, or after ENG_PHOTON_MAX_HITS surface hits (counted in
+ * stats->truncated). The result is bit-identical for any s->threads. stats (may be NULL)
+ * gets the emitted and truncated counts and stored count/power per bounce index. fs->scene
+ * resolves the materials of the draws rt was built from. ENG_ERR_INVALID on bad settings
+ * (max_bounces outside 0..ENG_PHOTON_MAX_HITS, random maps not created), ENG_ERR_NOMEM when
+ * out of memory. */
 eng_result photon_trace(const eng_rt *rt, const eng_frame_scene *fs, const eng_random_maps *rm,
                         const eng_bounce_photon *in, size_t count, const eng_trace_settings *s,
                         eng_photon_map *out, eng_trace_stats *stats, eng_error *err);

@@ -493,7 +493,7 @@ static double light_power(const eng_light_pose *l, const eng_frame_scene *fs)
 /* Light G-buffers and bounce maps of every light (ISPM §3 1b–c), announced; the surviving
  * bounce-map photons are gathered in e->bounce for the CPU trace. Returns non-zero when a
  * listener aborted (err set). */
-static eng_result light_passes(eng_engine *e, int frame, uint32_t salt, eng_error *err)
+static eng_result light_passes(eng_engine *e, int frame, const eng_rmap_frame *rf, eng_error *err)
 {
     eng_frame_scene *fs = &e->fs;
     double total = 0.0;
@@ -522,7 +522,7 @@ static eng_result light_passes(eng_engine *e, int frame, uint32_t salt, eng_erro
         int size = sizes[l];
         double t0 = now_ms();
         light_maps *lm = &e->lmaps[l];
-        eng_result r = pass_lightmaps_run(e->lightmaps, fs, l, size, salt, lm, err);
+        eng_result r = pass_lightmaps_run(e->lightmaps, fs, l, size, rf, lm, err);
         glFinish();
         add_time(e, "lightmaps", now_ms() - t0);
         if (r != ENG_OK)
@@ -775,11 +775,13 @@ eng_result eng_render_frame(eng_engine *e, int frame, eng_error *err)
 
     /* Light G-buffers, bounce maps and the CPU photon trace (ISPM §3 1b–d). */
     if (e->method) {
-        uint32_t salt = e->settings.random == ENG_RANDOM_PER_FRAME ? (uint32_t)frame + 1u : 0u;
-        eng_result r = light_passes(e, frame, salt, err);
+        eng_rmap_frame rf; /* salt and stratum of this frame (002 §4.2), for both processors */
+        rmap_frame(&e->settings, frame, &rf);
+        eng_result r = light_passes(e, frame, &rf, err);
         if (r != ENG_OK)
             return r;
-        eng_trace_settings ts = {e->settings.bounces, e->settings.threads, salt};
+        eng_trace_settings ts = {e->settings.bounces, e->settings.threads, rf.salt, rf.stratified,
+                                 {rf.offset[0], rf.offset[1], rf.offset[2], rf.offset[3]}};
         eng_trace_stats tstats;
         memset(&tstats, 0, sizeof tstats);
         t0 = now_ms();
@@ -795,6 +797,7 @@ eng_result eng_render_frame(eng_engine *e, int frame, eng_error *err)
         ind_photon_radii(&e->pmap, &e->settings, e->radius);
         e->stats.photons_emitted = tstats.emitted;
         memcpy(e->stats.photons_stored, tstats.stored, sizeof e->stats.photons_stored);
+        e->stats.photons_truncated = tstats.truncated;
         if (announce_photon_map(e, frame))
             return eng_fail(err, ENG_ERR_ABORTED, "frame %d: capture failed at photons.map", frame);
     }

@@ -92,7 +92,7 @@ static void draw_scene(const pass_lightmaps *p, const eng_frame_scene *fs)
 }
 
 eng_result pass_lightmaps_run(pass_lightmaps *p, const eng_frame_scene *fs, uint32_t light, int size,
-                              uint32_t salt, light_maps *lm, eng_error *err)
+                              const eng_rmap_frame *rf, light_maps *lm, eng_error *err)
 {
     const eng_light_pose *l = &fs->lights[light];
     light_views(l, fs, &lm->views);
@@ -139,7 +139,9 @@ eng_result pass_lightmaps_run(pass_lightmaps *p, const eng_frame_scene *fs, uint
     glUniform3fv(glGetUniformLocation(g, "u_light_scale"), 1, l->radiance_scale);
     glUniform3f(glGetUniformLocation(g, "u_light_params"), l->range, cosf(l->inner_cone), cosf(l->outer_cone));
     glUniform1f(glGetUniformLocation(g, "u_extent"), light_view_extent(l, &lm->views));
-    glUniform1ui(glGetUniformLocation(g, "u_salt"), salt);
+    glUniform1ui(glGetUniformLocation(g, "u_salt"), rf->salt);
+    glUniform1i(glGetUniformLocation(g, "u_stratified"), rf->stratified);
+    glUniform4fv(glGetUniformLocation(g, "u_offset"), 1, rf->offset);
     GLint u_layer = glGetUniformLocation(g, "u_layer");
     for (int i = 0; i < 4; i++) {
         glActiveTexture(GL_TEXTURE0 + i);

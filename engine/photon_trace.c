@@ -10,23 +10,57 @@
  * the geometry it hits and the maps — no counters, no thread ids — so a path that misses
  * everything that moved is bit-identical from frame to frame.
  *
- * Determinism across thread counts: input photon i writes only slots
- * [i·max_bounces, (i+1)·max_bounces) of a scratch array; the map is then compacted
+ * Stratified sampling across frames (002_558366c451cd32fd.txt §4.2): with
+ * s->stratified every event's numbers are Cranley–Patterson rotated by the frame's offsets
+ * (bsdf_stratify), exactly as the bounce-map shader rotates the first bounce's.
+ *
+ * Path length (003_… §4, 002_… §4.4): Russian roulette alone ends a path, so the photon map
+ * is an unbiased sample of all bounces; s->max_bounces > 0 is an optional cap on the photons
+ * stored per path (a biased, cheaper estimate), and ENG_PHOTON_MAX_HITS surface hits is a
+ * safety limit for pathological paths (e.g. between perfect mirrors). A path cut by the limit
+ * while it still carries power is counted in stats->truncated, so a manifest shows whether
+ * the limit ever mattered.
+ *
+ * Determinism across thread counts: a path's photons go to the buffer of the thread that
+ * traced it, and the path records where (thread, offset, count); the map is then compacted
  * sequentially in input order, and the statistics are summed sequentially after that.
  *
  * Storage rule: a photon is stored only on surfaces with a diffuse or glossy lobe
  * (bsdf_stores_photons): the photon map feeds the final gather, which cannot use photons on
- * purely specular surfaces (mirror, glass); such surfaces only redirect the path (caustics).
- * A path ends when it has stored max_bounces photons, is absorbed, leaves the scene, or
- * reaches bounce index PT_MAX_BOUNCE (a bound on specular chains). */
+ * purely specular surfaces (mirror, glass); such surfaces only redirect the path (caustics). */
 #include "bsdf.h"
 
 #include <math.h>
+#include <omp.h>
 #include <stdlib.h>
 #include <string.h>
 
-#define PT_MAX_BOUNCE 15 /* last bounce index a photon can be stored with (eng_trace_stats has 16) */
-#define PT_MAX_STORED (PT_MAX_BOUNCE - 1)
+/* A growable list of photons, one per thread. */
+typedef struct pt_buf {
+    eng_photon *p;
+    size_t n, cap;
+} pt_buf;
+
+static eng_photon *pt_push(pt_buf *b)
+{
+    if (b->n == b->cap) {
+        size_t cap = b->cap ? 2 * b->cap : 1024;
+        eng_photon *p = realloc(b->p, cap * sizeof *p);
+        if (!p)
+            return NULL;
+        b->p = p;
+        b->cap = cap;
+    }
+    return &b->p[b->n++];
+}
+
+/* Where a path's photons are: buffer `thread`, [at, at + count). */
+typedef struct pt_path {
+    size_t at;
+    uint32_t count;
+    uint16_t thread;
+    uint8_t truncated, oom;
+} pt_path;
 
 static float dot3(const float a[3], const float b[3])
 {
@@ -38,14 +72,17 @@ static int has_power(const float p[3])
     return p[0] > 0.0f || p[1] > 0.0f || p[2] > 0.0f;
 }
 
-/* Traces one bounce-map photon; writes its stored photons to slot[0..] and returns how many. */
-static int trace_path(const eng_rt *rt, const scn_scene *scene, const eng_random_maps *rm,
-                      const eng_bounce_photon *bp, int max_stored, uint32_t salt, eng_photon *slot)
+/* Traces one bounce-map photon, appending its stored photons to buf; fills rec. */
+static void trace_path(const eng_rt *rt, const scn_scene *scene, const eng_random_maps *rm,
+                       const eng_bounce_photon *bp, const eng_trace_settings *s, pt_buf *buf, pt_path *rec)
 {
+    rec->at = buf->n;
+    rec->count = 0;
+    rec->truncated = rec->oom = 0;
     if (!has_power(bp->power))
-        return 0;
+        return;
     const uint32_t mask = rm->size - 1;
-    const uint32_t seed = rmap_hash3(bp->position, salt);
+    const uint32_t seed = rmap_hash3(bp->position, s->salt);
     float power[3] = {bp->power[0], bp->power[1], bp->power[2]};
     float rho = bp->path_density;
     float eta = bp->ior > 0.0f ? bp->ior : 1.0f;
@@ -53,14 +90,17 @@ static int trace_path(const eng_rt *rt, const scn_scene *scene, const eng_random
     float dir[3] = {bp->direction[0], bp->direction[1], bp->direction[2]};
     float len = sqrtf(dot3(dir, dir));
     if (!(len > 0.0f) || !isfinite(len))
-        return 0;
+        return;
     for (int i = 0; i < 3; i++)
         dir[i] /= len;
     /* The bounce-map photon sits on the surface it left; no normal is known there, so the
      * first ray skips a short distance instead of offsetting its origin. */
     float tnear = bsdf_offset_eps(org);
-    int stored = 0;
-    for (uint32_t k = 0; 2 + k <= PT_MAX_BOUNCE; k++) {
+    for (uint32_t k = 0;; k++) {
+        if (k == ENG_PHOTON_MAX_HITS) {
+            rec->truncated = 1;
+            break;
+        }
         rt_hit h;
         if (!rt_intersect(rt, org, dir, tnear, INFINITY, &h))
             break;
@@ -72,7 +112,12 @@ static int trace_path(const eng_rt *rt, const scn_scene *scene, const eng_random
         memcpy(n, ((cg >= 0.0f) == (cs >= 0.0f)) ? h.normal : h.geom_normal, sizeof n);
         scn_material m = eng_material_of(scene, h.material);
         if (bsdf_stores_photons(&m)) {
-            eng_photon *ph = &slot[stored++];
+            eng_photon *ph = pt_push(buf);
+            if (!ph) {
+                rec->oom = 1;
+                return;
+            }
+            rec->count++;
             float side = dot3(n, wi) >= 0.0f ? 1.0f : -1.0f;
             for (int i = 0; i < 3; i++) {
                 ph->position[i] = h.position[i];
@@ -82,11 +127,17 @@ static int trace_path(const eng_rt *rt, const scn_scene *scene, const eng_random
             }
             ph->path_density = rho;
             ph->bounce = 2 + k;
-            if (stored == max_stored)
+            if (s->max_bounces > 0 && rec->count == (uint32_t)s->max_bounces)
                 break;
         }
         uint32_t e = (seed + k) & mask;
         bsdf_sample rnd = {rm->uniform + 4 * (size_t)e, rm->cosine + 4 * (size_t)e};
+        float su[4], scd[4];
+        if (s->stratified) {
+            bsdf_stratify(rnd.u, s->offset, su, scd);
+            rnd.u = su;
+            rnd.cosdir = scd;
+        }
         float wo[3], w[3], density;
         if (bsdf_scatter(&m, n, wi, &eta, &rnd, wo, w, &density) == BSDF_ABSORBED)
             break;
@@ -103,65 +154,78 @@ static int trace_path(const eng_rt *rt, const scn_scene *scene, const eng_random
         }
         tnear = 0.0f;
     }
-    return stored;
 }
 
 eng_result photon_trace(const eng_rt *rt, const eng_frame_scene *fs, const eng_random_maps *rm,
                         const eng_bounce_photon *in, size_t count, const eng_trace_settings *s,
                         eng_photon_map *out, eng_trace_stats *stats, eng_error *err)
 {
-    if (s->max_bounces < 1 || s->max_bounces > PT_MAX_STORED)
-        return eng_fail(err, ENG_ERR_INVALID, "photon trace: max_bounces %d outside 1..%d", s->max_bounces,
-                        PT_MAX_STORED);
+    if (s->max_bounces < 0 || s->max_bounces > ENG_PHOTON_MAX_HITS)
+        return eng_fail(err, ENG_ERR_INVALID, "photon trace: max_bounces %d outside 0..%d", s->max_bounces,
+                        ENG_PHOTON_MAX_HITS);
     if (rm->size == 0 || (rm->size & (rm->size - 1)) != 0 || !rm->uniform || !rm->cosine)
         return eng_fail(err, ENG_ERR_INVALID, "photon trace: random maps not created");
-    const size_t per = (size_t)s->max_bounces;
-    if (count > SIZE_MAX / per / sizeof(eng_photon))
-        return eng_fail(err, ENG_ERR_NOMEM, "photon trace: %zu photons × %zu bounces overflow", count, per);
-    eng_photon *slots = malloc((count ? count * per : 1) * sizeof *slots);
-    unsigned char *n_stored = calloc(count ? count : 1, 1);
-    if (!slots || !n_stored) {
-        free(slots);
-        free(n_stored);
+    const int threads = s->threads > 0 ? (s->threads < 1024 ? s->threads : 1024) : 1;
+    pt_path *paths = malloc((count ? count : 1) * sizeof *paths);
+    pt_buf *bufs = calloc((size_t)threads, sizeof *bufs);
+    if (!paths || !bufs) {
+        free(paths);
+        free(bufs);
         return eng_fail(err, ENG_ERR_NOMEM, "photon trace: out of memory for %zu photons", count);
     }
-    const int threads = s->threads > 0 ? s->threads : 1;
     const scn_scene *scene = fs->scene;
-    const uint32_t salt = s->salt;
-    const int max_stored = s->max_bounces;
-#pragma omp parallel for schedule(static) num_threads(threads)
-    for (ptrdiff_t i = 0; i < (ptrdiff_t)count; i++)
-        n_stored[i] = (unsigned char)trace_path(rt, scene, rm, &in[i], max_stored, salt, slots + (size_t)i * per);
+#pragma omp parallel num_threads(threads)
+    {
+        int t = omp_get_thread_num();
+        pt_buf *mine = &bufs[t];
+#pragma omp for schedule(static)
+        for (ptrdiff_t i = 0; i < (ptrdiff_t)count; i++) {
+            trace_path(rt, scene, rm, &in[i], s, mine, &paths[i]);
+            paths[i].thread = (uint16_t)t;
+        }
+    }
 
     size_t total = 0;
-    for (size_t i = 0; i < count; i++)
-        total += n_stored[i];
-    if (total > out->capacity) {
+    int oom = 0;
+    for (size_t i = 0; i < count; i++) {
+        total += paths[i].count;
+        oom |= paths[i].oom;
+    }
+    if (!oom && total > out->capacity) {
         eng_photon *p = realloc(out->photons, total * sizeof *p);
-        if (!p) {
-            free(slots);
-            free(n_stored);
-            return eng_fail(err, ENG_ERR_NOMEM, "photon trace: out of memory for %zu stored photons", total);
+        if (p) {
+            out->photons = p;
+            out->capacity = total;
+        } else {
+            oom = 1;
         }
-        out->photons = p;
-        out->capacity = total;
+    }
+    if (oom) {
+        for (int t = 0; t < threads; t++)
+            free(bufs[t].p);
+        free(bufs);
+        free(paths);
+        return eng_fail(err, ENG_ERR_NOMEM, "photon trace: out of memory for %zu stored photons", total);
     }
     size_t at = 0;
     for (size_t i = 0; i < count; i++) {
-        if (n_stored[i] == 0)
+        if (paths[i].count == 0)
             continue; /* out->photons may still be NULL when nothing was stored */
-        memcpy(out->photons + at, slots + i * per, n_stored[i] * sizeof(eng_photon));
-        at += n_stored[i];
+        memcpy(out->photons + at, bufs[paths[i].thread].p + paths[i].at, paths[i].count * sizeof(eng_photon));
+        at += paths[i].count;
     }
     out->count = total;
-    free(slots);
-    free(n_stored);
+    for (int t = 0; t < threads; t++)
+        free(bufs[t].p);
+    free(bufs);
 
     if (stats) {
         memset(stats, 0, sizeof *stats);
-        for (size_t i = 0; i < count; i++)
+        for (size_t i = 0; i < count; i++) {
             if (has_power(in[i].power))
                 stats->emitted++;
+            stats->truncated += paths[i].truncated;
+        }
         for (size_t j = 0; j < total; j++) {
             const eng_photon *ph = &out->photons[j];
             stats->stored[ph->bounce]++;
@@ -169,6 +233,7 @@ eng_result photon_trace(const eng_rt *rt, const eng_frame_scene *fs, const eng_r
                 stats->stored_power[ph->bounce][c] += ph->power[c];
         }
     }
+    free(paths);
     return ENG_OK;
 }
 

@@ -140,3 +140,39 @@ uint32_t rmap_hash_pixel(const float light[3], uint32_t x, uint32_t y, uint32_t 
     uint32_t w[6] = {float_word(light[0]), float_word(light[1]), float_word(light[2]), x, y, face};
     return hash_words(w, 6, salt);
 }
+
+static int gcd(int a, int b)
+{
+    while (b) {
+        int t = a % b;
+        a = b;
+        b = t;
+    }
+    return a;
+}
+
+void rmap_frame(const eng_settings *s, int frame, eng_rmap_frame *out)
+{
+    memset(out, 0, sizeof *out);
+    if (s->random == ENG_RANDOM_PER_FRAME)
+        out->salt = (uint32_t)frame + 1u;
+    if (s->random != ENG_RANDOM_STRATIFIED)
+        return;
+    int K = s->stratified_cycle > 0 ? s->stratified_cycle : 1;
+    int k = ((frame % K) + K) % K;
+    /* g₃: the g coprime to K nearest K/φ, in integer thousandths (1 always qualifies). */
+    const long long target = (long long)K * 618034 / 1000;
+    int g3 = 1;
+    long long best = -1;
+    for (int g = 1; g < K; g++) {
+        long long dist = llabs((long long)g * 1000 - target);
+        if (gcd(g, K) == 1 && (best < 0 || dist < best)) {
+            best = dist;
+            g3 = g;
+        }
+    }
+    const int g[4] = {1, 1, 1, g3};
+    out->stratified = 1;
+    for (int d = 0; d < 4; d++)
+        out->offset[d] = (float)((long long)k * g[d] % K) / (float)K;
+}

@@ -149,6 +149,7 @@ static eng_result parse_settings(parser *P, const cJSON *obj, eng_settings *s)
     static const char *const keys[] = {"shadow_map_size", "pcf_radius", "shadow_bias", "exposure", "threads",
                                        "indirect", "photon_count", "bounces", "kernel_radius",
                                        "normal_compression", "random", "random_map_size", "random_seed",
+                                       "stratified_cycle",
                                        "splat_subsample", "temporal", "temporal_alpha", "atrous_iterations",
                                        "atrous_detail", "atrous_gamma", NULL};
     char v[80];
@@ -204,14 +205,20 @@ static eng_result parse_settings(parser *P, const cJSON *obj, eng_settings *s)
             s->random = ENG_RANDOM_MAPS;
         else if (cJSON_IsString(it) && !strcmp(it->valuestring, "per-frame"))
             s->random = ENG_RANDOM_PER_FRAME;
+        else if (cJSON_IsString(it) && !strcmp(it->valuestring, "stratified"))
+            s->random = ENG_RANDOM_STRATIFIED;
         else
-            return bad(P, "settings.random: %s is not one of \"maps\", \"per-frame\"", show(it, v, sizeof v));
+            return bad(P, "settings.random: %s is not one of \"maps\", \"per-frame\", \"stratified\"",
+                       show(it, v, sizeof v));
     }
     if ((it = cJSON_GetObjectItemCaseSensitive(obj, "photon_count")) &&
         (r = get_int(P, it, "settings.photon_count", 6, 1 << 22, &s->photon_count)))
         return r;
     if ((it = cJSON_GetObjectItemCaseSensitive(obj, "bounces")) &&
-        (r = get_int(P, it, "settings.bounces", 1, 14, &s->bounces)))
+        (r = get_int(P, it, "settings.bounces", 0, ENG_PHOTON_MAX_HITS, &s->bounces)))
+        return r;
+    if ((it = cJSON_GetObjectItemCaseSensitive(obj, "stratified_cycle")) &&
+        (r = get_int(P, it, "settings.stratified_cycle", 1, 4096, &s->stratified_cycle)))
         return r;
     if ((it = cJSON_GetObjectItemCaseSensitive(obj, "random_seed")) &&
         (r = get_int(P, it, "settings.random_seed", 1, 2147483647, &s->random_seed)))

@@ -4,6 +4,7 @@
  * counts and processes is tested end to end (tests/e2e_determinism.sh), since llvmpipe's
  * thread count is fixed per process. */
 #include "eng.h"
+#include "bsdf.h"
 #include "eng_internal.h"
 
 #include <check.h>
@@ -614,6 +615,49 @@ START_TEST(random_maps_give_frame_coherence)
 }
 END_TEST
 
+/* Stratified sampling across frames (002 §4.2) through the whole engine, bounce-map shader
+ * included: with the box at rest (frames 2..5 at 0.5 fps) and a cycle of 2 frames, frames 2
+ * and 4 (stratum 0) give bit-identical bounce maps, photon maps and indirect light, while
+ * frame 3 (stratum 1) differs in all three. */
+static kept copy_named(const keeper *k, const char *a, const char *b)
+{
+    const kept *x = find(k, a);
+    if (!x)
+        x = find(k, b);
+    ck_assert_msg(x != NULL, "no buffer %s", a);
+    return copy_kept(x);
+}
+
+static int same_kept(const kept *a, const kept *b)
+{
+    return a->w == b->w && a->h == b->h && a->n == b->n &&
+           memcmp(a->data, b->data, (size_t)a->w * a->h * a->n * sizeof(float)) == 0;
+}
+
+START_TEST(stratified_frames_repeat_each_cycle)
+{
+    fixture f;
+    setup_cornell(&f, 32, 6, 0.5, "\"photon_count\":2048,\"random\":\"stratified\",\"stratified_cycle\":2");
+    static const char *const names[3][2] = {
+        {"bounce.light0", "bounce.light0.face0"}, {"photons.map", "photons.map"}, {"indirect.radiance", "indirect.radiance"}};
+    kept k[3][3];
+    for (int fr = 2; fr <= 4; fr++) {
+        render(&f, fr);
+        ck_assert_uint_eq(f.keep.last_stats.photons_truncated, 0);
+        for (int b = 0; b < 3; b++)
+            k[fr - 2][b] = copy_named(&f.keep, names[b][0], names[b][1]);
+    }
+    for (int b = 0; b < 3; b++) {
+        ck_assert_msg(same_kept(&k[0][b], &k[2][b]), "%s: frames 2 and 4 (one stratum) differ", names[b][0]);
+        ck_assert_msg(!same_kept(&k[0][b], &k[1][b]), "%s: frames 2 and 3 (two strata) are the same", names[b][0]);
+    }
+    for (int fr = 0; fr < 3; fr++)
+        for (int b = 0; b < 3; b++)
+            free(k[fr][b].data);
+    teardown(&f);
+}
+END_TEST
+
 /* Mean of channel c over a kept buffer. */
 static double mean_of(const kept *k, int c)
 {
@@ -654,7 +698,7 @@ START_TEST(settings_change_what_they_should)
     ck_assert_msg(more.emitted > 3 * base.emitted, "emitted %llu vs %llu", (unsigned long long)more.emitted,
                   (unsigned long long)base.emitted);
     ck_assert_uint_eq(one.max_bounce, 2);
-    ck_assert_uint_ge(base.max_bounce, 3);
+    ck_assert_uint_ge(base.max_bounce, 6); /* no cap by default: Russian roulette alone ends paths */
     ck_assert_msg(wide.mean_count > 2.0 * base.mean_count, "kernel radius: coverage %f vs %f", wide.mean_count,
                   base.mean_count);
     ck_assert_msg(flat.mean_count < base.mean_count, "normal compression: coverage %f vs %f", flat.mean_count,
@@ -678,17 +722,11 @@ START_TEST(indirect_none_announces_no_photon_buffers)
 END_TEST
 
 
-static void cross3(const double a[3], const double b[3], double o[3])
-{
-    o[0] = a[1] * b[2] - a[2] * b[1];
-    o[1] = a[2] * b[0] - a[0] * b[2];
-    o[2] = a[0] * b[1] - a[1] * b[0];
-}
-
 /* The bounce map draws its random numbers from the precomputed maps at seed =
- * rmap_hash_pixel(light, texel, face) (ISPM §4.1): recompute, on the CPU, the Lambertian
- * photons of the face looking down (−Y) and compare with what the shader stored: same
- * Russian-roulette decision, same outgoing direction. */
+ * rmap_hash_pixel(light, texel, face) (ISPM §4.1) and scatters with the BSDF the CPU trace
+ * uses (bsdf_sample.glsl, the twin of bsdf.c): recompute, on the CPU with bsdf_scatter, the
+ * Lambertian photons of the face looking down (−Y) and compare with what the shader stored:
+ * same Russian-roulette decision, same outgoing direction, power factor and path density. */
 START_TEST(bounce_map_uses_the_random_maps_at_hashed_seeds)
 {
     fixture f;
@@ -709,40 +747,36 @@ START_TEST(bounce_map_uses_the_random_maps_at_hashed_seeds)
         for (int x = 0; x < size; x++) {
             size_t i = (size_t)row * size + x;
             const float *p = lp->data + 3 * i;
-            double wi[3] = {light[0] - p[0], light[1] - p[1], light[2] - p[2]};
-            double l = sqrt(wi[0] * wi[0] + wi[1] * wi[1] + wi[2] * wi[2]);
-            double n[3] = {ln->data[3 * i], ln->data[3 * i + 1], ln->data[3 * i + 2]};
-            if (n[0] * wi[0] + n[1] * wi[1] + n[2] * wi[2] < 0)
-                for (int c = 0; c < 3; c++)
-                    n[c] = -n[c];
+            float wi[3] = {light[0] - p[0], light[1] - p[1], light[2] - p[2]};
+            float l = sqrtf(wi[0] * wi[0] + wi[1] * wi[1] + wi[2] * wi[2]);
+            for (int c = 0; c < 3; c++)
+                wi[c] /= l;
+            float n[3] = {ln->data[3 * i], ln->data[3 * i + 1], ln->data[3 * i + 2]};
+            float nl = sqrtf(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+            for (int c = 0; c < 3; c++)
+                n[c] /= nl;
             uint32_t seed = rmap_hash_pixel(light, (uint32_t)x, (uint32_t)(size - 1 - row), 3, 0);
-            const float *u = rm.uniform + 4 * (seed & 65535u);
-            const float *d = rm.cosine + 4 * ((seed + 1u) & 65535u);
-            const float *a = la->data + 3 * i;
-            double pmax = fmax(a[0], fmax(a[1], a[2]));
+            bsdf_sample rnd = {rm.uniform + 4 * (seed & 65535u), rm.cosine + 4 * (seed & 65535u)};
+            scn_material m;
+            memset(&m, 0, sizeof m);
+            memcpy(m.base_color, la->data + 3 * i, 3 * sizeof(float));
+            m.roughness = 1.0f;
+            m.ior = 1.5f;
+            float eta = 1.0f, wo[3], w[3], rho;
+            bsdf_lobe lobe = bsdf_scatter(&m, n, wi, &eta, &rnd, wo, w, &rho);
             const float *b = bm->data + 8 * i;
             int survived = b[0] > 0.0f || b[1] > 0.0f || b[2] > 0.0f;
-            ck_assert_int_eq(survived, u[2] < pmax);
-            (void)l;
+            ck_assert_int_eq(survived, lobe != BSDF_ABSORBED);
             if (!survived) {
                 absorbed++;
                 continue;
             }
-            double ax[3] = {fabs(n[0]) > 0.9 ? 0.0 : 1.0, fabs(n[0]) > 0.9 ? 1.0 : 0.0, 0.0}, t[3], bb[3];
-            cross3(ax, n, t);
-            double tl = sqrt(t[0] * t[0] + t[1] * t[1] + t[2] * t[2]);
+            ck_assert_int_eq(lobe, BSDF_DIFFUSE);
             for (int c = 0; c < 3; c++)
-                t[c] /= tl;
-            cross3(n, t, bb);
-            double wo[3], wl = 0.0;
-            for (int c = 0; c < 3; c++) {
-                wo[c] = t[c] * d[0] + bb[c] * d[1] + n[c] * d[2];
-                wl += wo[c] * wo[c];
-            }
-            for (int c = 0; c < 3; c++)
-                ck_assert_msg(fabs(wo[c] / sqrt(wl) - b[3 + c]) < 1e-4, "texel (%d,%d): direction %f vs %f", x, row,
-                              b[3 + c], wo[c] / sqrt(wl));
-            ck_assert_float_eq_tol(b[6], pmax / 1000.0, 1e-9); /* ρp = ρL/1000 (ISPM §4.3) */
+                ck_assert_msg(fabsf(wo[c] - b[3 + c]) < 1e-4f, "texel (%d,%d): direction %f vs %f", x, row, b[3 + c],
+                              wo[c]);
+            ck_assert_float_eq_tol(b[6], rho, 1e-9); /* ρp = ρL/1000 (ISPM §4.3) */
+            ck_assert_float_eq(b[7], 1.0f);
             checked++;
         }
     fprintf(stderr, "bounce map: %d photons recomputed on the CPU, %d absorbed\n", checked, absorbed);
@@ -800,6 +834,7 @@ static Suite *engine_suite(void)
     tcase_add_test(ind, bounce_map_uses_the_random_maps_at_hashed_seeds);
     tcase_add_test(ind, photon_volumes_equal_a_cpu_gather);
     tcase_add_test(ind, random_maps_give_frame_coherence);
+    tcase_add_test(ind, stratified_frames_repeat_each_cycle);
     tcase_add_test(ind, settings_change_what_they_should);
     tcase_add_test(ind, indirect_none_announces_no_photon_buffers);
     suite_add_tcase(s, ind);

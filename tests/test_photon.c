@@ -15,6 +15,7 @@
 
 #define CORNELL_GLTF ISPM_SOURCE_DIR "/scenes/cornell-box/cornell-box.gltf"
 #define CORNELL_GLASS_GLTF ISPM_SOURCE_DIR "/scenes/cornell-box/cornell-glass.gltf"
+#define FURNACE_GLTF ISPM_SOURCE_DIR "/scenes/furnace/furnace.gltf"
 
 /* ---------------------------------------------------------------- helpers */
 
@@ -480,7 +481,7 @@ START_TEST(energy_closed_box)
     /* ρp: 1 × (ρL/1000)^(bounce − 2). */
     ck_assert(map.photons[0].path_density == 1.0f);
 
-    eng_trace_settings bad = {.max_bounces = 0, .threads = 1};
+    eng_trace_settings bad = {.max_bounces = ENG_PHOTON_MAX_HITS + 1, .threads = 1};
     ck_assert_int_eq(photon_trace(h.rt, &h.fs, &rm, in, N, &bad, &map, NULL, &err), ENG_ERR_INVALID);
     photon_map_free(&map);
     photon_map_free(&map);
@@ -489,6 +490,7 @@ START_TEST(energy_closed_box)
     rt_destroy(h.rt);
 }
 END_TEST
+
 
 /* ---------------------------------------------------------------- Cornell box */
 
@@ -624,6 +626,21 @@ START_TEST(determinism_threads)
     /* Re-tracing into a used map gives the same map again. */
     ck_assert_int_eq(photon_trace(c.rt, &c.fs, &rm, in, n, &s3, &b, NULL, &err), ENG_OK);
     ck_assert_int_eq(memcmp(a.photons, b.photons, a.count * sizeof(eng_photon)), 0);
+    /* No cap (Russian roulette alone) and a stratified frame: still independent of the thread
+     * count, and paths longer than the old cap of 3 stored photons appear. */
+    eng_trace_settings u1 = {.max_bounces = 0, .threads = 1, .stratified = 1, .offset = {0.25f, 0.25f, 0.25f, 0.75f}};
+    eng_trace_settings u3 = u1;
+    u3.threads = 3;
+    ck_assert_int_eq(photon_trace(c.rt, &c.fs, &rm, in, n, &u1, &a, &sa, &err), ENG_OK);
+    ck_assert_int_eq(photon_trace(c.rt, &c.fs, &rm, in, n, &u3, &b, &sb, &err), ENG_OK);
+    ck_assert_uint_eq(a.count, b.count);
+    ck_assert_int_eq(memcmp(a.photons, b.photons, a.count * sizeof(eng_photon)), 0);
+    ck_assert_int_eq(memcmp(&sa, &sb, sizeof sa), 0);
+    size_t beyond3 = 0;
+    for (int k = 6; k < ENG_PHOTON_BOUNCES; k++)
+        beyond3 += sa.stored[k];
+    printf("photon: Cornell without a cap: %zu stored, %zu at bounce index >= 6\n", a.count, beyond3);
+    ck_assert_uint_gt(beyond3, 100);
     photon_map_free(&a);
     photon_map_free(&b);
     free(in);
@@ -805,6 +822,168 @@ START_TEST(glass_caustics)
 }
 END_TEST
 
+
+/* ---------------------------------------------------------------- Russian roulette alone */
+
+/* Photons leaving the centre of the furnace sphere (scenes/furnace: closed, Lambertian albedo
+ * ρ = 0.8 on both sides) in uniform directions, no cap on the path: Russian roulette alone
+ * ends paths (003 §4, 002 §4.4), so the power stored at bounce index b is Φ·ρ^(b−2) in
+ * expectation and the total Φ/(1 − ρ) — the geometric series that a cap of 3 cuts to
+ * Φ(1 + ρ + ρ²) (59% of it). Grey roulette keeps each photon's power, so the stored count
+ * at b is Binomial-like with relative σ = √((1 − ρ^(b−2)) / (N ρ^(b−2))); the finite table
+ * realises P = ρ only to ~1/√size, which compounds over bounces (allowed: 0.4% per bounce;
+ * this seed's table has u < 0.8 in 0.99974 of 0.8 of its entries). */
+START_TEST(furnace_unbiased)
+{
+    cornell c;
+    cornell_open(&c, FURNACE_GLTF, NULL);
+    const double rho = 0.8;
+    eng_random_maps rm;
+    eng_error err;
+    ck_assert_int_eq(rmap_create(0x15B3, 1u << 16, &rm, &err), ENG_OK);
+    const size_t N = 200000;
+    eng_bounce_photon *in = calloc(N, sizeof *in);
+    uint64_t st = 23;
+    for (size_t i = 0; i < N; i++) {
+        for (int k = 0; k < 3; k++)
+            in[i].position[k] = 0.2f * (test_uniform(&st) - 0.5f);
+        float z = 1.0f - 2.0f * test_uniform(&st), phi = (float)(2 * ENG_PI) * test_uniform(&st);
+        float r = sqrtf(fmaxf(0.0f, 1.0f - z * z));
+        in[i].direction[0] = r * cosf(phi);
+        in[i].direction[1] = r * sinf(phi);
+        in[i].direction[2] = z;
+        in[i].power[0] = in[i].power[1] = in[i].power[2] = 1.0f;
+        in[i].path_density = 1.0f;
+        in[i].ior = 1.0f;
+    }
+    eng_trace_settings s = {.max_bounces = 0, .threads = 2};
+    eng_photon_map map = {0};
+    eng_trace_stats stats;
+    ck_assert_int_eq(photon_trace(c.rt, &c.fs, &rm, in, N, &s, &map, &stats, &err), ENG_OK);
+    /* Closed: every photon reaches the wall (one in 10⁵ may slip through a crack between the
+     * tessellation's triangles); the series is measured from what arrived. */
+    ck_assert_uint_ge(stats.stored[2], N - N / 10000);
+    const double phi = stats.stored_power[2][0];
+    double total = 0.0;
+    int longest = 0;
+    for (int b = 2; b < ENG_PHOTON_BOUNCES; b++) {
+        total += stats.stored_power[b][0];
+        if (stats.stored[b])
+            longest = b;
+    }
+    for (int b = 2; b <= 14; b++) {
+        double expect = phi * pow(rho, b - 2);
+        double sigma = sqrt((1.0 - pow(rho, b - 2)) / expect);
+        double ratio = stats.stored_power[b][0] / expect;
+        printf("photon: furnace bounce %2d stored power %.1f, expected Phi rho^%d = %.1f (ratio %.4f, sigma %.4f)\n", b,
+               stats.stored_power[b][0], b - 2, expect, ratio, sigma);
+        ck_assert_msg(fabs(ratio - 1.0) <= 4.0 * sigma + 0.004 * (b - 2), "bounce %d: ratio %f", b, ratio);
+    }
+    double expect_total = phi / (1.0 - rho);
+    printf("photon: furnace total stored power %.1f, expected Phi/(1 - rho) = %.1f (ratio %.4f); longest path %d "
+           "stored photons; %llu truncated\n",
+           total, expect_total, total / expect_total, longest - 1, (unsigned long long)stats.truncated);
+    ck_assert_msg(fabs(total / expect_total - 1.0) < 0.02, "total %f vs %f", total, expect_total);
+    ck_assert_int_gt(longest - 1, 20); /* far longer paths than a cap of 3 allows */
+    /* P(a path survives 64 hits) = ρ^63 ≈ 8·10⁻⁷: at most a few of 200000. */
+    ck_assert_uint_le(stats.truncated, 5);
+    /* A cap is still honoured: stored photons per path ≤ 3, and the total is cut. */
+    eng_trace_settings capped = {.max_bounces = 3, .threads = 2};
+    eng_trace_stats cs;
+    ck_assert_int_eq(photon_trace(c.rt, &c.fs, &rm, in, N, &capped, &map, &cs, &err), ENG_OK);
+    ck_assert_uint_eq(cs.stored[5], 0);
+    ck_assert_uint_eq(cs.stored[4], stats.stored[4]);
+    photon_map_free(&map);
+    free(in);
+    rmap_destroy(&rm);
+    cornell_close(&c);
+}
+END_TEST
+
+/* A closed box of perfect white mirrors: nothing is ever absorbed, nothing stored (no
+ * diffuse or glossy lobe), so every path runs into the safety limit and is counted. */
+START_TEST(truncation_counted)
+{
+    make_cube();
+    hand_scene h;
+    hand_scene_init(&h, cube_pos, cube_nrm, 24, cube_idx, 36, material(1.0f, 1.0f, 1.0f, 1.0f, 0.0f, 0.0f),
+                    identity16);
+    eng_random_maps rm;
+    eng_error err;
+    ck_assert_int_eq(rmap_create(11, 1u << 12, &rm, &err), ENG_OK);
+    const size_t N = 1000;
+    eng_bounce_photon *in = calloc(N, sizeof *in);
+    uint64_t st = 5;
+    for (size_t i = 0; i < N; i++) {
+        for (int c = 0; c < 3; c++) {
+            in[i].position[c] = 0.2f * (test_uniform(&st) - 0.5f);
+            in[i].direction[c] = test_uniform(&st) - 0.5f;
+        }
+        in[i].power[0] = in[i].power[1] = in[i].power[2] = 1.0f;
+        in[i].path_density = 1.0f;
+        in[i].ior = 1.0f;
+    }
+    in[7].power[0] = in[7].power[1] = in[7].power[2] = 0.0f; /* absorbed in the bounce map */
+    eng_trace_settings s = {.max_bounces = 0, .threads = 3};
+    eng_photon_map map = {0};
+    eng_trace_stats stats;
+    ck_assert_int_eq(photon_trace(h.rt, &h.fs, &rm, in, N, &s, &map, &stats, &err), ENG_OK);
+    ck_assert_uint_eq(map.count, 0);
+    ck_assert_uint_eq(stats.emitted, N - 1);
+    ck_assert_uint_eq(stats.truncated, N - 1);
+    /* Grey walls: no path is truncated. */
+    h.mat = material(0.5f, 0.5f, 0.5f, 0.0f, 1.0f, 0.0f);
+    ck_assert_int_eq(photon_trace(h.rt, &h.fs, &rm, in, N, &s, &map, &stats, &err), ENG_OK);
+    ck_assert_uint_eq(stats.truncated, 0);
+    photon_map_free(&map);
+    free(in);
+    rmap_destroy(&rm);
+    rt_destroy(h.rt);
+}
+END_TEST
+
+/* Stratified sampling across frames (002 §4.2): frame f and f + K trace bit-identical photon
+ * maps of a static scene, while the K frames of a cycle all differ. */
+START_TEST(stratified_cycle)
+{
+    cornell c;
+    cornell_open(&c, CORNELL_GLTF, "shortBox");
+    eng_random_maps rm;
+    eng_error err;
+    ck_assert_int_eq(rmap_create(0x15B3, 1u << 16, &rm, &err), ENG_OK);
+    const size_t want = 4000;
+    eng_bounce_photon *in = calloc(want, sizeof *in);
+    size_t n = cornell_bounce_photons(&c, &rm, want, in);
+    enum { K = 4 };
+    eng_settings set;
+    memset(&set, 0, sizeof set);
+    set.random = ENG_RANDOM_STRATIFIED;
+    set.stratified_cycle = K;
+    eng_photon_map maps[2 * K];
+    memset(maps, 0, sizeof maps);
+    for (int f = 0; f < 2 * K; f++) {
+        eng_rmap_frame rf;
+        rmap_frame(&set, f, &rf);
+        eng_trace_settings s = {.max_bounces = 0, .threads = 2, .salt = rf.salt, .stratified = rf.stratified};
+        memcpy(s.offset, rf.offset, sizeof s.offset);
+        ck_assert_int_eq(photon_trace(c.rt, &c.fs, &rm, in, n, &s, &maps[f], NULL, &err), ENG_OK);
+    }
+    for (int f = 0; f < K; f++) {
+        ck_assert_uint_eq(maps[f].count, maps[f + K].count);
+        ck_assert_int_eq(memcmp(maps[f].photons, maps[f + K].photons, maps[f].count * sizeof(eng_photon)), 0);
+        for (int g = f + 1; g < K; g++)
+            ck_assert_msg(maps[f].count != maps[g].count ||
+                              memcmp(maps[f].photons, maps[g].photons, maps[f].count * sizeof(eng_photon)) != 0,
+                          "frames %d and %d of a cycle trace the same photons", f, g);
+    }
+    for (int f = 0; f < 2 * K; f++)
+        photon_map_free(&maps[f]);
+    free(in);
+    rmap_destroy(&rm);
+    cornell_close(&c);
+}
+END_TEST
+
 static Suite *photon_suite(void)
 {
     Suite *s = suite_create("photon");
@@ -817,9 +996,12 @@ static Suite *photon_suite(void)
     tcase_add_test(tc, bsdf_glass);
     tcase_add_test(tc, rt_known_triangle);
     tcase_add_test(tc, energy_closed_box);
+    tcase_add_test(tc, furnace_unbiased);
+    tcase_add_test(tc, truncation_counted);
     tcase_add_test(tc, determinism_threads);
     tcase_add_test(tc, frame_coherence);
     tcase_add_test(tc, glass_caustics);
+    tcase_add_test(tc, stratified_cycle);
     suite_add_tcase(s, tc);
     return s;
 }

@@ -16,13 +16,12 @@
 // words (light x, y, z bits with −0 made +0; texel x, y; face) seeded with the salt, i.e.
 // exactly rmap_hash_pixel in engine/random_maps.c, so the CPU can recompute any seed.
 //
-// BSDF sampling (kept in step with engine/bsdf.c): opaque dielectrics Lambertian (cosine
-// sampling, weight = albedo, ρ factor ρL/1000 per §4.3); metals GGX (Walter et al. 2007,
-// 002_… §4.1) or a perfect mirror below roughness 0.01 (weight F, ρ factor ρS/10 glossy, ρS
-// mirror); glass a Fresnel Bernoulli choice between reflection and refraction (002_… §4.5),
-// weight 1 or the tint, ρ factor 1. Russian roulette (002_… §4.4): survive with
-// P = max channel of the weight, power /= P.
-#define PI 3.14159265358979323846
+// BSDF sampling: bsdf_sample.glsl, the line-for-line twin of engine/bsdf.c that the CPU trace
+// uses for every later bounce (lobe order, constants, Russian roulette with P = max channel of
+// the weight (002_… §4.4), path-density factors of 003_… §4.3), reading entry seed + 0 of the
+// uniform and cosine tables as the CPU reads entry seed + k at its k-th event. With stratified
+// sampling across frames (002_… §4.2) the numbers are Cranley–Patterson rotated by this frame's
+// offsets first, exactly as photon_trace.c does.
 
 uniform sampler2DArray u_lpos;
 uniform sampler2DArray u_lnrm;
@@ -39,6 +38,8 @@ uniform vec3 u_light_scale;      // I (W/sr) or E (W/m²) per channel
 uniform vec3 u_light_params;     // range, cos inner, cos outer
 uniform float u_extent;          // tan(half-angle) (point: 1, spot) or half-width (directional)
 uniform uint u_salt;
+uniform int u_stratified;        // 1: rotate the random numbers by u_offset (bsdf_stratify)
+uniform vec4 u_offset;
 
 layout(location = 0) out vec4 o_power;     // Φ_o RGB, path density ρp
 layout(location = 1) out vec4 o_direction; // ω_o, index of refraction of the medium after the bounce
@@ -78,25 +79,8 @@ vec4 rmap(int table, uint seed, uint k)
     return texelFetch(u_rmap, ivec3(int(i & 255u), int(i >> 8), table), 0);
 }
 
-void frame_of(vec3 n, out vec3 t, out vec3 b)
-{
-    vec3 a = abs(n.x) > 0.9 ? vec3(0.0, 1.0, 0.0) : vec3(1.0, 0.0, 0.0);
-    t = normalize(cross(a, n));
-    b = cross(n, t);
-}
-
-float fresnel_dielectric(float cos_i, float eta_i, float eta_t)
-{
-    float sin_t = eta_i / eta_t * sqrt(max(0.0, 1.0 - cos_i * cos_i));
-    if (sin_t >= 1.0)
-        return 1.0;
-    float cos_t = sqrt(max(0.0, 1.0 - sin_t * sin_t));
-    float rs = (eta_i * cos_i - eta_t * cos_t) / (eta_i * cos_i + eta_t * cos_t);
-    float rp = (eta_t * cos_i - eta_i * cos_t) / (eta_t * cos_i + eta_i * cos_t);
-    return 0.5 * (rs * rs + rp * rp);
-}
-
-#pragma ispm_include "ggx.glsl"
+#pragma ispm_include "bsdf_constants.glsl"
+#pragma ispm_include "bsdf_sample.glsl"
 
 void main()
 {
@@ -143,72 +127,15 @@ void main()
     uint seed = xxh32_6(lp.x == 0.0 ? 0u : floatBitsToUint(lp.x), lp.y == 0.0 ? 0u : floatBitsToUint(lp.y),
                         lp.z == 0.0 ? 0u : floatBitsToUint(lp.z), uint(px.x), uint(px.y), uint(u_layer), u_salt);
     vec4 u = rmap(0, seed, 0u);
-
-    vec3 wo;
-    vec3 weight;
+    vec4 cosdir = rmap(1, seed, 0u);
+    if (u_stratified != 0)
+        bsdf_stratify(u, u_offset, u, cosdir);
+    // The photon arrives from the light through air.
+    float eta = 1.0;
+    vec3 wo, weight;
     float density;
-    float medium = 1.0;
-    if (mat.z > 0.0 && u.x < mat.z) {
-        // Glass: entering where the modelled normal faces the light, leaving otherwise.
-        bool entering = dot(wi, n) > 0.0;
-        vec3 nn = entering ? n : -n;
-        float eta_i = entering ? 1.0 : mat.w, eta_t = entering ? mat.w : 1.0;
-        float cos_i = dot(wi, nn);
-        float f = fresnel_dielectric(cos_i, eta_i, eta_t);
-        if (u.y < f) {
-            wo = reflect(-wi, nn);
-            weight = vec3(1.0);
-            medium = eta_i;
-        } else {
-            wo = refract(-wi, nn, eta_i / eta_t);
-            weight = albedo;
-            medium = eta_t;
-        }
-        density = 1.0;
-    } else {
-        if (dot(n, wi) < 0.0)
-            n = -n; // opaque surfaces shade alike on both sides
-        float cos_i = dot(n, wi);
-        float uu = mat.z > 0.0 ? (u.x - mat.z) / (1.0 - mat.z) : u.x;
-        if (mat.y > 0.0 && uu < mat.y) {
-            vec3 f0 = albedo;
-            if (mat.x < 0.01) {
-                wo = reflect(-wi, n);
-                weight = f0 + (1.0 - f0) * pow(1.0 - cos_i, 5.0);
-                density = max(weight.r, max(weight.g, weight.b));
-            } else {
-                float a = max(mat.x * mat.x, 1e-3), a2 = a * a;
-                vec4 g = rmap(0, seed, 2u);
-                float tan2 = a2 * g.x / max(1.0 - g.x, 1e-7);
-                float cos_h = 1.0 / sqrt(1.0 + tan2), sin_h = sqrt(max(0.0, 1.0 - cos_h * cos_h));
-                float phi = 2.0 * PI * g.y;
-                vec3 t, b;
-                frame_of(n, t, b);
-                vec3 h = normalize(t * (sin_h * cos(phi)) + b * (sin_h * sin(phi)) + n * cos_h);
-                wo = reflect(-wi, h);
-                float nwo = dot(n, wo), woh = dot(wo, h);
-                if (nwo <= 0.0 || woh <= 0.0) {
-                    weight = vec3(0.0);
-                } else {
-                    vec3 fr = f0 + (1.0 - f0) * pow(1.0 - woh, 5.0);
-                    float gg = smith_g1(cos_i, a2) * smith_g1(nwo, a2);
-                    weight = fr * gg * woh / (cos_i * cos_h);
-                }
-                density = max(f0.r, max(f0.g, f0.b)) / 10.0;
-            }
-        } else {
-            vec3 t, b;
-            frame_of(n, t, b);
-            vec3 d = rmap(1, seed, 1u).xyz;
-            wo = normalize(t * d.x + b * d.y + n * d.z);
-            weight = albedo;
-            density = max(albedo.r, max(albedo.g, albedo.b)) / 1000.0;
-        }
-    }
-    // Russian roulette (002_… §4.4).
-    float p = clamp(max(weight.r, max(weight.g, weight.b)), 0.0, 1.0);
-    if (p <= 0.0 || u.z >= p)
+    if (bsdf_scatter(albedo, mat, n, wi, eta, u, cosdir, wo, weight, density) == BSDF_LOBE_ABSORBED)
         return;
-    o_power = vec4(power * weight / p, density);
-    o_direction = vec4(wo, medium);
+    o_power = vec4(power * weight, density);
+    o_direction = vec4(wo, eta);
 }

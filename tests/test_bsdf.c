@@ -1,0 +1,286 @@
+/* test_bsdf.c — one BSDF sampling on both processors: engine/bsdf.c (the CPU trace) and its
+ * GLSL twin engine/shaders/bsdf_sample.glsl (the bounce map) are fed the same random numbers
+ * for every material class (diffuse, rough and smooth metal, glass, a glTF mixture of all
+ * three) through a probe fragment shader (shaders/bsdf_probe.frag.glsl) on the engine's OSMesa
+ * context, and must choose the same lobe and return the same direction, weight, path-density
+ * factor and medium; bsdf_stratify (stratified sampling across frames, 002_… §4.2) likewise.
+ * Also the stratification itself: rmap_frame's offsets put every dimension in each of the K
+ * strata once per cycle and repeat every K frames. */
+#include "bsdf.h"
+#include "eng_internal.h"
+
+#include <check.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define W 256
+#define ROWS_PER_CLASS 16
+#define CLASSES 5
+#define H (ROWS_PER_CLASS * CLASSES)
+#define N ((size_t)W * H)
+
+static uint64_t test_rng(uint64_t *state)
+{
+    uint64_t z = (*state += 0x9E3779B97F4A7C15ull);
+    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+    return z ^ (z >> 31);
+}
+
+static float test_uniform(uint64_t *state)
+{
+    return (float)(test_rng(state) >> 40) * (1.0f / 16777216.0f);
+}
+
+static void unit_vector(uint64_t *st, float out[3])
+{
+    float z = 1.0f - 2.0f * test_uniform(st), phi = 6.2831853f * test_uniform(st);
+    float r = sqrtf(fmaxf(0.0f, 1.0f - z * z));
+    out[0] = r * cosf(phi);
+    out[1] = r * sinf(phi);
+    out[2] = z;
+}
+
+static scn_material class_material(int c)
+{
+    scn_material m;
+    memset(&m, 0, sizeof m);
+    m.ior = 1.5f;
+    m.roughness = 1.0f;
+    m.base_color[3] = 1.0f;
+    const float colours[CLASSES][3] = {
+        {0.8f, 0.5f, 0.3f}, {0.9f, 0.6f, 0.2f}, {0.95f, 0.9f, 0.8f}, {0.9f, 0.95f, 1.0f}, {0.7f, 0.7f, 0.5f}};
+    memcpy(m.base_color, colours[c], sizeof colours[c]);
+    switch (c) {
+    case 0: /* diffuse */
+        break;
+    case 1: /* rough metal */
+        m.metallic = 1.0f;
+        m.roughness = 0.4f;
+        break;
+    case 2: /* smooth metal: below BSDF_MIRROR_ROUGHNESS, a mirror */
+        m.metallic = 1.0f;
+        m.roughness = 0.005f;
+        break;
+    case 3: /* glass */
+        m.transmission = 1.0f;
+        m.roughness = 0.0f;
+        break;
+    default: /* the glTF mixture: metal, glass and diffuse lobes */
+        m.metallic = 0.3f;
+        m.transmission = 0.4f;
+        m.roughness = 0.3f;
+        break;
+    }
+    return m;
+}
+
+static const char *const class_name[CLASSES] = {"diffuse", "rough metal", "smooth metal", "glass", "mixed"};
+
+static GLuint texture(const float *rgba)
+{
+    GLuint t;
+    glGenTextures(1, &t);
+    glBindTexture(GL_TEXTURE_2D, t);
+    glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA32F, W, H, 0, GL_RGBA, GL_FLOAT, rgba);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+    return t;
+}
+
+static float *download(GLuint tex)
+{
+    float *rgba = malloc(N * 4 * sizeof(float));
+    glBindTexture(GL_TEXTURE_2D, tex);
+    glGetTexImage(GL_TEXTURE_2D, 0, GL_RGBA, GL_FLOAT, rgba);
+    return rgba;
+}
+
+static float rel_err(float a, float b)
+{
+    return fabsf(a - b) / fmaxf(1.0f, fmaxf(fabsf(a), fabsf(b)));
+}
+
+START_TEST(glsl_matches_c)
+{
+    eng_error err;
+    eng_pin_determinism(2);
+    eng_glctx *ctx = NULL;
+    ck_assert_msg(glctx_create(&ctx, &err) == ENG_OK, "%s", err.msg);
+    eng_random_maps rm;
+    ck_assert_int_eq(rmap_create(7, 1u << 16, &rm, &err), ENG_OK);
+
+    enum { T_BASE, T_MAT, T_N, T_WI, T_U, T_COS, T_OFF, T_COUNT };
+    float *in[T_COUNT];
+    for (int t = 0; t < T_COUNT; t++)
+        in[t] = calloc(N * 4, sizeof(float));
+    uint64_t st = 99;
+    for (size_t i = 0; i < N; i++) {
+        int c = (int)(i / W / ROWS_PER_CLASS);
+        scn_material m = class_material(c);
+        memcpy(in[T_BASE] + 4 * i, m.base_color, 3 * sizeof(float));
+        in[T_BASE][4 * i + 3] = (test_rng(&st) & 3) == 0 ? 1.33f : 1.0f; /* medium before */
+        float *mat = in[T_MAT] + 4 * i;
+        mat[0] = m.roughness;
+        mat[1] = m.metallic;
+        mat[2] = m.transmission;
+        mat[3] = m.ior;
+        unit_vector(&st, in[T_N] + 4 * i);
+        unit_vector(&st, in[T_WI] + 4 * i); /* either side: glass enters and leaves */
+        for (int d = 0; d < 4; d++) {
+            in[T_U][4 * i + d] = test_uniform(&st);
+            in[T_OFF][4 * i + d] = (float)(test_rng(&st) % 16) / 16.0f;
+        }
+        memcpy(in[T_COS] + 4 * i, rm.cosine + 4 * (i & (rm.size - 1)), 4 * sizeof(float));
+    }
+
+    glu_pass p;
+    ck_assert_msg(glu_pass_create(&p, "bsdf_probe.frag.glsl", 5, W, H, &err) == ENG_OK, "%s", err.msg);
+    static const char *const names[T_COUNT] = {"u_base", "u_mat", "u_n", "u_wi", "u_u", "u_cosdir", "u_offset"};
+    GLuint tex[T_COUNT];
+    glUseProgram(p.program);
+    for (int t = 0; t < T_COUNT; t++) {
+        glActiveTexture(GL_TEXTURE0 + (GLenum)t);
+        tex[t] = texture(in[t]);
+        glUniform1i(glGetUniformLocation(p.program, names[t]), t);
+    }
+    glu_pass_draw(&p);
+    glFinish();
+    float *o_wo = download(p.target.color[0]), *o_w = download(p.target.color[1]);
+    float *o_eta = download(p.target.color[2]), *o_su = download(p.target.color[3]);
+    float *o_scd = download(p.target.color[4]);
+
+    /* Lobe choice is exact arithmetic on the inputs except where Russian roulette or the
+     * Fresnel choice compares u with a computed value (llvmpipe's sin/cos/atan are not
+     * libm's): a handful of such coin flips may differ, never more than 1 in 2000. */
+    for (int c = 0; c < CLASSES; c++) {
+        size_t lobe_diff = 0, alive = 0, lobes[6] = {0};
+        float e_wo = 0.0f, e_w = 0.0f, e_rho = 0.0f, e_eta = 0.0f, e_cd = 0.0f;
+        int su_exact = 1;
+        for (size_t i = (size_t)c * W * ROWS_PER_CLASS; i < (size_t)(c + 1) * W * ROWS_PER_CLASS; i++) {
+            scn_material m = class_material(c);
+            float eta = in[T_BASE][4 * i + 3];
+            bsdf_sample rnd = {in[T_U] + 4 * i, in[T_COS] + 4 * i};
+            float wo[3], w[3], rho;
+            bsdf_lobe lobe = bsdf_scatter(&m, in[T_N] + 4 * i, in[T_WI] + 4 * i, &eta, &rnd, wo, w, &rho);
+            lobes[lobe]++;
+            if ((int)o_wo[4 * i + 3] != (int)lobe) {
+                lobe_diff++;
+                continue;
+            }
+            alive += lobe != BSDF_ABSORBED;
+            for (int k = 0; k < 3; k++) {
+                e_wo = fmaxf(e_wo, fabsf(wo[k] - o_wo[4 * i + k]));
+                e_w = fmaxf(e_w, rel_err(w[k], o_w[4 * i + k]));
+            }
+            e_rho = fmaxf(e_rho, fabsf(rho - o_w[4 * i + 3]) / fmaxf(fabsf(rho), 1e-6f));
+            e_eta = fmaxf(e_eta, fabsf(eta - o_eta[4 * i]));
+            float su[4], scd[4];
+            bsdf_stratify(in[T_U] + 4 * i, in[T_OFF] + 4 * i, su, scd);
+            su_exact &= memcmp(su, o_su + 4 * i, sizeof su) == 0;
+            for (int k = 0; k < 4; k++)
+                e_cd = fmaxf(e_cd, fabsf(scd[k] - o_scd[4 * i + k]));
+        }
+        printf("bsdf: %-12s lobes diffuse %zu glossy %zu mirror %zu reflect %zu refract %zu absorbed %zu; "
+               "%zu lobe choices differ; max |Δwo| %.2g, rel Δweight %.2g, rel Δρ %.2g, |Δη| %.2g, "
+               "stratify |Δcosdir| %.2g\n",
+               class_name[c], lobes[BSDF_DIFFUSE], lobes[BSDF_GLOSSY], lobes[BSDF_MIRROR], lobes[BSDF_REFLECT],
+               lobes[BSDF_REFRACT], lobes[BSDF_ABSORBED], lobe_diff, (double)e_wo, (double)e_w, (double)e_rho,
+               (double)e_eta, (double)e_cd);
+        ck_assert_msg(lobe_diff * 2000 <= (size_t)W * ROWS_PER_CLASS, "%s: %zu lobe choices differ", class_name[c],
+                      lobe_diff);
+        ck_assert_msg(alive > (size_t)W * ROWS_PER_CLASS / 4, "%s: too few surviving samples", class_name[c]);
+        ck_assert_msg(e_wo < 2e-4f, "%s: direction differs by %g", class_name[c], (double)e_wo);
+        ck_assert_msg(e_w < 2e-4f, "%s: weight differs by %g", class_name[c], (double)e_w);
+        ck_assert_msg(e_rho < 1e-3f, "%s: path density differs by %g", class_name[c], (double)e_rho);
+        ck_assert_msg(e_eta == 0.0f, "%s: medium differs by %g", class_name[c], (double)e_eta);
+        ck_assert_msg(su_exact, "%s: the Cranley-Patterson rotation is not bit-identical", class_name[c]);
+        ck_assert_msg(e_cd < 2e-5f, "%s: stratified cosine direction differs by %g", class_name[c], (double)e_cd);
+    }
+    /* Every class reached the lobes it has. */
+    free(o_wo);
+    free(o_w);
+    free(o_eta);
+    free(o_su);
+    free(o_scd);
+    glDeleteTextures(T_COUNT, tex);
+    glu_pass_destroy(&p);
+    for (int t = 0; t < T_COUNT; t++)
+        free(in[t]);
+    rmap_destroy(&rm);
+    glctx_destroy(ctx);
+}
+END_TEST
+
+/* Over one cycle of K frames each dimension's offset visits every stratum j/K once, so a
+ * rotated number visits each stratum [j/K, (j+1)/K) once; frame f and f + K read the same;
+ * the direction pair (d = 2, 3) is a rank-1 lattice, not the diagonal. */
+START_TEST(stratified_offsets)
+{
+    eng_settings s;
+    memset(&s, 0, sizeof s);
+    s.random = ENG_RANDOM_STRATIFIED;
+    const int cycles[] = {1, 2, 4, 7, 16, 64};
+    for (size_t ci = 0; ci < sizeof cycles / sizeof cycles[0]; ci++) {
+        int K = cycles[ci];
+        s.stratified_cycle = K;
+        const float u[4] = {0.123f, 0.999f, 0.5f, 0.01f};
+        int seen[4][64];
+        memset(seen, 0, sizeof seen);
+        int diagonal = 1;
+        for (int f = 0; f < K; f++) {
+            eng_rmap_frame a, b;
+            rmap_frame(&s, f, &a);
+            rmap_frame(&s, f + 3 * K, &b);
+            ck_assert_int_eq(a.stratified, 1);
+            ck_assert_uint_eq(a.salt, 0);
+            ck_assert_int_eq(memcmp(&a, &b, sizeof a), 0);
+            float su[4], cd[4];
+            bsdf_stratify(u, a.offset, su, cd);
+            for (int d = 0; d < 4; d++) {
+                ck_assert(su[d] >= 0.0f && su[d] < 1.0f);
+                int j = (int)(su[d] * (float)K);
+                ck_assert(j >= 0 && j < K);
+                seen[d][j]++;
+            }
+            diagonal &= a.offset[2] == a.offset[3];
+            ck_assert(fabsf(cd[0] * cd[0] + cd[1] * cd[1] + cd[2] * cd[2] - 1.0f) < 1e-5f);
+        }
+        for (int d = 0; d < 4; d++)
+            for (int j = 0; j < K; j++)
+                ck_assert_msg(seen[d][j] == 1, "K=%d dimension %d stratum %d visited %d times", K, d, j, seen[d][j]);
+        if (K >= 4)
+            ck_assert_msg(!diagonal, "K=%d: the direction pair moves along the diagonal", K);
+    }
+    /* Not stratified: no rotation; per-frame salts by frame. */
+    s.random = ENG_RANDOM_MAPS;
+    eng_rmap_frame r;
+    rmap_frame(&s, 5, &r);
+    ck_assert(r.stratified == 0 && r.salt == 0 && r.offset[0] == 0.0f);
+    s.random = ENG_RANDOM_PER_FRAME;
+    rmap_frame(&s, 5, &r);
+    ck_assert(r.stratified == 0 && r.salt == 6);
+}
+END_TEST
+
+static Suite *bsdf_suite(void)
+{
+    Suite *s = suite_create("bsdf");
+    TCase *tc = tcase_create("bsdf");
+    tcase_set_timeout(tc, 600);
+    tcase_add_test(tc, glsl_matches_c);
+    tcase_add_test(tc, stratified_offsets);
+    suite_add_tcase(s, tc);
+    return s;
+}
+
+int main(void)
+{
+    SRunner *sr = srunner_create(bsdf_suite());
+    srunner_run_all(sr, CK_NORMAL);
+    int failed = srunner_ntests_failed(sr);
+    srunner_free(sr);
+    return failed ? EXIT_FAILURE : EXIT_SUCCESS;
+}
