@@ -35,6 +35,17 @@
 /* Planes of tg_state.plane and of a tile's local copy. */
 enum { P_SX, P_SY, P_SZ, P_NX, P_NY, P_NZ, P_FR, P_FG, P_FB, P_METAL, PLANES };
 
+typedef struct tg_entry {
+    uint32_t photon;
+    uint8_t xa, xb, ya, yb; /* columns and rows of the tile (0..TILE−1) to visit */
+} tg_entry;
+
+/* A photon-tile pair found while counting, kept for the fill. */
+typedef struct tg_pair {
+    uint32_t tile;
+    tg_entry entry;
+} tg_pair;
+
 typedef struct tg_state {
     int width, height, irradiance;
     int tiles_x, tiles_y;
@@ -48,14 +59,15 @@ typedef struct tg_state {
     float *plane;
     float *tile_box;   /* per tile: min xyz, max xyz of its covered points (min > max: none) */
     float *tile_count; /* tiles_x × tiles_y, top row first */
-    /* Per photon, grown as needed: screen rectangle (x0, y0, x1, y1 inclusive, rows top
-     * first; x0 > x1 when off screen). */
-    size_t photon_capacity;
-    int32_t *rect;
-    /* Tile lists: offsets (tiles + 1) into entries; per chunk counts while building. */
+    /* Per photon chunk: the photon-tile pairs it found, in photon order. */
+    tg_pair *pairs[MAX_CHUNKS];
+    size_t pair_count[MAX_CHUNKS], pair_capacity[MAX_CHUNKS];
+    /* Tile lists: offsets (tiles + 1) into entries; per chunk counts while building. An
+     * entry carries its photon's rectangle clipped to the tile, so a tile reads its list
+     * sequentially. */
     uint32_t *offset;
     uint32_t *chunk_count; /* MAX_CHUNKS × tiles */
-    uint32_t *entries;
+    tg_entry *entries;
     size_t entry_capacity;
 } tg_state;
 
@@ -72,7 +84,8 @@ static void tg_destroy(void *state)
     free(t->plane);
     free(t->tile_box);
     free(t->tile_count);
-    free(t->rect);
+    for (int c = 0; c < MAX_CHUNKS; c++)
+        free(t->pairs[c]);
     free(t->offset);
     free(t->chunk_count);
     free(t->entries);
@@ -280,7 +293,7 @@ __attribute__((target("avx"))) static void photon_avx(const tg_state *t, const e
  * are copied to a local block first (it fits in L1); accumulates locally and writes only the
  * tile's own pixels at the end. */
 static void eval_tile(tg_state *t, const eng_photon_map *map, const float *radius, float compression, int x0, int y0,
-                      const uint32_t *list, uint32_t count)
+                      const tg_entry *list, uint32_t count)
 {
     const int w = t->width, h = t->height;
     const size_t npix = (size_t)w * (size_t)h;
@@ -299,12 +312,12 @@ static void eval_tile(tg_state *t, const eng_photon_map *map, const float *radiu
                                      : pad;
     }
     for (uint32_t e = 0; e < count; e++) {
-        const uint32_t i = list[e];
+        const uint32_t i = list[e].photon;
+        if (e + 8 < count) /* the photons are read in index order, but sparsely */
+            __builtin_prefetch(&map->photons[list[e + 8].photon]);
         const eng_photon *ph = &map->photons[i];
-        const int32_t *rc = t->rect + 4 * (size_t)i;
         const float r = radius[i], r2 = r * r * 1.001f;
-        const int ya = (rc[1] > y0 ? rc[1] : y0) - y0, yb = (rc[3] < y1 ? rc[3] : y1) - y0;
-        const int xa = (rc[0] > x0 ? rc[0] : x0) - x0, xb = (rc[2] < x1 ? rc[2] : x1) - x0;
+        const int ya = list[e].ya, yb = list[e].yb, xa = list[e].xa, xb = list[e].xb;
 #if defined(TG_AVX)
         if (t->avx) {
             photon_avx(t, ph, r, compression, loc, acc, x0, y0, xa, xb, ya, yb);
@@ -382,15 +395,11 @@ static eng_result tg_run(void *state, const ind_input *in, ind_output *out, eng_
      * r_z about n_p, whose box has half-extent r_xy·√(1 − n_k²) + r_z·|n_k| along axis k
      * (widened by 0.1 % and 1e-6 m, never beyond the sphere's). */
     const size_t n = map->count;
-    if (n > t->photon_capacity) {
-        free(t->rect);
-        t->rect = eng_xmalloc(n * 4 * sizeof *t->rect);
-        t->photon_capacity = n;
-    }
     const float *vp = in->fs->camera.view_proj;
 
     /* Tile lists in photon order: a stable counting sort over photon chunks (each chunk makes
-     * its photons' rectangles and counts, then fills, its own slots of every tile), photon-tile
+     * its photons' rectangles, counts and keeps its photon-tile pairs, then fills its own
+     * slots of every tile from them), photon-tile
      * pairs whose sphere misses the tile's box left out. The lists do not depend on the number
      * of chunks. */
     int chunks = threads < MAX_CHUNKS ? threads : MAX_CHUNKS;
@@ -400,24 +409,42 @@ static eng_result tg_run(void *state, const ind_input *in, ind_output *out, eng_
     for (int c = 0; c < chunks; c++) {
         uint32_t *cnt = t->chunk_count + (size_t)c * tiles;
         memset(cnt, 0, tiles * sizeof *cnt);
+        t->pair_count[c] = 0;
         for (size_t i = n * (size_t)c / (size_t)chunks; i < n * (size_t)(c + 1) / (size_t)chunks; i++) {
             const eng_photon *ph = &map->photons[i];
-            const float r = in->radius[i], rz = r * s->normal_compression;
+            const float r = in->radius[i], rz = r * s->normal_compression, rr = reach(r);
             float ext[3];
             for (int k = 0; k < 3; k++) {
                 float nk = ph->normal[k], q = 1.0f - nk * nk;
-                ext[k] = fminf((r * sqrtf(q > 0.0f ? q : 0.0f) + rz * fabsf(nk)) * 1.001f + 1e-6f, reach(r));
+                ext[k] = fminf((r * sqrtf(q > 0.0f ? q : 0.0f) + rz * fabsf(nk)) * 1.001f + 1e-6f, rr);
             }
-            int32_t *rc = t->rect + 4 * i;
-            if (!screen_rect(vp, ph->position, ext, w, h, rc)) {
-                rc[0] = 1;
-                rc[2] = 0;
-            }
-            const float rr = reach(in->radius[i]);
-            for (int j = rc[1] / TILE; rc[0] <= rc[2] && j <= rc[3] / TILE; j++)
-                for (int k = rc[0] / TILE; k <= rc[2] / TILE; k++)
-                    if (touches_tile(t, (size_t)j * tx + k, map->photons[i].position, rr))
-                        cnt[(size_t)j * tx + k]++;
+            int32_t rc[4];
+            if (!screen_rect(vp, ph->position, ext, w, h, rc))
+                continue;
+            for (int j = rc[1] / TILE; j <= rc[3] / TILE; j++)
+                for (int k = rc[0] / TILE; k <= rc[2] / TILE; k++) {
+                    const size_t tile = (size_t)j * tx + k;
+                    if (!touches_tile(t, tile, ph->position, rr))
+                        continue;
+                    cnt[tile]++;
+                    if (t->pair_count[c] == t->pair_capacity[c]) {
+                        t->pair_capacity[c] = t->pair_capacity[c] ? 2 * t->pair_capacity[c] : 4096;
+                        tg_pair *grown = realloc(t->pairs[c], t->pair_capacity[c] * sizeof *grown);
+                        if (!grown) {
+                            fprintf(stderr, "ispm: out of memory\n");
+                            abort();
+                        }
+                        t->pairs[c] = grown;
+                    }
+                    const int x0 = k * TILE, y0 = j * TILE;
+                    tg_pair *pr = &t->pairs[c][t->pair_count[c]++];
+                    pr->tile = (uint32_t)tile;
+                    pr->entry.photon = (uint32_t)i;
+                    pr->entry.xa = (uint8_t)((rc[0] > x0 ? rc[0] : x0) - x0);
+                    pr->entry.xb = (uint8_t)((rc[2] < x0 + TILE - 1 ? rc[2] : x0 + TILE - 1) - x0);
+                    pr->entry.ya = (uint8_t)((rc[1] > y0 ? rc[1] : y0) - y0);
+                    pr->entry.yb = (uint8_t)((rc[3] < y0 + TILE - 1 ? rc[3] : y0 + TILE - 1) - y0);
+                }
         }
     }
     t->offset[0] = 0;
@@ -440,14 +467,8 @@ static eng_result tg_run(void *state, const ind_input *in, ind_output *out, eng_
 #pragma omp parallel for num_threads(threads) schedule(static, 1)
     for (int c = 0; c < chunks; c++) {
         uint32_t *cur = t->chunk_count + (size_t)c * tiles;
-        for (size_t i = n * (size_t)c / (size_t)chunks; i < n * (size_t)(c + 1) / (size_t)chunks; i++) {
-            const int32_t *rc = t->rect + 4 * i;
-            const float rr = reach(in->radius[i]);
-            for (int j = rc[1] / TILE; rc[0] <= rc[2] && j <= rc[3] / TILE; j++)
-                for (int k = rc[0] / TILE; k <= rc[2] / TILE; k++)
-                    if (touches_tile(t, (size_t)j * tx + k, map->photons[i].position, rr))
-                        t->entries[cur[(size_t)j * tx + k]++] = (uint32_t)i;
-        }
+        for (size_t q = 0; q < t->pair_count[c]; q++)
+            t->entries[cur[t->pairs[c][q].tile]++] = t->pairs[c][q].entry;
     }
 
     /* Each tile on one thread, its photons in order. */
