@@ -756,6 +756,8 @@ static cJSON *manifest_json(const cap_capture *c)
     jadd(st, "atrous_iterations", cJSON_CreateNumber(s.atrous_iterations));
     jadd(st, "atrous_detail", jstr(eng_detail_name(s.atrous_detail)));
     jadd(st, "atrous_gamma", jfloat(s.atrous_gamma));
+    jadd(st, "kernel_scaling", jstr(eng_scaling_name(s.kernel_scaling)));
+    jadd(st, "progressive", cJSON_CreateBool(s.progressive));
     jadd(root, "settings", st);
 
     cJSON *det = jok(cJSON_CreateObject());

@@ -39,7 +39,9 @@ enum { B_OK = 0, B_RUNTIME = 1, B_INPUT = 2 };
 #define BENCH_MAX_KEYS 24
 #define BENCH_MAX_METHODS (PLOT_MAX_SERIES - 1) /* one series is left for the Pareto front */
 
-static const char *const CAPTURED[] = {"indirect.radiance", "composite.radiance"};
+static const char *const CAPTURED[] = {"indirect.radiance", "composite.radiance", "gbuffer.position",
+                                       "gbuffer.normal"};
+#define BENCH_MAX_SERIES 16 /* report_frames */
 
 /* ---------------------------------------------------------------- config */
 
@@ -54,6 +56,8 @@ typedef struct bench_config {
     const cJSON *methods;            /* array of {"name", "settings"} */
     int method_count;
     const char *chart_metric, *chart_buffer;
+    int reference_frame;             /* −1: bench frame i against reference frame i; else this one */
+    int report_frames[BENCH_MAX_SERIES], report_count; /* indices into frames[] with a per-frame row */
 } bench_config;
 
 static void usage(FILE *f)
@@ -138,7 +142,7 @@ static eng_result config_load(const char *path, bench_config *c, eng_error *err)
     if (!cJSON_IsObject(root))
         return eng_fail(err, ENG_ERR_INVALID, "%s: expected a JSON object", path);
     static const char *const keys[] = {"sequence", "reference", "frames", "repeats", "warmup", "threads",
-                                       "grid", "methods", "chart", NULL};
+                                       "grid", "methods", "chart", "reference_frame", "report_frames", NULL};
     if ((r = check_keys(path, root, "config", keys, err)))
         return r;
     v = cJSON_GetObjectItemCaseSensitive(root, "sequence");
@@ -176,6 +180,28 @@ static eng_result config_load(const char *path, bench_config *c, eng_error *err)
     } else {
         return eng_fail(err, ENG_ERR_INVALID, "%s: \"frames\": expected a frame count or an array of frame indices",
                         path);
+    }
+    c->reference_frame = -1;
+    if ((v = cJSON_GetObjectItemCaseSensitive(root, "reference_frame")) &&
+        !get_int_in(v, 0, 1 << 20, &c->reference_frame))
+        return eng_fail(err, ENG_ERR_INVALID, "%s: \"reference_frame\": expected a frame index >= 0", path);
+    if ((v = cJSON_GetObjectItemCaseSensitive(root, "report_frames"))) {
+        int m = cJSON_IsArray(v) ? cJSON_GetArraySize(v) : 0;
+        if (m < 1 || m > BENCH_MAX_SERIES)
+            return eng_fail(err, ENG_ERR_INVALID, "%s: \"report_frames\": expected a list of 1..%d frame indices",
+                            path, BENCH_MAX_SERIES);
+        int i = 0;
+        for (const cJSON *it = v->child; it; it = it->next, i++) {
+            int f = -1, k = 0;
+            if (get_int_in(it, 0, 1 << 20, &f))
+                for (k = 0; k < c->frame_count && c->frames[k] != f; k++)
+                    ;
+            if (f < 0 || k == c->frame_count)
+                return eng_fail(err, ENG_ERR_INVALID, "%s: \"report_frames\"[%d]: expected one of the \"frames\"",
+                                path, i);
+            c->report_frames[i] = k;
+        }
+        c->report_count = m;
     }
     c->repeats = 1;
     c->warmup = 1;
@@ -271,7 +297,8 @@ static eng_result config_load(const char *path, bench_config *c, eng_error *err)
 static const char *const SETTING_KEYS[] = {
     "indirect", "photon_count", "bounces", "kernel_radius", "normal_compression", "splat_subsample", "temporal",
     "temporal_alpha", "atrous_iterations", "atrous_detail", "atrous_gamma", "random", "random_map_size",
-    "random_seed", "stratified_cycle", "shadow_map_size", "pcf_radius", "shadow_bias", "exposure", "threads", NULL};
+    "random_seed", "stratified_cycle", "shadow_map_size", "pcf_radius", "shadow_bias", "exposure", "threads",
+    "kernel_scaling", "progressive", NULL};
 
 /* The value the engine uses for a settings key, as text; 0 for a key it does not know. */
 static int setting_text(const eng_settings *s, const char *key, char *out, size_t size)
@@ -290,6 +317,10 @@ static int setting_text(const eng_settings *s, const char *key, char *out, size_
         return snprintf(out, size, "%s", eng_detail_name(s->atrous_detail)), 1;
     if (!strcmp(key, "temporal"))
         return snprintf(out, size, "%s", s->temporal ? "true" : "false"), 1;
+    if (!strcmp(key, "kernel_scaling"))
+        return snprintf(out, size, "%s", eng_scaling_name(s->kernel_scaling)), 1;
+    if (!strcmp(key, "progressive"))
+        return snprintf(out, size, "%s", s->progressive ? "true" : "false"), 1;
     INT_KEY(photon_count)
     INT_KEY(bounces)
     INT_KEY(splat_subsample)
@@ -324,6 +355,12 @@ typedef struct bench_point {
     double *frame_samples;
     double pass_ms[ENG_MAX_PASSES], frame_ms;
     rep_metrics_err indirect, full;
+    rep_metrics_bias bias;      /* indirect.radiance: mean ratio, block p90, edges (issue 13) */
+    /* Per report frame (config report_frames): the metrics of that frame alone, and the
+     * frame time summed from the first bench frame through it (first repeat). */
+    rep_metrics_err series_err[BENCH_MAX_SERIES];
+    rep_metrics_bias series_bias[BENCH_MAX_SERIES];
+    double series_ms[BENCH_MAX_SERIES];
     float *first_indirect;      /* indirect.radiance of the first bench frame */
     int pareto;
 } bench_point;
@@ -387,8 +424,8 @@ static eng_result point_sequence(const bench_config *c, const cJSON *seq_root, c
 
 typedef struct grab {
     int w, h;
-    float *indirect, *full;
-    int have_indirect, have_full;
+    float *indirect, *full, *position, *normal;
+    int have_indirect, have_full, have_position, have_normal;
     eng_frame_stats stats;
     int have_stats;
 } grab;
@@ -398,7 +435,7 @@ static int grab_begin(void *user, int frame, double time)
     (void)frame;
     (void)time;
     grab *g = user;
-    g->have_indirect = g->have_full = g->have_stats = 0;
+    g->have_indirect = g->have_full = g->have_stats = g->have_position = g->have_normal = 0;
     return 0;
 }
 
@@ -406,9 +443,11 @@ static int grab_buffer(void *user, int frame, const eng_buffer *b)
 {
     (void)frame;
     grab *g = user;
-    float *dst = !strcmp(b->name, "indirect.radiance") ? g->indirect
+    float *dst = !strcmp(b->name, "indirect.radiance")    ? g->indirect
                  : !strcmp(b->name, "composite.radiance") ? g->full
-                                                           : NULL;
+                 : !strcmp(b->name, "gbuffer.position")   ? g->position
+                 : !strcmp(b->name, "gbuffer.normal")     ? g->normal
+                                                          : NULL;
     if (!dst)
         return 0;
     if (b->width != g->w || b->height != g->h || b->channel_count != 3)
@@ -416,8 +455,12 @@ static int grab_buffer(void *user, int frame, const eng_buffer *b)
     memcpy(dst, b->data, (size_t)g->w * (size_t)g->h * 3 * sizeof(float));
     if (dst == g->indirect)
         g->have_indirect = 1;
-    else
+    else if (dst == g->full)
         g->have_full = 1;
+    else if (dst == g->position)
+        g->have_position = 1;
+    else
+        g->have_normal = 1;
     return 0;
 }
 
@@ -456,6 +499,17 @@ static double median(double *v, int n)
 {
     qsort(v, (size_t)n, sizeof *v, cmp_double);
     return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+static void bias_add(rep_metrics_bias *acc, const rep_metrics_bias *m, double weight)
+{
+    acc->mean_ratio += m->mean_ratio * weight;
+    acc->block_p90 += m->block_p90 * weight;
+    acc->edge_ratio += m->edge_ratio * weight;
+    acc->edge_rel_rmse += m->edge_rel_rmse * weight;
+    acc->flat_ratio += m->flat_ratio * weight;
+    acc->flat_rel_rmse += m->flat_rel_rmse * weight;
+    acc->edge_fraction += m->edge_fraction * weight;
 }
 
 static void metrics_add(rep_metrics_err *acc, const rep_metrics_err *m, double weight)
@@ -512,7 +566,7 @@ static eng_result load_reference(const bench_config *c, int w, int h, reference_
     ref->indirect = rep_xmalloc(plane * (size_t)c->frame_count * sizeof(float));
     ref->full = rep_xmalloc(plane * (size_t)c->frame_count * sizeof(float));
     for (int i = 0; i < c->frame_count && r == ENG_OK; i++) {
-        int f = c->frames[i];
+        int f = c->reference_frame >= 0 ? c->reference_frame : c->frames[i];
         if (f >= run->frame_count) {
             r = eng_fail(err, ENG_ERR_INVALID, "%s: frame %d requested, the reference run has %d frames", c->path, f,
                          run->frame_count);
@@ -537,7 +591,24 @@ static eng_result run_point(const bench_config *c, const scn_scene *scene, bench
 {
     const int w = p->seq->width, h = p->seq->height;
     const size_t plane = (size_t)w * (size_t)h * 3;
-    grab g = {w, h, rep_xmalloc(plane * sizeof(float)), rep_xmalloc(plane * sizeof(float)), 0, 0, {0}, 0};
+    grab g = {w,
+              h,
+              rep_xmalloc(plane * sizeof(float)),
+              rep_xmalloc(plane * sizeof(float)),
+              rep_xmalloc(plane * sizeof(float)),
+              rep_xmalloc(plane * sizeof(float)),
+              0,
+              0,
+              0,
+              0,
+              {0},
+              0};
+    /* The edge mask of rep_metric_bias, recomputed only when the G-buffer changes. */
+    signed char *mask = rep_xmalloc((size_t)w * (size_t)h);
+    float *mask_position = rep_xcalloc(plane, sizeof(float));
+    int have_mask = 0;
+    double elapsed = 0.0;
+
     eng_engine *eng = NULL;
     eng_desc d = {scene, p->seq};
     eng_result r = eng_create(&d, &eng, err);
@@ -552,6 +623,7 @@ static eng_result run_point(const bench_config *c, const scn_scene *scene, bench
     p->frame_samples = rep_xcalloc((size_t)c->frame_count * (size_t)c->repeats, sizeof(double));
     memset(&p->indirect, 0, sizeof p->indirect);
     memset(&p->full, 0, sizeof p->full);
+    memset(&p->bias, 0, sizeof p->bias);
     for (int rep = 0; rep < c->repeats && r == ENG_OK; rep++)
         for (int i = 0; i < c->frame_count && r == ENG_OK; i++) {
             r = eng_render_frame(eng, c->frames[i], err);
@@ -575,6 +647,7 @@ static eng_result run_point(const bench_config *c, const scn_scene *scene, bench
             p->frame_samples[p->sample_count++] = total;
             if (rep > 0)
                 continue;
+            elapsed += total;
             if (!g.have_indirect) /* indirect "none": no indirect light at all */
                 memset(g.indirect, 0, plane * sizeof(float));
             char what[160];
@@ -589,6 +662,23 @@ static eng_result run_point(const bench_config *c, const scn_scene *scene, bench
                 break;
             metrics_add(&p->indirect, &mi, 1.0 / c->frame_count);
             metrics_add(&p->full, &mf, 1.0 / c->frame_count);
+            /* Bias near edges: within one kernel radius of a geometric edge (issue 13). */
+            if (g.have_position && g.have_normal &&
+                (!have_mask || memcmp(mask_position, g.position, plane * sizeof(float)))) {
+                rep_edge_mask(g.position, g.normal, w, h, g.stats.camera_view_proj, g.stats.camera_eye,
+                              p->seq->settings.kernel_radius, mask);
+                memcpy(mask_position, g.position, plane * sizeof(float));
+                have_mask = 1;
+            }
+            rep_metrics_bias mb;
+            rep_metric_bias(g.indirect, ref->indirect + plane * (size_t)i, w, h, have_mask ? mask : NULL, &mb);
+            bias_add(&p->bias, &mb, 1.0 / c->frame_count);
+            for (int k = 0; k < c->report_count; k++)
+                if (c->report_frames[k] == i) {
+                    p->series_err[k] = mi;
+                    p->series_bias[k] = mb;
+                    p->series_ms[k] = elapsed;
+                }
             if (i == 0) {
                 p->first_indirect = rep_xmalloc(plane * sizeof(float));
                 memcpy(p->first_indirect, g.indirect, plane * sizeof(float));
@@ -597,6 +687,10 @@ static eng_result run_point(const bench_config *c, const scn_scene *scene, bench
     eng_destroy(eng);
     free(g.indirect);
     free(g.full);
+    free(g.position);
+    free(g.normal);
+    free(mask);
+    free(mask_position);
     if (r != ENG_OK)
         return r;
     double *tmp = rep_xmalloc((size_t)p->sample_count * sizeof(double));
@@ -661,6 +755,25 @@ static void metric_csv(rep_sb *sb, const rep_metrics_err *m)
     rep_sb_printf(sb, ",%.9g,%.9g,%.9g,%.9g,%.9g", m->rmse, m->rel_mse, m->mae, m->max_abs, m->block_rmse);
 }
 
+static void bias_csv(rep_sb *sb, const rep_metrics_bias *m)
+{
+    rep_sb_printf(sb, ",%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g", m->mean_ratio, m->block_p90, m->edge_ratio,
+                  m->edge_rel_rmse, m->flat_ratio, m->flat_rel_rmse, m->edge_fraction);
+}
+
+static cJSON *bias_json(const rep_metrics_bias *m)
+{
+    cJSON *o = cJSON_CreateObject();
+    cJSON_AddNumberToObject(o, "mean_ratio", m->mean_ratio);
+    cJSON_AddNumberToObject(o, "block_p90", m->block_p90);
+    cJSON_AddNumberToObject(o, "edge_ratio", m->edge_ratio);
+    cJSON_AddNumberToObject(o, "edge_rel_rmse", m->edge_rel_rmse);
+    cJSON_AddNumberToObject(o, "flat_ratio", m->flat_ratio);
+    cJSON_AddNumberToObject(o, "flat_rel_rmse", m->flat_rel_rmse);
+    cJSON_AddNumberToObject(o, "edge_fraction", m->edge_fraction);
+    return o;
+}
+
 static char *make_csv(const bench_point *pts, int n, const columns *cols, const pass_names *passes)
 {
     rep_sb sb = {0};
@@ -674,6 +787,8 @@ static char *make_csv(const bench_point *pts, int n, const columns *cols, const 
     for (int b = 0; b < 2; b++)
         rep_sb_printf(&sb, ",%s_rmse,%s_rel_mse,%s_mae,%s_max_abs,%s_block_rmse", which[b], which[b], which[b],
                       which[b], which[b]);
+    rep_sb_printf(&sb, ",indirect_mean_ratio,indirect_block_p90,indirect_edge_ratio,indirect_edge_rel_rmse,"
+                       "indirect_flat_ratio,indirect_flat_rel_rmse,indirect_edge_fraction");
     rep_sb_printf(&sb, ",pareto\n");
     for (int i = 0; i < n; i++) {
         const bench_point *p = &pts[i];
@@ -688,6 +803,7 @@ static char *make_csv(const bench_point *pts, int n, const columns *cols, const 
         rep_sb_printf(&sb, ",%.4f,%d", p->frame_ms, p->sample_count);
         metric_csv(&sb, &p->indirect);
         metric_csv(&sb, &p->full);
+        bias_csv(&sb, &p->bias);
         rep_sb_printf(&sb, ",%d\n", p->pareto);
     }
     return sb.s;
@@ -794,6 +910,7 @@ static char *make_json(const bench_config *c, const char *command_line, const be
     cJSON_AddNumberToObject(root, "repeats", c->repeats);
     cJSON_AddNumberToObject(root, "warmup", c->warmup);
     cJSON_AddNumberToObject(root, "metric_epsilon", REP_METRIC_EPSILON);
+    cJSON_AddNumberToObject(root, "reference_frame", c->reference_frame);
     cJSON *chart = cJSON_AddObjectToObject(root, "chart");
     cJSON_AddStringToObject(chart, "metric", c->chart_metric);
     cJSON_AddStringToObject(chart, "buffer", c->chart_buffer);
@@ -820,6 +937,19 @@ static char *make_json(const bench_config *c, const char *command_line, const be
         cJSON_AddNumberToObject(o, "samples", p->sample_count);
         cJSON_AddItemToObject(o, "indirect", metric_json(&p->indirect));
         cJSON_AddItemToObject(o, "full", metric_json(&p->full));
+        cJSON_AddItemToObject(o, "indirect_bias", bias_json(&p->bias));
+        if (c->report_count) {
+            cJSON *ser = cJSON_AddArrayToObject(o, "series");
+            for (int k = 0; k < c->report_count; k++) {
+                cJSON *e = cJSON_CreateObject();
+                cJSON_AddNumberToObject(e, "frame", c->frames[c->report_frames[k]]);
+                cJSON_AddNumberToObject(e, "frames_rendered", c->report_frames[k] + 1);
+                cJSON_AddNumberToObject(e, "elapsed_ms", p->series_ms[k]);
+                cJSON_AddItemToObject(e, "indirect", metric_json(&p->series_err[k]));
+                cJSON_AddItemToObject(e, "indirect_bias", bias_json(&p->series_bias[k]));
+                cJSON_AddItemToArray(ser, e);
+            }
+        }
         cJSON_AddBoolToObject(o, "pareto", p->pareto);
         cJSON_AddItemToArray(arr, o);
     }
@@ -949,6 +1079,51 @@ static eng_result write_comparison(const char *outdir, const bench_point *pts, i
     return r;
 }
 
+/* With report_frames: the indirect error of every point against the frames rendered and
+ * against the time spent (first repeat), one series per point (at most PLOT_MAX_SERIES). */
+static eng_result write_convergence(const bench_config *c, const char *outdir, const bench_point *pts, int n,
+                                    eng_error *err)
+{
+    if (!c->report_count)
+        return ENG_OK;
+    static const char *const what[3] = {"block_p90", "rmse", "block_p90"};
+    static const char *const file[3] = {"convergence_frames", "convergence_rmse_frames", "convergence_time"};
+    int np = n < PLOT_MAX_SERIES ? n : PLOT_MAX_SERIES;
+    double *xs = rep_xcalloc((size_t)np * BENCH_MAX_SERIES, sizeof(double));
+    double *ys = rep_xcalloc((size_t)np * BENCH_MAX_SERIES, sizeof(double));
+    eng_result r = ENG_OK;
+    for (int k = 0; k < 3 && r == ENG_OK; k++) {
+        plot_chart ch;
+        memset(&ch, 0, sizeof ch);
+        char title[256], ylabel[128];
+        snprintf(title, sizeof title, "Convergence: %.200s", n > 0 ? pts[0].seq->name : "");
+        snprintf(ylabel, sizeof ylabel, "indirect %s vs reference", what[k]);
+        ch.title = title;
+        ch.x_label = k == 2 ? "time spent (ms, sum of frame times)" : "frames rendered";
+        ch.y_label = ylabel;
+        ch.log_x = ch.log_y = 1;
+        for (int i = 0; i < np; i++) {
+            plot_series *se = &ch.series[ch.series_count++];
+            double *x = xs + (size_t)i * BENCH_MAX_SERIES, *y = ys + (size_t)i * BENCH_MAX_SERIES;
+            for (int j = 0; j < c->report_count; j++) {
+                x[j] = k == 2 ? pts[i].series_ms[j] : c->report_frames[j] + 1;
+                y[j] = k == 1 ? pts[i].series_err[j].rmse : pts[i].series_bias[j].block_p90;
+            }
+            se->label = pts[i].label;
+            se->x = x;
+            se->y = y;
+            se->count = c->report_count;
+            se->style = PLOT_LINES_POINTS;
+        }
+        char *path = rep_xprintf("%s/%s.png", outdir, file[k]);
+        r = plot_xy(path, &ch, err);
+        free(path);
+    }
+    free(xs);
+    free(ys);
+    return r;
+}
+
 static eng_result write_charts(const bench_config *c, const char *outdir, const bench_point *pts, int n,
                                const pass_names *passes, eng_error *err)
 {
@@ -1048,6 +1223,20 @@ static eng_result write_charts(const bench_config *c, const char *outdir, const 
 }
 
 /* ---------------------------------------------------------------- the command */
+
+/* The bias measures of a point on stderr (beside the per-point line). */
+static void print_bias(const bench_config *c, const bench_point *p)
+{
+    const rep_metrics_bias *b = &p->bias;
+    fprintf(stderr, "        indirect mean ratio %.4f  block p90 %.4f  edges (%.0f%% of pixels): ratio %.4f rel rmse %.4f"
+                    "  elsewhere: ratio %.4f rel rmse %.4f\n",
+            b->mean_ratio, b->block_p90, 100.0 * b->edge_fraction, b->edge_ratio, b->edge_rel_rmse, b->flat_ratio,
+            b->flat_rel_rmse);
+    for (int k = 0; k < c->report_count; k++)
+        fprintf(stderr, "        frame %3d (%3d rendered, %9.1f ms): rmse %.4g  mean ratio %.4f  block p90 %.4f  edge ratio %.4f\n",
+                c->frames[c->report_frames[k]], c->report_frames[k] + 1, p->series_ms[k], p->series_err[k].rmse,
+                p->series_bias[k].mean_ratio, p->series_bias[k].block_p90, p->series_bias[k].edge_ratio);
+}
 
 int cmd_bench(int argc, char **argv, const char *command_line)
 {
@@ -1153,6 +1342,8 @@ int cmd_bench(int argc, char **argv, const char *command_line)
         if (r == ENG_OK && !quiet)
             fprintf(stderr, "  [%d/%d] %-32s frame %8.2f ms  indirect rmse %.4g  full rmse %.4g\n", i + 1, n,
                     pts[i].label, pts[i].frame_ms, pts[i].indirect.rmse, pts[i].full.rmse);
+        if (r == ENG_OK && !quiet)
+            print_bias(&c, &pts[i]);
     }
     if (r == ENG_OK) {
         mark_pareto(&c, pts, n);
@@ -1171,6 +1362,8 @@ int cmd_bench(int argc, char **argv, const char *command_line)
         r = write_comparison(outdir, pts, n, ref.indirect, &pair, &err);
         if (r == ENG_OK)
             r = write_charts(&c, outdir, pts, n, &passes, &err);
+        if (r == ENG_OK)
+            r = write_convergence(&c, outdir, pts, n, &err);
         if (r == ENG_OK) {
             char *csv = make_csv(pts, n, &cols, &passes);
             r = rep_write_atomic(old_csv, csv, strlen(csv), &err);

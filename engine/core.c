@@ -176,6 +176,19 @@ void eng_settings_defaults(eng_settings *s)
     if (s->temporal_alpha == 0.0f) s->temporal_alpha = 0.95f;
     if (s->atrous_detail == ENG_DETAIL_DEFAULT) s->atrous_detail = ENG_DETAIL_CLIPPED;
     if (s->atrous_gamma == 0.0f) s->atrous_gamma = 0.05f;
+    if (s->kernel_scaling == ENG_SCALING_DEFAULT) s->kernel_scaling = ENG_SCALING_PATH_DENSITY;
+}
+
+const char *eng_scaling_name(eng_kernel_scaling m)
+{
+    switch (m) {
+    case ENG_SCALING_RAY_LENGTH: return "ray-length";
+    case ENG_SCALING_TILE_DENSITY: return "tile-density";
+    case ENG_SCALING_BANDWIDTH: return "bandwidth";
+    case ENG_SCALING_PATH_DENSITY:
+    case ENG_SCALING_DEFAULT: return "path-density";
+    }
+    return "unknown";
 }
 
 const char *eng_detail_name(eng_atrous_detail m)

@@ -210,7 +210,17 @@ typedef enum eng_random_mode {
                                * stratified_cycle frames (002 §4.2); repeats every cycle */
 } eng_random_mode;
 
+/* How each photon's kernel radius r_xy is chosen (ind_photon_radii, engine/ind_common.c). */
+typedef enum eng_kernel_scaling {
+    ENG_SCALING_DEFAULT = 0,  /* = path-density */
+    ENG_SCALING_PATH_DENSITY, /* kernel_radius · clamp((1000 ρp)^(−1/4), 1/4, 2) (splat_radius) */
+    ENG_SCALING_RAY_LENGTH,   /* 002 Eq. 6.1: the incoming ray's length over a scene-sized l_max */
+    ENG_SCALING_TILE_DENSITY, /* 002 Eq. 6.2: the photon density of the screen tile it lands in */
+    ENG_SCALING_BANDWIDTH     /* 004 §6: variable bandwidth C = C0/√p, p = cos θ / d² */
+} eng_kernel_scaling;
+
 const char *eng_indirect_name(eng_indirect m);
+const char *eng_scaling_name(eng_kernel_scaling m);
 const char *eng_random_name(eng_random_mode m);
 const char *eng_detail_name(eng_atrous_detail m);
 
@@ -243,6 +253,10 @@ typedef struct eng_settings {
     int atrous_iterations;    /* À-Trous wavelet iterations (002 §7.3, Eq. 7.5), 0 = off; default 0 */
     eng_atrous_detail atrous_detail; /* default clipped */
     float atrous_gamma;       /* γ of Eq. 7.7; default 0.05 (002 §8.2's table) */
+    /* Convergence for still views (issue 13). */
+    eng_kernel_scaling kernel_scaling; /* default path-density */
+    int progressive;          /* 1: running mean of the indirect estimate while nothing moves, the
+                               * kernel shrinking as in progressive photon mapping; default 0 */
 } eng_settings;
 
 void eng_settings_defaults(eng_settings *s);
@@ -262,6 +276,8 @@ typedef struct seq_sequence {
     char name[SCN_NAME_MAX];
     int frame_count;        /* >= 1 */
     double fps;             /* > 0; frame i is at t = i / fps */
+    int still;              /* "still": true: every frame at t = 0 (a still view, e.g. for
+                             * progressive accumulation); default 0 */
     int width, height;      /* pixels, 1..16384 */
     /* Camera: either a glTF camera node (camera_node[0] != 0) or explicit look-at keys,
      * linearly interpolated and clamped (camera_key_count >= 1). */
@@ -286,6 +302,8 @@ eng_result seq_parse(const char *path, const char *json, size_t len, seq_sequenc
 
 /* Does the sequence ask for this buffer to be captured? */
 int seq_wants(const seq_sequence *seq, const char *buffer_name);
+/* The scene time of frame i: i / fps, or 0 for a still sequence. */
+double seq_frame_time(const seq_sequence *seq, int frame);
 
 /* ---------------------------------------------------------------- buffers & listeners */
 

@@ -326,6 +326,7 @@ typedef struct eng_photon {
     float normal[3];    /* n_p: shading normal of the surface hit, facing the incoming photon */
     float path_density; /* ρp */
     uint32_t bounce;    /* 2 = second surface of the path (the first stored), 3, ... */
+    float ray_length;   /* length of the ray segment that brought it here (m): 002 Eq. 6.1, 004 §6 */
 } eng_photon;
 
 typedef struct eng_photon_map {

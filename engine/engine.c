@@ -10,6 +10,7 @@
 #define _POSIX_C_SOURCE 200809L /* clock_gettime */
 #include "eng_internal.h"
 #include "indirect.h"
+#include "progressive.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -53,7 +54,16 @@ struct eng_engine {
     pass_temporal *temporal;
     pass_atrous *atrous;
     pass_resolve *resolve;
-    int next_frame; /* the frame the temporal history is ready for (frames render in order) */
+    /* Progressive accumulation (progressive.h): state, the G-buffer and the method's output
+     * read back, and the target the mean is uploaded into. */
+    prog_state *prog;
+    ind_gbuffer prog_gb;
+    float *prog_in[2], *prog_mean[2], *prog_count, *prog_radius;
+    size_t prog_pixels;
+    ind_cpu_target prog_target;
+    int prog_target_ok;
+    float radius_scale; /* this frame's progressive radius scale (1 without) */
+    int next_frame; /* the frame the temporal/progressive history is ready for (frames render in order) */
     int silent;     /* re-rendering earlier frames for the temporal history: announce nothing */
     int listener_count;
     eng_listener listeners[ENG_MAX_LISTENERS];
@@ -191,7 +201,13 @@ eng_result eng_create(const eng_desc *desc, eng_engine **out, eng_error *err)
             r = pass_atrous_create(e->width, e->height, st->atrous_iterations, &e->atrous, err);
         if (r == ENG_OK && e->filtered)
             r = pass_resolve_create(e->width, e->height, &e->resolve, err);
+        if (r == ENG_OK && st->progressive) {
+            e->prog = prog_create();
+            r = ind_cpu_target_create(&e->prog_target, w, h, e->filtered, err);
+            e->prog_target_ok = r == ENG_OK;
+        }
     }
+    e->radius_scale = 1.0f;
     if (r != ENG_OK) {
         eng_destroy(e);
         return r;
@@ -231,6 +247,8 @@ void eng_destroy(eng_engine *e)
         pass_temporal_destroy(e->temporal);
         pass_atrous_destroy(e->atrous);
         pass_resolve_destroy(e->resolve);
+        if (e->prog_target_ok)
+            ind_cpu_target_destroy(&e->prog_target);
         pass_composite_destroy(e->composite);
         pass_direct_destroy(e->direct);
         pass_shadow_destroy(e->shadow);
@@ -249,6 +267,14 @@ void eng_destroy(eng_engine *e)
     photon_map_free(&e->pmap);
     free(e->bounce);
     free(e->radius);
+    prog_destroy(e->prog);
+    ind_gbuffer_free(&e->prog_gb);
+    for (int a = 0; a < 2; a++) {
+        free(e->prog_in[a]);
+        free(e->prog_mean[a]);
+    }
+    free(e->prog_count);
+    free(e->prog_radius);
     free(e->gpu);
     free(e->world);
     free(e->prev_world);
@@ -313,8 +339,8 @@ static void camera_at(const eng_engine *e, const float *world, double t, eng_vie
 static void pose_frame(eng_engine *e, int frame)
 {
     const scn_scene *s = e->scene;
-    double t = frame / e->seq->fps;
-    double tp = frame > 0 ? (frame - 1) / e->seq->fps : t;
+    double t = seq_frame_time(e->seq, frame);
+    double tp = frame > 0 ? seq_frame_time(e->seq, frame - 1) : t;
     scn_evaluate(s, t, e->world);
     scn_evaluate(s, tp, e->prev_world);
     eng_frame_scene *fs = &e->fs;
@@ -631,6 +657,48 @@ static eng_result run_method(eng_engine *e, int frame, const glu_target *gb, con
     return ENG_OK;
 }
 
+/* Progressive accumulation (progressive.h) of the method's output *sp against the G-buffer gb
+ * it ran on: reads both back, adds the frame to the running mean, uploads the mean into a
+ * target of the same layout, announces progressive.{radiance,count,radius} and replaces *sp
+ * with it. The same for every method (it sees only the method's output target). */
+static eng_result progressive_run(eng_engine *e, int frame, const glu_target *gb, const glu_target **sp,
+                                  eng_error *err)
+{
+    static const int p4[] = {0, 1, 2, 3};
+    double t0 = now_ms();
+    const int w = gb->width, h = gb->height, na = e->filtered ? 2 : 1;
+    const size_t n = (size_t)w * (size_t)h;
+    if (e->prog_pixels != n) {
+        for (int a = 0; a < 2; a++) {
+            free(e->prog_in[a]);
+            free(e->prog_mean[a]);
+            e->prog_in[a] = eng_xmalloc(n * 4 * sizeof(float));
+            e->prog_mean[a] = eng_xmalloc(n * 4 * sizeof(float));
+        }
+        free(e->prog_count);
+        free(e->prog_radius);
+        e->prog_count = eng_xmalloc(n * sizeof(float));
+        e->prog_radius = eng_xmalloc(n * sizeof(float));
+        e->prog_pixels = n;
+    }
+    ind_gbuffer_read(gb, &e->prog_gb);
+    for (int a = 0; a < na; a++)
+        glu_read(*sp, a, 0, 4, p4, e->prog_in[a]);
+    prog_accumulate(e->prog, &e->prog_gb, na, (const float *const *)e->prog_in, e->prog_mean, e->prog_count,
+                    e->prog_radius);
+    for (int a = 0; a < na; a++)
+        ind_cpu_target_upload(&e->prog_target, a, e->prog_mean[a]);
+    glFinish();
+    add_time(e, "progressive", now_ms() - t0);
+    *sp = &e->prog_target.target;
+    static const int p012[] = {0, 1, 2};
+    if (read_and_announce(e, frame, "progressive.radiance", *sp, 0, 0, 3, p012, CH_RGB) ||
+        announce(e, frame, "progressive.count", w, h, 1, CH_Y, e->prog_count) ||
+        announce(e, frame, "progressive.radius", w, h, 1, CH_Y, e->prog_radius))
+        return eng_fail(err, ENG_ERR_ABORTED, "frame %d: capture failed in the progressive pass", frame);
+    return ENG_OK;
+}
+
 /* The indirect light through the reconstruction filters (DESIGN.md steps 6–7): G-buffers at
  * the subsampled levels, photon volumes as irradiance at the coarsest level, upsampling level
  * by level, temporal accumulation, À-Trous, and the BSDF. Announces every level; *tex gets
@@ -669,6 +737,8 @@ static eng_result filtered_indirect(eng_engine *e, int frame, const glu_target *
     aborted = aborted || read_and_announce(e, frame, name, sp, 0, 0, 1, p3, CH_Y);
     snprintf(name, sizeof name, "%s.glossy", pre);
     aborted = aborted || read_and_announce(e, frame, name, sp, 1, 0, 3, p012, CH_RGB);
+    if (!aborted && e->prog && (r = progressive_run(e, frame, lvl[e->levels], &sp, err)) != ENG_OK)
+        return r;
     GLuint irradiance = sp->color[0], glossy = sp->color[1];
     for (int l = e->levels - 1; l >= 0 && !aborted; l--) {
         t0 = now_ms();
@@ -721,11 +791,14 @@ eng_result eng_render_frame(eng_engine *e, int frame, eng_error *err)
 {
     if (frame < 0 || frame >= e->seq->frame_count)
         return eng_fail(err, ENG_ERR_INVALID, "%s: frame %d outside 0..%d", e->seq->path, frame, e->seq->frame_count - 1);
-    if (e->temporal && !e->silent && frame != e->next_frame) {
-        /* Frame i's temporal result depends on every earlier frame: asked for frames out of
-         * order (e.g. record --resume), rebuild the history from frame 0 without announcing,
-         * so the result is the same as in an uninterrupted run. */
-        pass_temporal_reset(e->temporal);
+    if ((e->temporal || e->prog) && !e->silent && frame != e->next_frame) {
+        /* Frame i's temporal (or progressive) result depends on every earlier frame: asked for
+         * frames out of order (e.g. record --resume), rebuild the history from frame 0 without
+         * announcing, so the result is the same as in an uninterrupted run. */
+        if (e->temporal)
+            pass_temporal_reset(e->temporal);
+        if (e->prog)
+            prog_reset(e->prog);
         e->silent = 1;
         for (int k = 0; k < frame; k++) {
             eng_result r = eng_render_frame(e, k, err);
@@ -736,7 +809,7 @@ eng_result eng_render_frame(eng_engine *e, int frame, eng_error *err)
         }
         e->silent = 0;
     }
-    double t = frame / e->seq->fps;
+    double t = seq_frame_time(e->seq, frame);
     memset(&e->stats, 0, sizeof e->stats);
     e->stats.frame = frame;
     e->stats.time = t;
@@ -794,7 +867,9 @@ eng_result eng_render_frame(eng_engine *e, int frame, eng_error *err)
             e->radius = eng_xmalloc(e->pmap.count * sizeof *e->radius);
             e->radius_capacity = e->pmap.count;
         }
-        ind_photon_radii(&e->pmap, &e->settings, e->radius);
+        /* Progressive photon mapping's radius scale (progressive.h): one per frame. */
+        e->radius_scale = e->prog ? prog_begin(e->prog, &e->fs) : 1.0f;
+        ind_photon_radii(&e->pmap, &e->settings, &e->fs, e->width, e->height, e->radius_scale, e->radius);
         e->stats.photons_emitted = tstats.emitted;
         memcpy(e->stats.photons_stored, tstats.stored, sizeof e->stats.photons_stored);
         e->stats.photons_truncated = tstats.truncated;
@@ -867,8 +942,14 @@ eng_result eng_render_frame(eng_engine *e, int frame, eng_error *err)
         snprintf(name, sizeof name, "%s.indirect", e->method->prefix);
         int aborted = read_and_announce(e, frame, name, sp, 0, 0, 3, p012, CH_RGB);
         snprintf(name, sizeof name, "%s.count", e->method->prefix);
-        aborted = aborted || read_and_announce(e, frame, name, sp, 0, 0, 1, p3, CH_Y) ||
-                  read_and_announce(e, frame, "indirect.radiance", sp, 0, 0, 3, p012, CH_RGB);
+        aborted = aborted || read_and_announce(e, frame, name, sp, 0, 0, 1, p3, CH_Y);
+        if (!aborted && e->prog) {
+            r = progressive_run(e, frame, gb, &sp, err);
+            if (r != ENG_OK)
+                return r;
+            indirect_tex = sp->color[0];
+        }
+        aborted = aborted || read_and_announce(e, frame, "indirect.radiance", sp, 0, 0, 3, p012, CH_RGB);
         if (aborted)
             return eng_fail(err, ENG_ERR_ABORTED, "frame %d: capture failed in the %s pass", frame, e->method->pass);
     }

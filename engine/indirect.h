@@ -61,10 +61,15 @@ extern const ind_method ind_quads_method;
 extern const ind_method ind_tilegather_method;
 extern const ind_method ind_kdgather_method;
 
-/* Fills radius[i] (map->count floats) with photon i's kernel radius r_xy: the path-density
- * scaling of ISPM §4.3 (splat_radius). Every method reads this array, so a kernel scaling is
- * defined in one place for all of them. */
-void ind_photon_radii(const eng_photon_map *map, const eng_settings *s, float *radius);
+/* Fills radius[i] (map->count floats) with photon i's kernel radius r_xy under the
+ * `kernel_scaling` setting: path-density (ISPM §4.3, splat_radius), ray-length (002 Eq. 6.1),
+ * tile-density (002 Eq. 6.2; needs the camera of fs and the width×height image) or bandwidth
+ * (004 §6), each in [kernel_radius/4, 2·kernel_radius], then times `scale` (progressive
+ * photon mapping's shrinking radius; 1 otherwise). Every method reads this array, so a kernel
+ * scaling is defined in one place for all of them. Single-threaded: the same for any thread
+ * count. */
+void ind_photon_radii(const eng_photon_map *map, const eng_settings *s, const eng_frame_scene *fs, int width,
+                      int height, float scale, float *radius);
 
 /* The method of a setting, or NULL for ENG_INDIRECT_NONE. */
 const ind_method *ind_method_of(eng_indirect m);

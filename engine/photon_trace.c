@@ -127,6 +127,7 @@ static void trace_path(const eng_rt *rt, const scn_scene *scene, const eng_rando
             }
             ph->path_density = rho;
             ph->bounce = 2 + k;
+            ph->ray_length = h.t;
             if (s->max_bounces > 0 && rec->count == (uint32_t)s->max_bounces)
                 break;
         }

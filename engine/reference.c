@@ -1053,7 +1053,7 @@ eng_result ref_render_frame(ref_renderer *r, int frame, eng_error *err)
     const seq_sequence *seq = d->sequence;
     if (frame < 0 || frame >= seq->frame_count)
         return eng_fail(err, ENG_ERR_INVALID, "%s: frame %d outside 0..%d", seq->path, frame, seq->frame_count - 1);
-    double t = frame / seq->fps;
+    double t = seq_frame_time(seq, frame);
     for (int i = 0; i < r->listener_count; i++)
         if (r->listeners[i].frame_begin && r->listeners[i].frame_begin(r->listeners[i].user, frame, t) != 0)
             return eng_fail(err, ENG_ERR_ABORTED, "frame %d: a listener refused the frame", frame);

@@ -7,6 +7,8 @@
  *   scene       required; path of the glTF, relative to the sequence file's folder or absolute
  *   frames      required; integer 1..100000; frame i is at t = i / fps
  *   fps         required; finite number > 0
+ *   still       optional; true: every frame is rendered at t = 0 (a still view whose frames
+ *               differ only in their random numbers); default false
  *   resolution  required; [width, height], integers 1..16384
  *   camera      required; {"node": "<glTF node with a camera>"} or
  *               {"keys": [{"time", "position", "target"}, ...], "up", "yfov_deg", "znear", "zfar"}
@@ -151,7 +153,7 @@ static eng_result parse_settings(parser *P, const cJSON *obj, eng_settings *s)
                                        "normal_compression", "random", "random_map_size", "random_seed",
                                        "stratified_cycle",
                                        "splat_subsample", "temporal", "temporal_alpha", "atrous_iterations",
-                                       "atrous_detail", "atrous_gamma", NULL};
+                                       "atrous_detail", "atrous_gamma", "kernel_scaling", "progressive", NULL};
     char v[80];
     eng_result r;
     if (!cJSON_IsObject(obj))
@@ -283,6 +285,24 @@ static eng_result parse_settings(parser *P, const cJSON *obj, eng_settings *s)
             return bad(P, "settings.atrous_gamma: %s is out of range (0, 1000] (γ of 002 Eq. 7.7; "
                           "use \"atrous_detail\": \"none\" for scaling coefficients only)", show(it, v, sizeof v));
         s->atrous_gamma = (float)d;
+    }
+    if ((it = cJSON_GetObjectItemCaseSensitive(obj, "kernel_scaling"))) {
+        static const eng_kernel_scaling modes[] = {ENG_SCALING_PATH_DENSITY, ENG_SCALING_RAY_LENGTH,
+                                                   ENG_SCALING_TILE_DENSITY, ENG_SCALING_BANDWIDTH};
+        int found = 0;
+        for (int i = 0; i < 4 && !found; i++)
+            if (cJSON_IsString(it) && !strcmp(it->valuestring, eng_scaling_name(modes[i]))) {
+                s->kernel_scaling = modes[i];
+                found = 1;
+            }
+        if (!found)
+            return bad(P, "settings.kernel_scaling: %s is not one of \"path-density\", \"ray-length\", "
+                          "\"tile-density\", \"bandwidth\"", show(it, v, sizeof v));
+    }
+    if ((it = cJSON_GetObjectItemCaseSensitive(obj, "progressive"))) {
+        if (!cJSON_IsBool(it))
+            return bad(P, "settings.progressive: expected true or false, got %s", show(it, v, sizeof v));
+        s->progressive = cJSON_IsTrue(it) ? 1 : 0;
     }
     return ENG_OK;
 }
@@ -437,7 +457,7 @@ static void default_name(const char *path, char out[SCN_NAME_MAX])
 static eng_result parse_root(parser *P, const cJSON *root, seq_sequence *out)
 {
     static const char *const keys[] = {"name", "scene", "frames", "fps", "resolution", "camera", "settings",
-                                       "capture", NULL};
+                                       "capture", "still", NULL};
     static const char *const required[] = {"scene", "frames", "fps", "resolution", "camera"};
     char v[80];
     eng_result r;
@@ -479,6 +499,11 @@ static eng_result parse_root(parser *P, const cJSON *root, seq_sequence *out)
         return r;
     if (!(out->fps > 0.0))
         return bad(P, "fps: %s must be positive", show(it, v, sizeof v));
+    if ((it = cJSON_GetObjectItemCaseSensitive(root, "still"))) {
+        if (!cJSON_IsBool(it))
+            return bad(P, "still: expected true or false, got %s", show(it, v, sizeof v));
+        out->still = cJSON_IsTrue(it) ? 1 : 0;
+    }
 
     it = cJSON_GetObjectItemCaseSensitive(root, "resolution");
     if (!cJSON_IsArray(it) || cJSON_GetArraySize(it) != 2)
@@ -573,4 +598,9 @@ int seq_wants(const seq_sequence *seq, const char *buffer_name)
         if (fnmatch(seq->capture[i], buffer_name, 0) == 0)
             return 1;
     return 0;
+}
+
+double seq_frame_time(const seq_sequence *seq, int frame)
+{
+    return seq->still ? 0.0 : frame / seq->fps;
 }

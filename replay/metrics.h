@@ -36,6 +36,37 @@ typedef struct rep_metrics_err {
 eng_result rep_metric_compute(const float *test, const float *ref, int w, int h, int channels, const char *what,
                               rep_metrics_err *out, eng_error *err);
 
+/* Bias measures of an indirect image (issue 13): images RGB (3 floats a pixel), per pixel
+ * the mean of R, G, B ("intensity").
+ *
+ *   mean_ratio     Σ t / Σ r over all pixels (1 = the right amount of light)
+ *   block_p90      8×8 blocks: |mean t − mean r| / mean r per block, its 90th percentile over
+ *                  the blocks whose mean r is at least REP_BLOCK_MIN_FRACTION of the image's
+ *                  mean (black blocks have no relative error)
+ *   edge_*, flat_* the same ratio, and the relative RMSE √(mean (t − r)²) / mean r, over the
+ *                  pixels of the edge mask (mask ≠ 0) and over the other surface pixels
+ *                  (mask = 0); edge_fraction: the edge pixels over the surface pixels
+ * mask: w×h, 1 edge, 0 away from edges, −1 not counted (background); NULL = no edge split
+ * (edge_* = 0, flat_* over all pixels). */
+#define REP_BLOCK_MIN_FRACTION 0.01
+typedef struct rep_metrics_bias {
+    double mean_ratio, block_p90;
+    double edge_ratio, edge_rel_rmse, flat_ratio, flat_rel_rmse, edge_fraction;
+} rep_metrics_bias;
+
+void rep_metric_bias(const float *test, const float *ref, int w, int h, const signed char *mask,
+                     rep_metrics_bias *out);
+
+/* The edge mask of rep_metric_bias from an eye G-buffer (position XYZ, normal XYZ, top row
+ * first, w×h) and the camera (view_proj, column-major, eye): a surface pixel is an edge pixel
+ * when a visible surface point of another plane lies within `radius` metres of it (searched
+ * among the pixels within the radius projected at its distance), another plane meaning a
+ * normal more than ~8° apart (cos < 0.99) or a point farther than radius/4 off its tangent
+ * plane; a background pixel in that window (a silhouette) also counts. Background pixels
+ * (normal 0) are −1. */
+void rep_edge_mask(const float *position, const float *normal, int w, int h, const float view_proj[16],
+                   const float eye[3], double radius, signed char *mask);
+
 #ifdef __cplusplus
 }
 #endif

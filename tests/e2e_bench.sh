@@ -79,6 +79,39 @@ for r in rows:
     assert s > 0.3 * float(r["frame_ms"]) and s < 3 * float(r["frame_ms"]), f"passes {s} vs frame {r['frame_ms']}"
 # at least one point on the Pareto front
 assert any(r["pareto"] == "1" for r in rows)
+# Bias measures (issue 13): present, in range, the same for scatter and gather.
+for r in rows:
+    for k in ["indirect_mean_ratio", "indirect_block_p90", "indirect_edge_ratio", "indirect_edge_rel_rmse",
+              "indirect_flat_ratio", "indirect_flat_rel_rmse", "indirect_edge_fraction"]:
+        v = float(r[k]); assert math.isfinite(v) and v >= 0, f"{k} = {v}"
+    assert 0.2 < float(r["indirect_mean_ratio"]) < 5
+    assert 0 < float(r["indirect_edge_fraction"]) < 1
+for pc in ["1024", "4096"]:
+    a, b = m[("ispm", pc)], m[("kd", pc)]
+    for k in ["indirect_mean_ratio", "indirect_edge_ratio", "indirect_flat_ratio"]:
+        assert abs(float(a[k]) - float(b[k])) <= 1e-4, f"{k} at {pc}: {a[k]} vs {b[k]}"
+PY
+
+# Progressive accumulation with a per-frame series against one reference frame.
+cat > conv.json <<EOF
+{"sequence": "seq.json", "reference": "refrun", "reference_frame": 1, "frames": 2, "report_frames": [0, 1],
+ "warmup": 0, "methods": [{"name": "prog", "settings": {"indirect": "kd-gather", "progressive": true,
+ "random": "per-frame", "kernel_scaling": "tile-density"}}]}
+EOF
+"$ISPM" bench conv.json -o conv --quiet > conv.out; rc=$?
+[ $rc -eq 0 ] || fail "convergence bench exited $rc"
+for f in convergence_frames.png convergence_rmse_frames.png convergence_time.png; do
+  [ -s "conv/$f" ] || fail "no conv/$f"
+done
+python3 - conv/bench.json <<'PY' || fail "convergence bench.json content"
+import json, sys
+j = json.load(open(sys.argv[1]))
+assert j["reference_frame"] == 1
+p = j["points"][0]
+assert p["settings"]["progressive"] == "true" and p["settings"]["kernel_scaling"] == "tile-density", p["settings"]
+s = p["series"]
+assert [e["frames_rendered"] for e in s] == [1, 2] and s[1]["elapsed_ms"] > s[0]["elapsed_ms"] > 0
+assert all(0 < e["indirect_bias"]["mean_ratio"] < 5 for e in s)
 PY
 
 python3 - out/bench.json <<'PY' || fail "bench.json content"

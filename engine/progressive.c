@@ -1,0 +1,183 @@
+/* progressive.c — running mean of the indirect estimate with PPM's shrinking radius
+ * (progressive.h; Hachisuka, Ogaki, Jensen 2008, "Progressive Photon Mapping", §4). */
+#include "progressive.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+struct prog_state {
+    int width, height, attachments;
+    int frames;        /* since the last global restart; 0 = none yet */
+    double r2;         /* (r_i / r_1)² */
+    int restart_all;   /* prog_begin decided a global restart for this frame */
+    int have_view;
+    eng_view camera;
+    uint32_t light_count;
+    eng_light_pose lights[8];
+    double *sum[2];    /* per pixel RGB sums */
+    uint32_t *count;
+    ind_gbuffer prev;  /* the previous frame's G-buffer, for the bit-wise test */
+    int have_prev;
+};
+
+static void *xcalloc(size_t n, size_t size)
+{
+    void *p = calloc(n ? n : 1, size);
+    if (!p) {
+        fprintf(stderr, "ispm: out of memory\n");
+        abort();
+    }
+    return p;
+}
+
+prog_state *prog_create(void)
+{
+    prog_state *p = xcalloc(1, sizeof *p);
+    return p;
+}
+
+static void free_buffers(prog_state *p)
+{
+    free(p->sum[0]);
+    free(p->sum[1]);
+    free(p->count);
+    p->sum[0] = p->sum[1] = NULL;
+    p->count = NULL;
+    ind_gbuffer_free(&p->prev);
+    p->have_prev = 0;
+    p->width = p->height = p->attachments = 0;
+}
+
+void prog_destroy(prog_state *p)
+{
+    if (!p)
+        return;
+    free_buffers(p);
+    free(p);
+}
+
+void prog_reset(prog_state *p)
+{
+    p->frames = 0;
+    p->r2 = 1.0;
+    p->have_view = 0;
+    p->have_prev = 0;
+}
+
+double prog_radius_scale(int i)
+{
+    double r2 = 1.0;
+    for (int k = 1; k < i; k++)
+        r2 *= ((double)k + PROG_ALPHA) / ((double)k + 1.0);
+    return sqrt(r2);
+}
+
+int prog_frames(const prog_state *p) { return p->frames; }
+
+static int same_light(const eng_light_pose *a, const eng_light_pose *b)
+{
+    return a->type == b->type && !memcmp(a->position, b->position, sizeof a->position) &&
+           !memcmp(a->direction, b->direction, sizeof a->direction) &&
+           !memcmp(a->radiance_scale, b->radiance_scale, sizeof a->radiance_scale) &&
+           !memcmp(&a->range, &b->range, sizeof a->range) && !memcmp(&a->inner_cone, &b->inner_cone, sizeof(float)) &&
+           !memcmp(&a->outer_cone, &b->outer_cone, sizeof(float));
+}
+
+float prog_begin(prog_state *p, const eng_frame_scene *fs)
+{
+    int moved = !p->have_view || p->frames == 0 || memcmp(&p->camera, &fs->camera, sizeof p->camera) != 0 ||
+                p->light_count != fs->light_count;
+    uint32_t nl = fs->light_count < 8 ? fs->light_count : 8;
+    for (uint32_t l = 0; l < nl && !moved; l++)
+        moved = !same_light(&p->lights[l], &fs->lights[l]);
+    p->camera = fs->camera;
+    p->light_count = fs->light_count;
+    for (uint32_t l = 0; l < nl; l++)
+        p->lights[l] = fs->lights[l];
+    p->have_view = 1;
+    if (moved) {
+        p->frames = 1;
+        p->r2 = 1.0;
+    } else {
+        /* PPM Eq. 8 with N_i/M_i replaced by one frame: r_{i+1}² = r_i² (i + α)/(i + 1). */
+        p->r2 *= ((double)p->frames + PROG_ALPHA) / ((double)p->frames + 1.0);
+        p->frames++;
+    }
+    p->restart_all = moved;
+    return (float)sqrt(p->r2);
+}
+
+static int same_pixel(const ind_gbuffer *a, const ind_gbuffer *b, size_t i)
+{
+    return !memcmp(a->position + 4 * i, b->position + 4 * i, 4 * sizeof(float)) &&
+           !memcmp(a->normal + 3 * i, b->normal + 3 * i, 3 * sizeof(float)) &&
+           !memcmp(a->albedo + 3 * i, b->albedo + 3 * i, 3 * sizeof(float)) &&
+           !memcmp(a->material + 4 * i, b->material + 4 * i, 4 * sizeof(float));
+}
+
+static void copy_gbuffer(ind_gbuffer *dst, const ind_gbuffer *src)
+{
+    size_t n = (size_t)src->width * (size_t)src->height;
+    if (dst->width != src->width || dst->height != src->height || !dst->position) {
+        ind_gbuffer_free(dst);
+        dst->width = src->width;
+        dst->height = src->height;
+        dst->position = xcalloc(n * 4, sizeof(float));
+        dst->normal = xcalloc(n * 3, sizeof(float));
+        dst->albedo = xcalloc(n * 3, sizeof(float));
+        dst->material = xcalloc(n * 4, sizeof(float));
+    }
+    memcpy(dst->position, src->position, n * 4 * sizeof(float));
+    memcpy(dst->normal, src->normal, n * 3 * sizeof(float));
+    memcpy(dst->albedo, src->albedo, n * 3 * sizeof(float));
+    memcpy(dst->material, src->material, n * 4 * sizeof(float));
+}
+
+void prog_accumulate(prog_state *p, const ind_gbuffer *gb, int attachments, const float *const *in, float **mean,
+                     float *count, float *radius)
+{
+    const int w = gb->width, h = gb->height;
+    const size_t n = (size_t)w * (size_t)h;
+    if (p->width != w || p->height != h || p->attachments != attachments) {
+        free_buffers(p);
+        p->width = w;
+        p->height = h;
+        p->attachments = attachments;
+        for (int a = 0; a < attachments; a++)
+            p->sum[a] = xcalloc(n * 3, sizeof(double));
+        p->count = xcalloc(n, sizeof(uint32_t));
+    }
+    const int all = p->restart_all || !p->have_prev;
+    const float scale = (float)sqrt(p->r2);
+    for (size_t i = 0; i < n; i++) {
+        int surface = gb->position[4 * i + 3] > 0.0f;
+        if (all || !same_pixel(gb, &p->prev, i)) {
+            p->count[i] = 0;
+            for (int a = 0; a < attachments; a++)
+                p->sum[a][3 * i] = p->sum[a][3 * i + 1] = p->sum[a][3 * i + 2] = 0.0;
+        }
+        if (surface)
+            p->count[i]++;
+        const uint32_t k = p->count[i];
+        for (int a = 0; a < attachments; a++) {
+            const float *x = in[a] + 4 * i;
+            float *m = mean[a] + 4 * i;
+            if (!surface) {
+                memcpy(m, x, 4 * sizeof(float));
+                continue;
+            }
+            for (int c = 0; c < 3; c++) {
+                p->sum[a][3 * i + c] += (double)x[c];
+                m[c] = (float)(p->sum[a][3 * i + c] / (double)k);
+            }
+            m[3] = x[3];
+        }
+        count[i] = (float)k;
+        radius[i] = surface ? scale : 0.0f;
+    }
+    copy_gbuffer(&p->prev, gb);
+    p->have_prev = 1;
+    p->restart_all = 0;
+}
