@@ -36,6 +36,10 @@ void m4_normal_matrix(float out9[9], const float m[16]);
 /* Compiles and links vertex + fragment shaders from engine/shaders/<name>; the error names
  * the shader file and carries the driver's log (flattened to one line). */
 eng_result glu_program(const char *vert_name, const char *frag_name, GLuint *out, eng_error *err);
+/* The same with lines of preprocessor definitions (e.g. "#define X\n") inserted into the
+ * fragment shader after its #version line (shader variants from one source file). */
+eng_result glu_program_defines(const char *vert_name, const char *frag_name, const char *frag_defines, GLuint *out,
+                               eng_error *err);
 
 /* A framebuffer with `count` RGBA32F colour attachments of w×h and a 32F depth buffer.
  * layers > 0 makes each colour attachment a 2D array texture of that many layers (attach
@@ -211,6 +215,34 @@ float splat_kernel(const float d[3], const float n_p[3], float r_xy, float r_z);
 /* The kernel radius r_xy of a photon of path density rho (ISPM §2.5/§4.3: large kernels for
  * improbable paths, small for caustics): kernel_radius · clamp((1000 ρ)^(−1/4), 1/4, 2). */
 float splat_radius(float kernel_radius, float rho);
+
+/* Where photon volumes can reach the G-buffer (splat_bounds.c): per SPLAT_TILE² tile of the
+ * eye G-buffer, the bounding box of its surface points. position: width×height RGBA (xyz, w
+ * = coverage; w = 0 pixels are background and left out), GL row order (bottom row first).
+ * A zero-initialised splat_tiles is empty; build (re)allocates. */
+#define SPLAT_TILE 8
+#define SPLAT_COARSE 4 /* tiles per side of a coarse tile */
+typedef struct splat_tiles {
+    int width, height, tiles_x, tiles_y, coarse_x, coarse_y;
+    float *box;    /* per tile, rows bottom first: min xyz, max xyz; min > max without surface */
+    float *coarse; /* the same per coarse tile */
+} splat_tiles;
+void splat_tiles_build(splat_tiles *t, const float *position, int width, int height);
+void splat_tiles_free(splat_tiles *t); /* accepts NULL */
+
+/* A photon volume as drawn: inclusive pixel rectangle in GL window coordinates (x right, y up
+ * from the bottom row) and the NDC depth of its far side. */
+typedef struct splat_bounds {
+    int x0, y0, x1, y1;
+    float z;
+} splat_bounds;
+/* Whether the kernel of a photon at x (surface normal n, radii r_xy ≥ r_z) can reach a pixel
+ * of t's G-buffer seen through view_proj (proj: its projection part), and if so the
+ * rectangle that holds every such pixel (returns 1), else 0. Conservative: every pixel whose
+ * G-buffer point lies in the kernel's support (t < 1 in Eq. 2, as the shaders evaluate it in
+ * float) is inside the rectangle. */
+int splat_photon_bounds(const float view_proj[16], const float proj[16], const splat_tiles *t, const float x[3],
+                        const float n[3], float r_xy, float r_z, splat_bounds *out);
 
 /* Reconstruction filters (pass_filter.c; DESIGN.md step 7). G-buffer targets are laid out as
  * pass_gbuffer's: 0 position, 1 normal (w: the point's eye depth in the previous frame),

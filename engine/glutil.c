@@ -121,7 +121,7 @@ void m4_normal_matrix(float out9[9], const float m[16])
 
 /* ---------------------------------------------------------------- shaders */
 
-static eng_result compile(GLenum kind, const char *name, GLuint *out, eng_error *err)
+static eng_result compile(GLenum kind, const char *name, const char *defines, GLuint *out, eng_error *err)
 {
     const char *src = eng_glsl_source(name);
     if (!src)
@@ -131,10 +131,20 @@ static eng_result compile(GLenum kind, const char *name, GLuint *out, eng_error 
      * included files, in order. Included files do not include further. */
     static const char directive[] = "#pragma ispm_include \"";
     enum { MAX_INCLUDES = 8 };
-    const char *parts[2 * MAX_INCLUDES + 1];
-    GLint lens[2 * MAX_INCLUDES + 1];
+    const char *parts[2 * MAX_INCLUDES + 3];
+    GLint lens[2 * MAX_INCLUDES + 3];
     int nparts = 0;
     const char *rest = src;
+    if (defines) { /* after the #version line, which must come first */
+        const char *eol = strchr(src, '\n');
+        if (!eol)
+            return eng_fail(err, ENG_ERR_GL, "engine/shaders/%s: no line after #version", name);
+        parts[nparts] = src;
+        lens[nparts++] = (GLint)(eol + 1 - src);
+        parts[nparts] = defines;
+        lens[nparts++] = -1;
+        rest = eol + 1;
+    }
     for (const char *at; (at = strstr(rest, directive));) {
         if (nparts == 2 * MAX_INCLUDES)
             return eng_fail(err, ENG_ERR_GL, "engine/shaders/%s: more than %d ispm_include lines", name, MAX_INCLUDES);
@@ -174,11 +184,17 @@ static eng_result compile(GLenum kind, const char *name, GLuint *out, eng_error 
 
 eng_result glu_program(const char *vert_name, const char *frag_name, GLuint *out, eng_error *err)
 {
+    return glu_program_defines(vert_name, frag_name, NULL, out, err);
+}
+
+eng_result glu_program_defines(const char *vert_name, const char *frag_name, const char *frag_defines, GLuint *out,
+                               eng_error *err)
+{
     GLuint vs, fs;
-    eng_result r = compile(GL_VERTEX_SHADER, vert_name, &vs, err);
+    eng_result r = compile(GL_VERTEX_SHADER, vert_name, NULL, &vs, err);
     if (r != ENG_OK)
         return r;
-    r = compile(GL_FRAGMENT_SHADER, frag_name, &fs, err);
+    r = compile(GL_FRAGMENT_SHADER, frag_name, frag_defines, &fs, err);
     if (r != ENG_OK) {
         glDeleteShader(vs);
         return r;

@@ -1,15 +1,24 @@
 /* pass_splat.c — indirect light by scattering photon volumes (ISPM 003_… §5, Eq. 1–3): every
- * photon-map photon becomes an instanced icosahedron bounding its kernel ellipsoid; the
- * fragment shader evaluates Eq. 1 against the eye G-buffer and additive blending sums the
- * contributions (see shaders/splat.frag.glsl for the kernel). The volumes are depth-tested
- * against the eye G-buffer's own depth buffer, so a volume entirely in front of or behind the
- * visible surface costs no shading; back faces only, so each pixel is shaded once per photon.
- * Known artifact (§6.3): where the near plane clips a volume's back faces, the surface behind
- * gets nothing from that photon.
+ * photon-map photon whose kernel can reach a visible surface is drawn as one screen-aligned
+ * rectangle (two triangles, one draw, vertices pulled from a storage buffer) holding every
+ * pixel whose G-buffer point can lie in its kernel ellipsoid (splat_bounds.c, from the
+ * G-buffer's positions read back and boxed per 8×8 tile); the fragment shader evaluates Eq. 1
+ * against the eye G-buffer and additive blending sums the contributions (see
+ * shaders/splat.frag.glsl for the kernel). The rectangles are drawn at the NDC depth of the
+ * ellipsoid's far side and depth-tested (GEQUAL, no writes) against the eye G-buffer's own
+ * depth buffer, so a pixel whose surface lies behind the whole volume costs no shading. A
+ * pixel gets each photon once, in photon order, and exactly the pixels whose point lies in
+ * the kernel pass the shader's test, so the sums are those of the earlier instanced
+ * icosahedra, less their losses at the kernel's rim (docs/scatter.md: the same image, ~3×
+ * cheaper on llvmpipe). The rectangles are never clipped, and a volume that reaches the eye
+ * plane covers the tiles it can reach, so the §6.3 near-plane artifact does not occur.
+ * The fragment program is picked per frame from the drawn materials (no metallic: no glossy
+ * term; no transmission either: no material fetch), which sums the same floats.
  *
  * Determinism: llvmpipe bins primitives per tile and each tile is rasterised by one thread in
- * submission order, so the float sums are the same whatever LP_NUM_THREADS is.
- * Owns its program, the icosahedron, the instance buffer and its target. */
+ * submission order, so the float sums are the same whatever LP_NUM_THREADS is; the CPU
+ * bounds are per photon, packed in photon order.
+ * Owns its programs, the photon and index buffers, the read-back positions and its target. */
 #include "eng_internal.h"
 
 #include <math.h>
@@ -19,14 +28,19 @@
 
 struct pass_splat {
     glu_target target;
-    GLuint program, vao, vbo_ico, ibo_ico, vbo_inst;
-    size_t inst_capacity;
+    /* 0 the full BSDF, 1 SPLAT_NO_METALLIC (no glossy term), 2 also SPLAT_NO_TRANSMISSION
+     * (Lambert only, no material fetch). */
+    GLuint program[3], vao, ssbo, ibo;
+    size_t capacity; /* photons the buffers hold */
+    float *position;  /* read-back G-buffer positions, GL row order */
+    float *packed;    /* SPLAT_VEC4 vec4 per drawn photon */
+    splat_bounds *bounds; /* per photon */
+    unsigned char *keep;  /* per photon: drawn */
+    splat_tiles tiles;
 };
 
-/* Per-instance attributes, 16 floats. */
-typedef struct splat_instance {
-    float position[3], normal[3], power[3], direction[3], radius[2], pad[2];
-} splat_instance;
+/* Per drawn photon: rect, (x, z_far), (n_p, r_xy), (Φ_i, r_z), (ω_i, 0); splat.vert.glsl. */
+#define SPLAT_VEC4 5
 
 float splat_radius(float kernel_radius, float rho)
 {
@@ -51,110 +65,135 @@ float splat_kernel(const float d[3], const float n_p[3], float r_xy, float r_z)
     return (float)(2.0 / (ENG_PI * (double)r_xy * r_xy) * (1.0 - t * t));
 }
 
-static void make_icosahedron(float v[12][3], unsigned idx[60])
-{
-    const float t = (1.0f + sqrtf(5.0f)) * 0.5f;
-    const float raw[12][3] = {{-1, t, 0}, {1, t, 0}, {-1, -t, 0}, {1, -t, 0}, {0, -1, t}, {0, 1, t},
-                              {0, -1, -t}, {0, 1, -t}, {t, 0, -1}, {t, 0, 1}, {-t, 0, -1}, {-t, 0, 1}};
-    const unsigned faces[60] = {0, 11, 5, 0, 5, 1, 0, 1, 7, 0, 7, 10, 0, 10, 11, 1, 5, 9, 5, 11, 4,
-                                11, 10, 2, 10, 7, 6, 7, 1, 8, 3, 9, 4, 3, 4, 2, 3, 2, 6, 3, 6, 8,
-                                3, 8, 9, 4, 9, 5, 2, 4, 11, 6, 2, 10, 8, 6, 7, 9, 8, 1};
-    float len = sqrtf(1.0f + t * t);
-    for (int i = 0; i < 12; i++)
-        for (int c = 0; c < 3; c++)
-            v[i][c] = raw[i][c] / len; /* circumradius 1; the shader scales by 1/inradius */
-    memcpy(idx, faces, sizeof faces);
-}
-
 eng_result pass_splat_create(int width, int height, int irradiance, pass_splat **out, eng_error *err)
 {
     *out = NULL;
     pass_splat *p = calloc(1, sizeof *p);
     if (!p)
         return eng_fail(err, ENG_ERR_NOMEM, "splat: out of memory");
-    eng_result r = glu_program("splat.vert.glsl", irradiance ? "splat_irradiance.frag.glsl" : "splat.frag.glsl",
-                               &p->program, err);
+    const char *frag = irradiance ? "splat_irradiance.frag.glsl" : "splat.frag.glsl";
+    eng_result r = glu_program("splat.vert.glsl", frag, &p->program[0], err);
+    if (r == ENG_OK)
+        r = glu_program_defines("splat.vert.glsl", frag, "#define SPLAT_NO_METALLIC\n", &p->program[1], err);
+    if (r == ENG_OK)
+        r = glu_program_defines("splat.vert.glsl", frag, "#define SPLAT_NO_METALLIC\n#define SPLAT_NO_TRANSMISSION\n",
+                                &p->program[2], err);
     if (r == ENG_OK)
         r = glu_target_create(&p->target, irradiance ? 2 : 1, width, height, 0, err);
     if (r != ENG_OK) {
         pass_splat_destroy(p);
         return r;
     }
-    float v[12][3];
-    unsigned idx[60];
-    make_icosahedron(v, idx);
+    p->position = eng_xmalloc((size_t)width * (size_t)height * 4 * sizeof(float));
     glGenVertexArrays(1, &p->vao);
-    glBindVertexArray(p->vao);
-    glGenBuffers(1, &p->vbo_ico);
-    glBindBuffer(GL_ARRAY_BUFFER, p->vbo_ico);
-    glBufferData(GL_ARRAY_BUFFER, sizeof v, v, GL_STATIC_DRAW);
-    glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, 0, NULL);
-    glEnableVertexAttribArray(0);
-    glGenBuffers(1, &p->ibo_ico);
-    glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, p->ibo_ico);
-    glBufferData(GL_ELEMENT_ARRAY_BUFFER, sizeof idx, idx, GL_STATIC_DRAW);
-    glGenBuffers(1, &p->vbo_inst);
-    glBindBuffer(GL_ARRAY_BUFFER, p->vbo_inst);
-    const GLsizei stride = sizeof(splat_instance);
-    const size_t offs[5] = {offsetof(splat_instance, position), offsetof(splat_instance, normal),
-                            offsetof(splat_instance, power), offsetof(splat_instance, direction),
-                            offsetof(splat_instance, radius)};
-    for (int a = 0; a < 5; a++) {
-        glVertexAttribPointer(1 + a, a == 4 ? 2 : 3, GL_FLOAT, GL_FALSE, stride, (const void *)offs[a]);
-        glVertexAttribDivisor(1 + a, 1);
-        glEnableVertexAttribArray(1 + a);
+    glGenBuffers(1, &p->ssbo);
+    glGenBuffers(1, &p->ibo);
+    for (int k = 0; k < 3; k++) {
+        GLuint prog = p->program[k];
+        glUseProgram(prog);
+        glUniform1i(glGetUniformLocation(prog, "u_position"), 0);
+        glUniform1i(glGetUniformLocation(prog, "u_normal"), 1);
+        glUniform1i(glGetUniformLocation(prog, "u_albedo"), 2);
+        glUniform1i(glGetUniformLocation(prog, "u_material"), 3);
+        glUniform2f(glGetUniformLocation(prog, "u_viewport"), (float)width, (float)height);
     }
-    glBindVertexArray(0);
-    glUseProgram(p->program);
-    glUniform1i(glGetUniformLocation(p->program, "u_position"), 0);
-    glUniform1i(glGetUniformLocation(p->program, "u_normal"), 1);
-    glUniform1i(glGetUniformLocation(p->program, "u_albedo"), 2);
-    glUniform1i(glGetUniformLocation(p->program, "u_material"), 3);
     *out = p;
     return ENG_OK;
+}
+
+/* Grows the photon and index buffers to hold n photons (two triangles of 4 vertices each). */
+static void reserve(pass_splat *p, size_t n)
+{
+    if (n <= p->capacity)
+        return;
+    p->capacity = n;
+    free(p->packed);
+    free(p->bounds);
+    free(p->keep);
+    p->packed = eng_xmalloc(n * SPLAT_VEC4 * 4 * sizeof(float));
+    p->bounds = eng_xmalloc(n * sizeof *p->bounds);
+    p->keep = eng_xmalloc(n);
+    glBindBuffer(GL_SHADER_STORAGE_BUFFER, p->ssbo);
+    glBufferData(GL_SHADER_STORAGE_BUFFER, (GLsizeiptr)(n * SPLAT_VEC4 * 4 * sizeof(float)), NULL, GL_STREAM_DRAW);
+    glBindBuffer(GL_SHADER_STORAGE_BUFFER, 0);
+    uint32_t *idx = eng_xmalloc(n * 6 * sizeof *idx);
+    for (size_t i = 0; i < n; i++) {
+        const uint32_t b = (uint32_t)(4 * i);
+        const uint32_t q[6] = {b, b + 1, b + 2, b + 2, b + 1, b + 3};
+        memcpy(idx + 6 * i, q, sizeof q);
+    }
+    glBindVertexArray(p->vao);
+    glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, p->ibo);
+    glBufferData(GL_ELEMENT_ARRAY_BUFFER, (GLsizeiptr)(n * 6 * sizeof *idx), idx, GL_STATIC_DRAW);
+    glBindVertexArray(0);
+    free(idx);
 }
 
 const glu_target *pass_splat_run(pass_splat *p, const eng_frame_scene *fs, const glu_target *gbuf,
                                  const eng_photon_map *map, const float *radius, const eng_settings *s)
 {
     glu_target *t = &p->target;
+    const int w = t->width, h = t->height;
+    /* The G-buffer's positions, for the CPU bounds (the G-buffer is finished before any
+     * indirect method runs, so this read waits for nothing the splat does not need). */
+    glBindFramebuffer(GL_READ_FRAMEBUFFER, gbuf->fbo);
+    glReadBuffer(GL_COLOR_ATTACHMENT0);
+    glReadPixels(0, 0, w, h, GL_RGBA, GL_FLOAT, p->position);
+    splat_tiles_build(&p->tiles, p->position, w, h);
+
     /* Share the eye G-buffer's depth buffer for the depth test. */
     glBindFramebuffer(GL_FRAMEBUFFER, t->fbo);
     glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, gbuf->depth);
-    glViewport(0, 0, t->width, t->height);
+    glViewport(0, 0, w, h);
     const float zero[4] = {0, 0, 0, 0};
     for (int i = 0; i < t->count; i++)
         glClearBufferfv(GL_COLOR, i, zero);
-    if (map->count > 0) {
-        if (map->count > p->inst_capacity) {
-            p->inst_capacity = map->count;
-            glBindBuffer(GL_ARRAY_BUFFER, p->vbo_inst);
-            glBufferData(GL_ARRAY_BUFFER, (GLsizeiptr)(p->inst_capacity * sizeof(splat_instance)), NULL,
-                         GL_STREAM_DRAW);
-        }
-        splat_instance *inst = malloc(map->count * sizeof *inst);
-        if (!inst) {
-            fprintf(stderr, "ispm: out of memory\n");
-            abort();
-        }
-        for (size_t i = 0; i < map->count; i++) {
-            const eng_photon *ph = &map->photons[i];
-            splat_instance *d = &inst[i];
-            memcpy(d->position, ph->position, sizeof d->position);
-            memcpy(d->normal, ph->normal, sizeof d->normal);
-            memcpy(d->power, ph->power, sizeof d->power);
-            memcpy(d->direction, ph->direction, sizeof d->direction);
-            d->radius[0] = radius[i];
-            d->radius[1] = d->radius[0] * s->normal_compression;
-            d->pad[0] = d->pad[1] = 0.0f;
-        }
-        glBindBuffer(GL_ARRAY_BUFFER, p->vbo_inst);
-        glBufferSubData(GL_ARRAY_BUFFER, 0, (GLsizeiptr)(map->count * sizeof *inst), inst);
-        free(inst);
+    reserve(p, map->count);
+    /* Bounds per photon on the CPU threads (independent), then the drawn ones packed in
+     * photon order: the order the blending sums them in. */
+    const long n = (long)map->count;
+    const int threads = s->threads > 0 ? s->threads : 1;
+#pragma omp parallel for schedule(static, 1024) num_threads(threads)
+    for (long i = 0; i < n; i++) {
+        const eng_photon *ph = &map->photons[i];
+        const float r_xy = radius[i];
+        p->keep[i] = (unsigned char)splat_photon_bounds(fs->camera.view_proj, fs->camera.proj, &p->tiles, ph->position,
+                                                        ph->normal, r_xy, r_xy * s->normal_compression, &p->bounds[i]);
+    }
+    size_t drawn = 0;
+    for (size_t i = 0; i < map->count; i++) {
+        if (!p->keep[i])
+            continue;
+        const eng_photon *ph = &map->photons[i];
+        const splat_bounds *b = &p->bounds[i];
+        const float r_xy = radius[i];
+        const float r_z = r_xy * s->normal_compression;
+        float *d = p->packed + drawn * SPLAT_VEC4 * 4;
+        const float v[SPLAT_VEC4 * 4] = {(float)b->x0, (float)b->y0, (float)(b->x1 + 1), (float)(b->y1 + 1),
+                                         ph->position[0], ph->position[1], ph->position[2], b->z,
+                                         ph->normal[0], ph->normal[1], ph->normal[2], r_xy,
+                                         ph->power[0], ph->power[1], ph->power[2], r_z,
+                                         ph->direction[0], ph->direction[1], ph->direction[2], 0.0f};
+        memcpy(d, v, sizeof v);
+        drawn++;
+    }
+    if (drawn > 0) {
+        glBindBuffer(GL_SHADER_STORAGE_BUFFER, p->ssbo);
+        glBufferSubData(GL_SHADER_STORAGE_BUFFER, 0, (GLsizeiptr)(drawn * SPLAT_VEC4 * 4 * sizeof(float)), p->packed);
+        glBindBuffer(GL_SHADER_STORAGE_BUFFER, 0);
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, p->ssbo);
 
-        glUseProgram(p->program);
-        glUniformMatrix4fv(glGetUniformLocation(p->program, "u_view_proj"), 1, GL_FALSE, fs->camera.view_proj);
-        glUniform3fv(glGetUniformLocation(p->program, "u_eye"), 1, fs->camera.eye);
+        /* The G-buffer's metallic and transmission channels are the drawn materials' factors
+         * (pass_gbuffer.c): without such a material they are 0 at every pixel. */
+        int metallic = 0, transmission = 0;
+        for (uint32_t i = 0; i < fs->draw_count; i++) {
+            scn_material m = eng_material_of(fs->scene, fs->draws[i].material);
+            metallic |= m.metallic > 0.0f;
+            transmission |= m.transmission != 0.0f;
+        }
+        const GLuint prog = p->program[metallic ? 0 : transmission ? 1 : 2];
+        glUseProgram(prog);
+        glUniform3fv(glGetUniformLocation(prog, "u_eye"), 1, fs->camera.eye);
         for (int i = 0; i < 4; i++) {
             glActiveTexture(GL_TEXTURE0 + i);
             glBindTexture(GL_TEXTURE_2D, gbuf->color[i]);
@@ -162,17 +201,14 @@ const glu_target *pass_splat_run(pass_splat *p, const eng_frame_scene *fs, const
         glEnable(GL_DEPTH_TEST);
         glDepthFunc(GL_GEQUAL);
         glDepthMask(GL_FALSE);
-        glEnable(GL_CULL_FACE);
-        glCullFace(GL_FRONT);
         glEnable(GL_BLEND);
         glBlendFunc(GL_ONE, GL_ONE);
         glBlendEquation(GL_FUNC_ADD);
         glBindVertexArray(p->vao);
-        glDrawElementsInstanced(GL_TRIANGLES, 60, GL_UNSIGNED_INT, NULL, (GLsizei)map->count);
+        glDrawElements(GL_TRIANGLES, (GLsizei)(drawn * 6), GL_UNSIGNED_INT, NULL);
         glBindVertexArray(0);
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, 0);
         glDisable(GL_BLEND);
-        glCullFace(GL_BACK);
-        glDisable(GL_CULL_FACE);
         glDepthMask(GL_TRUE);
         glDepthFunc(GL_LESS);
         glDisable(GL_DEPTH_TEST);
@@ -189,9 +225,15 @@ void pass_splat_destroy(pass_splat *p)
     glu_target_destroy(&p->target);
     if (p->vao)
         glDeleteVertexArrays(1, &p->vao);
-    GLuint bufs[3] = {p->vbo_ico, p->ibo_ico, p->vbo_inst};
-    glDeleteBuffers(3, bufs);
-    if (p->program)
-        glDeleteProgram(p->program);
+    GLuint bufs[2] = {p->ssbo, p->ibo};
+    glDeleteBuffers(2, bufs);
+    for (int k = 0; k < 3; k++)
+        if (p->program[k])
+            glDeleteProgram(p->program[k]);
+    free(p->position);
+    free(p->packed);
+    free(p->bounds);
+    free(p->keep);
+    splat_tiles_free(&p->tiles);
     free(p);
 }

@@ -810,6 +810,151 @@ START_TEST(listener_refusal_aborts_render)
 }
 END_TEST
 
+
+/* ---------------------------------------------------------------- splat bounds (CPU) */
+
+/* splat.frag.glsl's support test (photon_kernel.glsl) in float, as the shader evaluates it. */
+static int shader_reaches(const float s[3], const float x[3], const float n[3], float r_xy, float r_z)
+{
+    float d[3] = {s[0] - x[0], s[1] - x[1], s[2] - x[2]};
+    float len = sqrtf(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+    float dn = fabsf(d[0] * n[0] + d[1] * n[1] + d[2] * n[2]);
+    float t = len > 0.0f ? len / r_xy * (1.0f + dn / len * (r_xy - r_z) / r_z) : 0.0f;
+    return t < 1.0f;
+}
+
+static float test_rand(uint32_t *state)
+{
+    *state = *state * 1664525u + 1013904223u;
+    return (float)(*state >> 8) / 16777216.0f;
+}
+
+/* A ray-cast G-buffer of an open box (floor y=0, back wall z=−1, left wall x=−1, a floating
+ * block 0.2 ≤ x,y,z ≤ 0.5 seen from its front) with sky pixels, and random photons on those
+ * surfaces, behind them, in the air and around the eye (some volumes reach the near plane):
+ * every photon whose kernel the shader would evaluate as reaching a pixel's point must be
+ * kept, its rectangle must hold that pixel, and its far depth must pass the GEQUAL test
+ * against the pixel's depth. Photons hidden behind the block or the walls must be culled. */
+START_TEST(splat_bounds_never_lose_a_reached_pixel)
+{
+    const int w = 96, h = 72;
+    const float znear = 0.01f;
+    for (int cam = 0; cam < 2; cam++) {
+        float eye[3] = {0.3f, 0.6f, 1.6f}, target[3] = {-0.2f, 0.2f, -1.0f}, up[3] = {0, 1, 0};
+        if (cam == 1) { /* the eye 3 cm from the back wall */
+            eye[0] = 0.1f, eye[1] = 0.4f, eye[2] = -0.97f;
+            target[0] = -0.6f, target[1] = 0.1f, target[2] = -1.0f;
+        }
+        float view[16], proj[16], vp[16], inv[16];
+        m4_look_at(view, eye, target, up);
+        m4_perspective(proj, 1.0f, (float)w / (float)h, znear, 20.0f);
+        m4_mul(vp, proj, view);
+        ck_assert(m4_invert(inv, vp));
+        float *pos = calloc((size_t)w * h * 4, sizeof(float));
+        float *depth = calloc((size_t)w * h, sizeof(float));
+        ck_assert_ptr_nonnull(pos);
+        ck_assert_ptr_nonnull(depth);
+        for (int y = 0; y < h; y++)
+            for (int x = 0; x < w; x++) {
+                float ndc[3] = {(x + 0.5f) / w * 2 - 1, (y + 0.5f) / h * 2 - 1, -1.0f}, far_ndc[3] = {ndc[0], ndc[1], 1.0f};
+                float o[3], f[3];
+                m4_transform_point(inv, ndc, o);
+                m4_transform_point(inv, far_ndc, f);
+                double dir[3] = {f[0] - o[0], f[1] - o[1], f[2] - o[2]};
+                double best = INFINITY;
+                /* planes: y = 0 (x ≥ −1, z ≥ −1), z = −1, x = −1 */
+                const int axis[3] = {1, 2, 0};
+                const double val[3] = {0.0, -1.0, -1.0};
+                for (int k = 0; k < 3; k++) {
+                    if (dir[axis[k]] == 0.0)
+                        continue;
+                    double tt = (val[k] - o[axis[k]]) / dir[axis[k]];
+                    if (tt <= 0.0 || tt >= best)
+                        continue;
+                    double q[3] = {o[0] + tt * dir[0], o[1] + tt * dir[1], o[2] + tt * dir[2]};
+                    if (q[0] < -1.0 - 1e-9 || q[1] < -1e-9 || q[2] < -1.0 - 1e-9 || q[0] > 1.5 || q[1] > 1.5 || q[2] > 1.5)
+                        continue;
+                    best = tt;
+                }
+                /* the block's front face z = 0.5 (0.2 ≤ x, y ≤ 0.5) and top y = 0.5 */
+                double tf = (0.5 - o[2]) / dir[2];
+                if (dir[2] != 0.0 && tf > 0.0 && tf < best) {
+                    double qx = o[0] + tf * dir[0], qy = o[1] + tf * dir[1];
+                    if (qx >= 0.2 && qx <= 0.5 && qy >= 0.2 && qy <= 0.5)
+                        best = tf;
+                }
+                double tp = (0.5 - o[1]) / dir[1];
+                if (dir[1] != 0.0 && tp > 0.0 && tp < best) {
+                    double qx = o[0] + tp * dir[0], qz = o[2] + tp * dir[2];
+                    if (qx >= 0.2 && qx <= 0.5 && qz >= 0.2 && qz <= 0.5)
+                        best = tp;
+                }
+                float *p = pos + 4 * ((size_t)y * w + x);
+                if (best == INFINITY)
+                    continue; /* sky */
+                for (int c = 0; c < 3; c++)
+                    p[c] = (float)(o[c] + best * dir[c]);
+                p[3] = 1.0f;
+                float clip_z = vp[2] * p[0] + vp[6] * p[1] + vp[10] * p[2] + vp[14];
+                float clip_w = vp[3] * p[0] + vp[7] * p[1] + vp[11] * p[2] + vp[15];
+                depth[(size_t)y * w + x] = clip_z / clip_w;
+            }
+        splat_tiles tiles = {0};
+        splat_tiles_build(&tiles, pos, w, h);
+        uint32_t rng = 12345u + (uint32_t)cam;
+        int kept = 0, culled = 0, reached = 0;
+        for (int i = 0; i < 4000; i++) {
+            float x[3], n[3];
+            int kind = i % 5;
+            float u = test_rand(&rng) * 2.5f - 1.0f, v = test_rand(&rng) * 2.0f - 0.5f;
+            if (kind == 0) { /* floor */
+                x[0] = u, x[1] = 0.0f, x[2] = v - 0.5f;
+                n[0] = 0, n[1] = 1, n[2] = 0;
+            } else if (kind == 1) { /* back wall, or behind it */
+                x[0] = u, x[1] = v + 0.5f, x[2] = (i & 8) ? -1.0f : -1.3f;
+                n[0] = 0, n[1] = 0, n[2] = 1;
+            } else if (kind == 2) { /* behind the block or on its back and sides */
+                x[0] = 0.2f + 0.3f * test_rand(&rng), x[1] = 0.2f + 0.3f * test_rand(&rng), x[2] = 0.2f;
+                n[0] = 0, n[1] = 0, n[2] = -1;
+            } else if (kind == 3) { /* near the eye */
+                x[0] = eye[0] + 0.1f * u, x[1] = eye[1] + 0.1f * v, x[2] = eye[2] - 0.05f * test_rand(&rng);
+                float a = 6.2831853f * test_rand(&rng);
+                n[0] = cosf(a), n[1] = 0.0f, n[2] = sinf(a);
+            } else { /* anywhere, any normal */
+                x[0] = u, x[1] = v + 0.5f, x[2] = u * v - 0.5f;
+                float a = 6.2831853f * test_rand(&rng), b = 3.14159265f * test_rand(&rng);
+                n[0] = sinf(b) * cosf(a), n[1] = cosf(b), n[2] = sinf(b) * sinf(a);
+            }
+            float r_xy = 0.02f + 0.3f * test_rand(&rng), r_z = r_xy * (0.05f + 0.95f * test_rand(&rng));
+            splat_bounds b;
+            int keep = splat_photon_bounds(vp, proj, &tiles, x, n, r_xy, r_z, &b);
+            keep ? kept++ : culled++;
+            for (int y = 0; y < h; y++)
+                for (int xx = 0; xx < w; xx++) {
+                    const float *p = pos + 4 * ((size_t)y * w + xx);
+                    if (p[3] == 0.0f || !shader_reaches(p, x, n, r_xy, r_z))
+                        continue;
+                    reached++;
+                    if (!keep)
+                        ck_abort_msg("camera %d photon %d culled, but reaches pixel (%d, %d)", cam, i, xx, y);
+                    if (xx < b.x0 || xx > b.x1 || y < b.y0 || y > b.y1)
+                        ck_abort_msg("camera %d photon %d reaches pixel (%d, %d) outside [%d, %d] x [%d, %d]", cam, i, xx,
+                                     y, b.x0, b.x1, b.y0, b.y1);
+                    if (!(b.z >= depth[(size_t)y * w + xx]))
+                        ck_abort_msg("camera %d photon %d: far depth %.9g in front of pixel (%d, %d) at %.9g", cam, i,
+                                     (double)b.z, xx, y, (double)depth[(size_t)y * w + xx]);
+                }
+        }
+        ck_assert_int_gt(reached, 0);
+        ck_assert_int_gt(culled, 400); /* the hidden and off-screen ones */
+        ck_assert_int_gt(kept, 400);
+        splat_tiles_free(&tiles);
+        free(pos);
+        free(depth);
+    }
+}
+END_TEST
+
 static Suite *engine_suite(void)
 {
     Suite *s = suite_create("engine");
@@ -838,6 +983,10 @@ static Suite *engine_suite(void)
     tcase_add_test(ind, settings_change_what_they_should);
     tcase_add_test(ind, indirect_none_announces_no_photon_buffers);
     suite_add_tcase(s, ind);
+    TCase *sb = tcase_create("splat_bounds");
+    tcase_set_timeout(sb, 300);
+    tcase_add_test(sb, splat_bounds_never_lose_a_reached_pixel);
+    suite_add_tcase(s, sb);
     return s;
 }
 

@@ -1,17 +1,16 @@
 #version 450 core
-// Photon volumes (ISPM 003_… §5): one instanced icosahedron per photon, scaled to bound the
-// photon's kernel ellipsoid — radius r_xy in the plane of the surface the photon hit and
-// r_z = compression · r_xy along that surface's normal n_p (§5.1, Fig. 4 right). The unit
-// icosahedron's vertices lie on a sphere of radius 1/0.79465 so its faces enclose the unit
-// sphere (inradius/circumradius of a regular icosahedron = 0.79465).
-layout(location = 0) in vec3 a_vertex;       // unit icosahedron
-layout(location = 1) in vec3 a_position;     // photon x
-layout(location = 2) in vec3 a_normal;       // n_p
-layout(location = 3) in vec3 a_power;        // Φ_i
-layout(location = 4) in vec3 a_direction;    // ω_i
-layout(location = 5) in vec2 a_radius;       // r_xy, r_z
+// Photon volumes (ISPM 003_… §5), drawn as one screen-aligned rectangle per photon, two
+// triangles, vertices pulled from a buffer (no instancing): pass_splat.c and splat_bounds.c
+// compute on the CPU the pixel rectangle that holds every pixel whose G-buffer point can lie
+// in the photon's kernel ellipsoid (radius r_xy in the plane of the surface the photon hit,
+// r_z = compression · r_xy along that surface's normal n_p; §5.1, Fig. 4 right), and the NDC
+// depth of the ellipsoid's far side, so the GEQUAL depth test still drops pixels whose
+// surface lies behind the whole volume. Each pixel of the rectangle is shaded once.
+// Per photon, 5 vec4: rect (x0, y0, x1 + 1, y1 + 1 in window pixels), (x, z_far),
+// (n_p, r_xy), (Φ_i, r_z), (ω_i, 0).
+layout(std430, binding = 0) readonly buffer splat_photons { vec4 u_photons[]; };
 
-uniform mat4 u_view_proj;
+uniform vec2 u_viewport;
 
 flat out vec3 v_position;
 flat out vec3 v_normal;
@@ -21,16 +20,16 @@ flat out vec2 v_radius;
 
 void main()
 {
-    vec3 n = a_normal;
-    vec3 a = abs(n.x) > 0.9 ? vec3(0.0, 1.0, 0.0) : vec3(1.0, 0.0, 0.0);
-    vec3 t = normalize(cross(a, n));
-    vec3 b = cross(n, t);
-    vec3 p = a_vertex * 1.2584;
-    vec3 world = a_position + (t * p.x + b * p.y) * a_radius.x + n * (p.z * a_radius.y);
-    v_position = a_position;
-    v_normal = n;
-    v_power = a_power;
-    v_direction = a_direction;
-    v_radius = a_radius;
-    gl_Position = u_view_proj * vec4(world, 1.0);
+    int i = gl_VertexID >> 2, corner = gl_VertexID & 3;
+    vec4 rect = u_photons[5 * i];
+    vec4 pz = u_photons[5 * i + 1];
+    vec4 nr = u_photons[5 * i + 2];
+    vec4 pw = u_photons[5 * i + 3];
+    v_position = pz.xyz;
+    v_normal = nr.xyz;
+    v_power = pw.xyz;
+    v_direction = u_photons[5 * i + 4].xyz;
+    v_radius = vec2(nr.w, pw.w);
+    vec2 px = vec2((corner & 1) != 0 ? rect.z : rect.x, (corner & 2) != 0 ? rect.w : rect.y);
+    gl_Position = vec4(px / u_viewport * 2.0 - 1.0, pz.w, 1.0);
 }

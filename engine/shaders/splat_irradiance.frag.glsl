@@ -7,6 +7,7 @@
 //      A = number of kernels covering the pixel
 //   1  the glossy part Σ f_glossy Φ_i κ (radiance), which depends on ω_i and
 //      so cannot be factored out of the sum; it is upsampled but not filtered.
+// SPLAT_NO_METALLIC: the variant for scenes without metallic materials (splat.frag.glsl).
 #define PI 3.14159265358979323846
 
 flat in vec3 v_position;
@@ -44,7 +45,9 @@ void main()
     vec3 e = v_power * kappa;
     o_irradiance = vec4(e, 1.0);
     vec3 g = vec3(0.0);
+#ifndef SPLAT_NO_METALLIC
     if (mat.y > 0.0)
         g = photon_glossy(n, s.xyz, u_eye, v_direction, cos_i, texelFetch(u_albedo, px, 0).rgb, mat) * e;
+#endif
     o_glossy = vec4(g, 0.0);
 }
