@@ -840,6 +840,7 @@ static const char *indirect_pass(eng_indirect m)
     switch (m) {
     case ENG_INDIRECT_QUADS: return "quads";
     case ENG_INDIRECT_TILEGATHER:
+    case ENG_INDIRECT_TILEGATHER_GL:
     case ENG_INDIRECT_KDGATHER: return "gather";
     case ENG_INDIRECT_NONE: return NULL;
     case ENG_INDIRECT_ISPM:

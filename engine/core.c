@@ -209,6 +209,7 @@ const char *eng_indirect_name(eng_indirect m)
     case ENG_INDIRECT_KDGATHER: return "kd-gather";
     case ENG_INDIRECT_QUADS: return "quads";
     case ENG_INDIRECT_TILEGATHER: return "tile-gather";
+    case ENG_INDIRECT_TILEGATHER_GL: return "tile-gather-gl";
     case ENG_INDIRECT_ISPM:
     case ENG_INDIRECT_DEFAULT: return "ispm";
     }

@@ -190,8 +190,10 @@ typedef enum eng_indirect {
     ENG_INDIRECT_KDGATHER,    /* the same photon map, gathered per pixel from a k-d tree on the
                                * CPU (traditional photon mapping, ISPM Appendix A): the baseline */
     ENG_INDIRECT_QUADS,       /* camera-independent photon quads on the tangent plane (001 §3.3) */
-    ENG_INDIRECT_TILEGATHER   /* photons binned to screen tiles, each tile evaluating its list
+    ENG_INDIRECT_TILEGATHER,  /* photons binned to screen tiles, each tile evaluating its list
                                * (002 §6.3); the same estimate as the k-d gather, bit for bit */
+    ENG_INDIRECT_TILEGATHER_GL /* the same tile lists evaluated in a GL compute shader (002 §6.3
+                                * as the paper runs it); equal up to llvmpipe's rounding */
 } eng_indirect;
 
 /* What the À-Trous filter keeps of its detail coefficients (002_… §7.3.1). */

@@ -40,6 +40,8 @@ eng_result glu_program(const char *vert_name, const char *frag_name, GLuint *out
  * fragment shader after its #version line (shader variants from one source file). */
 eng_result glu_program_defines(const char *vert_name, const char *frag_name, const char *frag_defines, GLuint *out,
                                eng_error *err);
+/* A compute program from one embedded shader (GL 4.3+; llvmpipe has 4.5). */
+eng_result glu_compute_program(const char *name, GLuint *out, eng_error *err);
 
 /* A framebuffer with `count` RGBA32F colour attachments of w×h and a 32F depth buffer.
  * layers > 0 makes each colour attachment a 2D array texture of that many layers (attach

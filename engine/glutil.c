@@ -217,6 +217,28 @@ eng_result glu_program_defines(const char *vert_name, const char *frag_name, con
     return ENG_OK;
 }
 
+eng_result glu_compute_program(const char *name, GLuint *out, eng_error *err)
+{
+    GLuint cs;
+    eng_result r = compile(GL_COMPUTE_SHADER, name, NULL, &cs, err);
+    if (r != ENG_OK)
+        return r;
+    GLuint prog = glCreateProgram();
+    glAttachShader(prog, cs);
+    glLinkProgram(prog);
+    glDeleteShader(cs);
+    GLint ok = 0;
+    glGetProgramiv(prog, GL_LINK_STATUS, &ok);
+    if (!ok) {
+        char log[768];
+        glGetProgramInfoLog(prog, sizeof log, NULL, log);
+        glDeleteProgram(prog);
+        return eng_fail(err, ENG_ERR_GL, "engine/shaders/%s: link failed: %s", name, log);
+    }
+    *out = prog;
+    return ENG_OK;
+}
+
 /* ---------------------------------------------------------------- targets */
 
 eng_result glu_target_create(glu_target *t, int count, int width, int height, int layers, eng_error *err)

@@ -14,6 +14,7 @@ const ind_method *ind_method_of(eng_indirect m)
     case ENG_INDIRECT_ISPM: return &ind_scatter_method;
     case ENG_INDIRECT_QUADS: return &ind_quads_method;
     case ENG_INDIRECT_TILEGATHER: return &ind_tilegather_method;
+    case ENG_INDIRECT_TILEGATHER_GL: return &ind_tilegather_gl_method;
     case ENG_INDIRECT_KDGATHER: return &ind_kdgather_method;
     case ENG_INDIRECT_NONE: break;
     }

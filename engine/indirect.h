@@ -5,6 +5,7 @@
  *   ind_scatter.c     "ispm"         photon volumes rasterised (003 §5)
  *   ind_quads.c       "quads"        camera-independent photon quads (001 §3.3)
  *   ind_tilegather.c  "tile-gather"  screen tiles, each evaluating its photon list (002 §6.3)
+ *   ind_tilegather_gl.c "tile-gather-gl" the same lists evaluated in a GL compute shader (002 §6.3)
  *   kdgather.c        "kd-gather"    per-pixel k-d tree gather, the baseline (003 App. A)
  *
  * The frame loop (engine.c) only sees this table: it creates the method once, runs it once
@@ -59,6 +60,7 @@ typedef struct ind_method {
 extern const ind_method ind_scatter_method;
 extern const ind_method ind_quads_method;
 extern const ind_method ind_tilegather_method;
+extern const ind_method ind_tilegather_gl_method;
 extern const ind_method ind_kdgather_method;
 
 /* Fills radius[i] (map->count floats) with photon i's kernel radius r_xy under the

@@ -197,9 +197,11 @@ static eng_result parse_settings(parser *P, const cJSON *obj, eng_settings *s)
             s->indirect = ENG_INDIRECT_QUADS;
         else if (cJSON_IsString(it) && !strcmp(it->valuestring, "tile-gather"))
             s->indirect = ENG_INDIRECT_TILEGATHER;
+        else if (cJSON_IsString(it) && !strcmp(it->valuestring, "tile-gather-gl"))
+            s->indirect = ENG_INDIRECT_TILEGATHER_GL;
         else
             return bad(P, "settings.indirect: %s is not one of \"ispm\", \"quads\", \"tile-gather\", "
-                          "\"kd-gather\", \"none\"",
+                          "\"tile-gather-gl\", \"kd-gather\", \"none\"",
                        show(it, v, sizeof v));
     }
     if ((it = cJSON_GetObjectItemCaseSensitive(obj, "random"))) {
