@@ -41,6 +41,29 @@ for f in bench.csv bench.json error_vs_time.png error_vs_time.svg pass_times.png
   [ -s "out/$f" ] || fail "out/$f missing"
 done
 
+# Speed-up against the k-d gather: one stdout line per ispm point, the same ratios in bench.json.
+[ "$(grep -c '^speedup vs kd-gather: ispm ' bench.out)" -eq 2 ] || fail "want 2 'speedup vs kd-gather' lines: $(cat bench.out)"
+python3 - out/bench.json bench.out <<'PY' || fail "speedup_vs_kd_gather"
+import json, re, sys
+d = json.load(open(sys.argv[1]))
+pts = d["points"]
+ups = d["speedup_vs_kd_gather"]
+assert len(ups) == 2, ups
+lines = [l for l in open(sys.argv[2]) if l.startswith("speedup vs kd-gather: ")]
+for u in ups:
+    a, b = pts[u["point"]], pts[u["kd_gather_point"]]
+    assert a["method"] == "ispm" and b["method"] == "kd"
+    assert a["settings"]["photon_count"] == b["settings"]["photon_count"]
+    assert abs(u["frame_speedup"] - b["frame_ms"] / a["frame_ms"]) <= 1e-9 * u["frame_speedup"]
+    assert abs(u["pass_speedup"] - b["pass_ms"]["gather"] / a["pass_ms"]["splat"]) <= 1e-9 * u["pass_speedup"]
+    assert 0 <= u["max_rel"] < 1e-4, u  # the same estimator
+    pc = a["settings"]["photon_count"]
+    l = [x for x in lines if re.match(r"speedup vs kd-gather: ispm %s " % pc, x)]
+    assert len(l) == 1, (pc, lines)
+    m = re.search(r"([0-9.]+)x frame .*, ([0-9.]+)x pass", l[0])
+    assert m and abs(float(m.group(1)) - u["frame_speedup"]) <= 0.051 and abs(float(m.group(2)) - u["pass_speedup"]) <= 0.051, l[0]
+PY
+
 # CSV: header + 4 rows, every row as wide as the header; columns by name.
 python3 - out/bench.csv <<'PY' || fail "bench.csv content"
 import csv, math, sys
