@@ -87,6 +87,42 @@ eng_result malformed(const char *path, int part, eng_error *err)
                     "length limit", path, part);
 }
 
+// A channel list (OpenEXR file layout: name, int pixel type, pLinear, 3 reserved bytes, x and y
+// sampling; an empty name ends it) whose pixel type is not UINT, HALF or FLOAT makes
+// OpenImageIO 2.4 abort on an assertion instead of failing: refuse it here. Reads exactly len
+// bytes.
+eng_result check_chlist(std::FILE *f, int32_t len, const char *path, int part, const std::string &attr,
+                        eng_error *err)
+{
+    std::vector<unsigned char> b(static_cast<size_t>(len));
+    if (len > 0 && std::fread(b.data(), 1, b.size(), f) != b.size())
+        return malformed(path, part, err);
+    size_t at = 0;
+    for (;;) {
+        size_t nul = at;
+        while (nul < b.size() && b[nul] != 0)
+            nul++;
+        if (nul >= b.size())
+            break; // no terminator: OpenImageIO reports the truncated list
+        if (nul == at)
+            return ENG_OK;
+        std::string ch(reinterpret_cast<const char *>(&b[at]), nul - at);
+        at = nul + 1;
+        if (b.size() - at < 16)
+            break;
+        uint32_t type = static_cast<uint32_t>(b[at]) | static_cast<uint32_t>(b[at + 1]) << 8 |
+                        static_cast<uint32_t>(b[at + 2]) << 16 | static_cast<uint32_t>(b[at + 3]) << 24;
+        if (type > 2)
+            return eng_fail(err, ENG_ERR_INVALID,
+                            "%s: EXR header of part %d: \"%s\" channel \"%s\" has pixel type %u (not uint, half "
+                            "or float)",
+                            path, part, attr.c_str(), ch.c_str(), type);
+        at += 16;
+    }
+    return eng_fail(err, ENG_ERR_INVALID, "%s: EXR header of part %d: channel list \"%s\" is truncated", path,
+                    part, attr.c_str());
+}
+
 // OpenEXR 3.1 (Debian 12) believes the size fields of a header: it allocates and clears a string
 // attribute as long as its size field says before noticing the file is shorter, and sizes a
 // part's chunk offset table from "chunkCount" or the data window. A few hundred hostile bytes
@@ -154,6 +190,12 @@ eng_result check_exr_header(const char *path, eng_error *err)
                     if (!read_i32(f, v[k]))
                         return malformed(path, part, err);
                 rows = static_cast<int64_t>(v[3]) - v[1] + 1;
+                continue;
+            }
+            if (type == "chlist") {
+                eng_result cr = check_chlist(f, len, path, part, name, err);
+                if (cr != ENG_OK)
+                    return cr;
                 continue;
             }
             if (name == "tiles")

@@ -720,6 +720,32 @@ START_TEST(shim_rejects_lying_header_sizes)
         ck_assert_ptr_null(strchr(err.msg, '\n'));
         free(bytes);
     }
+    /* A channel whose pixel type is none of uint/half/float (found by fuzz_run_reader in CI:
+     * OpenImageIO 2.4 aborts on an assertion in TypeDesc_from_ImfPixelType instead of failing). */
+    static const uint32_t bad_types[] = {3, 255, 0x80000000u};
+    for (size_t k = 0; k < sizeof bad_types / sizeof bad_types[0]; k++) {
+        uint32_t type = bad_types[k];
+        char *bytes = malloc(len);
+        ck_assert_ptr_nonnull(bytes);
+        memcpy(bytes, orig, len);
+        long at = find_bytes(bytes, len, "channels\0chlist\0", 16);
+        ck_assert_msg(at >= 0, "no channel list in the file");
+        size_t first = (size_t)at + 16 + 4; /* the list's size field, then the first name */
+        size_t pt = first + strlen(bytes + first) + 1;
+        unsigned char le[4] = {(unsigned char)type, (unsigned char)(type >> 8), (unsigned char)(type >> 16),
+                               (unsigned char)(type >> 24)};
+        memcpy(bytes + pt, le, 4);
+        ck_assert_int_eq(rep_write_atomic(path, bytes, len, &err), ENG_OK);
+        rep_part *parts = NULL;
+        int n = 0;
+        eng_result res = rep_oiio_read_parts(path, REP_MAX_FLOATS, &parts, &n, &err);
+        ck_assert_msg(res == ENG_ERR_INVALID, "pixel type %u: %s: %s", type, eng_result_name(res), err.msg);
+        ck_assert_ptr_null(parts);
+        ck_assert_ptr_nonnull(strstr(err.msg, path));
+        ck_assert_msg(strstr(err.msg, "pixel type") != NULL, "%s", err.msg);
+        ck_assert_ptr_null(strchr(err.msg, '\n'));
+        free(bytes);
+    }
     free(orig);
     free(path);
     fx_free(&r);

@@ -8,6 +8,10 @@
 set -euo pipefail
 SRC=$(cd "$1" && pwd); WORK=$2; shift 2
 SECONDS_EACH=${FUZZ_SECONDS:-20}
+# A fixed seed makes the CI smoke explore the same inputs on every run of one commit (a
+# crash it finds is found again, and a commit that passed does not fail later by luck);
+# FUZZ_SEED=0 lets libFuzzer pick one, for long runs.
+SEED=${FUZZ_SEED:-1}
 BUILD=${FUZZ_BUILD_DIR:-$WORK/build}
 TARGETS=("$@")
 [ ${#TARGETS[@]} -gt 0 ] || TARGETS=(fuzz_gltf fuzz_sequence fuzz_run_reader)
@@ -44,8 +48,8 @@ for t in "${TARGETS[@]}"; do
   mkdir -p "$corpus" "$WORK/artifacts/$t"
   dict=()
   [ -f "$SRC/tests/fuzz/$t.dict" ] && dict=(-dict="$SRC/tests/fuzz/$t.dict")
-  echo "fuzz smoke: $t for ${SECONDS_EACH}s"
-  if ! "$BUILD/tests/fuzz/$t" "$corpus" "$SEEDS/$t" "${dict[@]}" -max_total_time="$SECONDS_EACH" \
+  echo "fuzz smoke: $t for ${SECONDS_EACH}s (seed $SEED)"
+  if ! "$BUILD/tests/fuzz/$t" "$corpus" "$SEEDS/$t" "${dict[@]}" -max_total_time="$SECONDS_EACH" -seed="$SEED" \
        -timeout=20 -rss_limit_mb=2560 -max_len=65536 -print_final_stats=1 \
        -artifact_prefix="$WORK/artifacts/$t/" > "$WORK/$t.log" 2>&1; then
     tail -60 "$WORK/$t.log"
