@@ -26,6 +26,11 @@ typedef struct cap_desc {
     const scn_scene *scene;       /* borrowed */
     const char *gl_version;       /* may be NULL */
     const char *gl_renderer;      /* may be NULL */
+    /* The GL context's backend ("osmesa", "egl") and what it ran on ("surfaceless", "device 0
+     * (…)"): "gl": {"backend", "device"} in the manifest. NULL: not recorded (older runs, whose
+     * backend was OSMesa). */
+    const char *gl_backend;
+    const char *gl_where;
     const char *tool_version;     /* e.g. "0.1.0" */
     const char *git_revision;     /* e.g. "abc123" or "unknown" */
     const char *command_line;     /* recorded verbatim, may be NULL */

@@ -45,7 +45,7 @@
 #define RUNINFO_TMP_NAME "run.json.tmp"
 /* The keys of the manifest that run.json repeats and --resume compares. */
 static const char *const runinfo_keys[] = {"sequence", "scene", "resolution", "fps", "frame_count",
-                                           "camera", "settings", NULL};
+                                           "camera", "settings", "gl", NULL};
 
 /* What the manifest says about one captured buffer. */
 typedef struct cap_bufrec {
@@ -82,7 +82,7 @@ struct cap_capture {
     char *run_dir, *frames_dir;
     const seq_sequence *seq;
     const scn_scene *scene;
-    char *gl_version, *gl_renderer, *tool_version, *git_revision, *command_line;
+    char *gl_version, *gl_renderer, *gl_backend, *gl_where, *tool_version, *git_revision, *command_line;
     char *renderer;            /* NULL: the engine */
     cJSON *renderer_settings;  /* a JSON object, or NULL */
     int det_count;  /* pairs */
@@ -354,6 +354,8 @@ eng_result cap_create(const cap_desc *desc, cap_capture **out, eng_error *err)
     c->scene = desc->scene;
     c->gl_version = dup_or_null(desc->gl_version);
     c->gl_renderer = dup_or_null(desc->gl_renderer);
+    c->gl_backend = dup_or_null(desc->gl_backend);
+    c->gl_where = dup_or_null(desc->gl_where);
     c->tool_version = dup_or_null(desc->tool_version);
     c->git_revision = dup_or_null(desc->git_revision);
     c->command_line = dup_or_null(desc->command_line);
@@ -394,6 +396,8 @@ void cap_destroy(cap_capture *c)
     free(c->det);
     free(c->gl_version);
     free(c->gl_renderer);
+    free(c->gl_backend);
+    free(c->gl_where);
     free(c->tool_version);
     free(c->git_revision);
     free(c->command_line);
@@ -768,6 +772,10 @@ static cJSON *manifest_json(const cap_capture *c)
     cJSON *gl = jok(cJSON_CreateObject());
     jadd(gl, "version", jstr(c->gl_version));
     jadd(gl, "renderer", jstr(c->gl_renderer));
+    if (c->gl_backend)
+        jadd(gl, "backend", jstr(c->gl_backend));
+    if (c->gl_where)
+        jadd(gl, "device", jstr(c->gl_where));
     jadd(root, "gl", gl);
 
     if (c->renderer) {

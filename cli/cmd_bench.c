@@ -610,7 +610,7 @@ static eng_result run_point(const bench_config *c, const scn_scene *scene, bench
     double elapsed = 0.0;
 
     eng_engine *eng = NULL;
-    eng_desc d = {scene, p->seq};
+    eng_desc d = {.scene = scene, .sequence = p->seq};
     eng_result r = eng_create(&d, &eng, err);
     if (r == ENG_OK) {
         eng_listener l = {&g, grab_begin, grab_buffer, grab_end};

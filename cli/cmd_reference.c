@@ -204,7 +204,7 @@ int cmd_reference(int argc, char **argv, const char *command_line)
     cseq->capture_count = 1;
     snprintf(cseq->capture[0], sizeof cseq->capture[0], "reference.*");
 
-    eng_desc ed = {scene, eseq};
+    eng_desc ed = {.scene = scene, .sequence = eseq};
     r = eng_create(&ed, &eng, &err);
     if (r == ENG_OK) {
         rd.engine = eng;

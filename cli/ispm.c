@@ -37,7 +37,7 @@ static void usage(FILE *f)
 static void record_usage(FILE *f)
 {
     fprintf(f,
-            "usage: ispm record SEQUENCE -o RUN [--force | --resume] [--threads N] [--quiet]\n"
+            "usage: ispm record SEQUENCE -o RUN [--force | --resume] [--threads N] [--gl osmesa|egl [--gl-device N]] [--quiet]\n"
             "\n"
             "Renders frame i of SEQUENCE at t = i / fps and writes every announced buffer to\n"
             "RUN/frames/NNNNNN.exr (one multi-part EXR per frame), then RUN/manifest.json last.\n"
@@ -48,6 +48,10 @@ static void record_usage(FILE *f)
             "                     frames already written are kept, the rest rendered (same\n"
             "                     options as the interrupted run; the result is bit-identical)\n"
             "  -j, --threads N    CPU threads (llvmpipe, Embree); overrides the sequence's settings\n"
+            "      --gl BACKEND   how the GL 4.5 context is made: osmesa (default; Mesa's llvmpipe, the\n"
+            "                     goldens' reference) or egl (no window: Mesa's surfaceless platform,\n"
+            "                     or with --gl-device an EGL device such as a GPU); in the manifest\n"
+            "      --gl-device N  with --gl egl: EGL device N (EGL_EXT_platform_device, from 0)\n"
             "  -q, --quiet        no per-frame progress\n"
             "  -h, --help         this text\n"
             "\n"
@@ -130,10 +134,11 @@ static int cmd_record(int argc, char **argv, const char *command_line)
     static const struct option opts[] = {
         {"output", required_argument, NULL, 'o'}, {"force", no_argument, NULL, 'f'},
         {"threads", required_argument, NULL, 'j'}, {"quiet", no_argument, NULL, 'q'},
-        {"resume", no_argument, NULL, 'r'}, {"help", no_argument, NULL, 'h'}, {NULL, 0, NULL, 0},
+        {"resume", no_argument, NULL, 'r'}, {"help", no_argument, NULL, 'h'},
+        {"gl", required_argument, NULL, 'G'}, {"gl-device", required_argument, NULL, 'D'}, {NULL, 0, NULL, 0},
     };
-    const char *out = NULL;
-    int force = 0, resume = 0, quiet = 0, threads = 0, c;
+    const char *out = NULL, *gl = NULL;
+    int force = 0, resume = 0, quiet = 0, threads = 0, gl_device = -1, c;
     while ((c = getopt_long(argc, argv, "o:fj:qrh", opts, NULL)) != -1) {
         switch (c) {
         case 'o': out = optarg; break;
@@ -150,6 +155,23 @@ static int cmd_record(int argc, char **argv, const char *command_line)
             threads = (int)v;
             break;
         }
+        case 'G':
+            if (!eng_gl_backend_known(optarg)) {
+                fprintf(stderr, "ispm record: --gl: '%s' is not a GL backend (%s)\n", optarg, ENG_GL_BACKENDS);
+                return EXIT_INPUT;
+            }
+            gl = optarg;
+            break;
+        case 'D': {
+            char *end;
+            long v = strtol(optarg, &end, 10);
+            if (!*optarg || *end || v < 0 || v > 1023) {
+                fprintf(stderr, "ispm record: --gl-device: '%s' is not a device number (0, 1, ...)\n", optarg);
+                return EXIT_INPUT;
+            }
+            gl_device = (int)v;
+            break;
+        }
         case 'h': record_usage(stdout); return EXIT_OK;
         default: record_usage(stderr); return EXIT_INPUT;
         }
@@ -160,6 +182,10 @@ static int cmd_record(int argc, char **argv, const char *command_line)
     }
     if (force && resume) {
         fprintf(stderr, "ispm record: --force and --resume exclude each other\n");
+        return EXIT_INPUT;
+    }
+    if (gl_device >= 0 && (!gl || strcmp(gl, "egl") != 0)) {
+        fprintf(stderr, "ispm record: --gl-device needs --gl egl\n");
         return EXIT_INPUT;
     }
     const char *seq_path = argv[optind];
@@ -184,7 +210,8 @@ static int cmd_record(int argc, char **argv, const char *command_line)
         rc = EXIT_INPUT;
         goto done;
     }
-    eng_desc ed = {scene, seq};
+    eng_desc ed = {.scene = scene, .sequence = seq, .gl = gl, .gl_use_device = gl_device >= 0,
+                   .gl_device = gl_device};
     r = eng_create(&ed, &eng, &err);
     if (r != ENG_OK) {
         fprintf(stderr, "ispm record: %s\n", err.msg);
@@ -194,6 +221,7 @@ static int cmd_record(int argc, char **argv, const char *command_line)
     cap_desc cd = {
         .run_dir = out, .sequence = seq, .scene = scene,
         .gl_version = eng_gl_version(eng), .gl_renderer = eng_gl_renderer(eng),
+        .gl_backend = eng_gl_backend(eng), .gl_where = eng_gl_where(eng),
         .tool_version = ISPM_VERSION, .git_revision = ISPM_GIT_REV,
         .command_line = command_line, .overwrite = force,
         .determinism = eng_determinism_info(), .resume = resume,
@@ -213,6 +241,8 @@ static int cmd_record(int argc, char **argv, const char *command_line)
     if (!quiet)
         fprintf(stderr, "ispm record: %s (%s), %d frames at %g fps, %dx%d, %s\n", seq->name, scene->path,
                 seq->frame_count, seq->fps, seq->width, seq->height, eng_gl_renderer(eng));
+    if (!quiet && gl)
+        fprintf(stderr, "ispm record: GL through %s, %s\n", eng_gl_backend(eng), eng_gl_where(eng));
     for (int i = 0; i < seq->frame_count; i++) {
         /* Resuming: frames the interrupted run completed are kept (each is rendered from
          * scratch, so skipping some changes no other frame). */

@@ -366,7 +366,18 @@ typedef struct eng_engine eng_engine;
 typedef struct eng_desc {
     const scn_scene *scene;      /* borrowed; must outlive the engine */
     const seq_sequence *sequence;/* borrowed */
+    /* The GL context's backend (a property of the machine, not of the sequence: ispm record
+     * --gl): NULL or "osmesa" (the default, the goldens' reference) or "egl". With "egl",
+     * gl_use_device chooses EGL device gl_device (EGL_EXT_platform_device, --gl-device N);
+     * without it Mesa's surfaceless platform. */
+    const char *gl;
+    int gl_use_device, gl_device;
 } eng_desc;
+
+#define ENG_GL_DEFAULT "osmesa"
+#define ENG_GL_BACKENDS "osmesa, egl" /* for messages */
+/* 1 if name is a GL backend eng_desc.gl accepts. */
+int eng_gl_backend_known(const char *name);
 
 /* Pins what follows the host's SIMD width before any GL or Embree object exists:
  * LP_NATIVE_VECTOR_WIDTH=128, GALLIUM_OVERRIDE_CPU_CAPS=sse4.1, LP_NUM_THREADS=threads,
@@ -394,6 +405,10 @@ int eng_occluded(eng_engine *e, const float a[3], const float b[3]);
 /* GL_VERSION and GL_RENDERER of the engine's context (for the manifest). */
 const char *eng_gl_version(const eng_engine *e);
 const char *eng_gl_renderer(const eng_engine *e);
+/* The backend's name ("osmesa", "egl") and what it runs on ("offscreen", "surfaceless",
+ * "device 0 (/dev/dri/renderD128)"), for the manifest. */
+const char *eng_gl_backend(const eng_engine *e);
+const char *eng_gl_where(const eng_engine *e);
 
 /* ---------------------------------------------------------------- small shared helpers */
 

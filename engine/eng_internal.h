@@ -8,9 +8,8 @@
 #ifndef ISPM_ENG_INTERNAL_H
 #define ISPM_ENG_INTERNAL_H
 
-#define GL_GLEXT_PROTOTYPES 1
-#include <GL/gl.h>
-#include <GL/glext.h>
+/* Every GL function is a pointer loaded from the context's backend (glctx.c). */
+#include "gl_loader.h"
 
 #include "eng.h"
 
@@ -297,7 +296,12 @@ void pass_composite_destroy(pass_composite *p);
 /* ---------------------------------------------------------------- GL context (glctx.c) */
 
 typedef struct eng_glctx eng_glctx;
-eng_result glctx_create(eng_glctx **out, eng_error *err);
+/* A context from backend (NULL: ENG_GL_DEFAULT), made current; use_device: EGL device
+ * `device` (--gl-device). Loads every GL function through the backend. */
+eng_result glctx_create_on(const char *backend, int use_device, int device, eng_glctx **out, eng_error *err);
+eng_result glctx_create(eng_glctx **out, eng_error *err); /* the default backend */
+const char *glctx_backend_name(const eng_glctx *c);
+const char *glctx_where(const eng_glctx *c);
 void glctx_destroy(eng_glctx *c);
 const char *glctx_version(const eng_glctx *c);
 const char *glctx_renderer(const eng_glctx *c);

@@ -165,7 +165,7 @@ eng_result eng_create(const eng_desc *desc, eng_engine **out, eng_error *err)
     }
 
     eng_pin_determinism(e->settings.threads);
-    eng_result r = glctx_create(&e->gl, err);
+    eng_result r = glctx_create_on(desc->gl, desc->gl_use_device, desc->gl_device, &e->gl, err);
     if (r == ENG_OK)
         r = rt_create(s, e->settings.threads, &e->rt, err);
     if (r == ENG_OK)
@@ -294,6 +294,8 @@ eng_result eng_add_listener(eng_engine *e, const eng_listener *l)
 
 const char *eng_gl_version(const eng_engine *e) { return glctx_version(e->gl); }
 const char *eng_gl_renderer(const eng_engine *e) { return glctx_renderer(e->gl); }
+const char *eng_gl_backend(const eng_engine *e) { return glctx_backend_name(e->gl); }
+const char *eng_gl_where(const eng_engine *e) { return glctx_where(e->gl); }
 
 /* ---------------------------------------------------------------- scene at time t */
 

@@ -1,22 +1,28 @@
-/* glctx.c — the engine's GL 4.5 core context, made offscreen with OSMesa (Mesa's llvmpipe),
- * so recording needs no display and no GPU. It also pins everything in the rasterizer and
- * the ray tracer that follows the host's SIMD width, because goldens recorded on one CPU are
- * replayed on others: llvmpipe's vector width and CPU feature set (AVX/FMA change rounding)
- * and Embree's ISA. The pinned values go into every run's manifest. */
+/* glctx.c — the engine's GL 4.5 core context, made offscreen by one of the backends of
+ * glctx_backend.h (OSMesa by default, EGL with ispm record --gl egl), and every GL function
+ * loaded through that backend's GetProcAddress (gl_loader.h). It also pins everything in the
+ * rasterizer and the ray tracer that follows the host's SIMD width, because goldens recorded
+ * on one CPU are replayed on others: llvmpipe's vector width and CPU feature set (AVX/FMA
+ * change rounding) and Embree's ISA. The same pins hold for Mesa's EGL, whose llvmpipe then
+ * renders bit-identically to OSMesa's. The pinned values go into every run's manifest. */
 #define _POSIX_C_SOURCE 200809L /* setenv */
 #include "eng_internal.h"
+#include "glctx_backend.h"
 
-#include <GL/osmesa.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
 struct eng_glctx {
-    OSMesaContext ctx;
-    unsigned char dummy[16 * 16 * 4]; /* the context's own framebuffer; passes use FBOs */
+    const glctx_backend *backend;
+    void *impl;
     char version[128];
     char renderer[128];
+    char where[128];
 };
+
+static const glctx_backend *const g_backends[] = {&glctx_osmesa_backend, &glctx_egl_backend};
+#define BACKEND_COUNT (sizeof g_backends / sizeof g_backends[0])
 
 static char g_threads[16] = "2";
 static char g_embree_cfg[64] = "isa=sse2,threads=2";
@@ -46,29 +52,50 @@ const char *const *eng_determinism_info(void)
     return g_info;
 }
 
-eng_result glctx_create(eng_glctx **out, eng_error *err)
+static const glctx_backend *backend_named(const char *name)
+{
+    for (size_t i = 0; i < BACKEND_COUNT; i++)
+        if (strcmp(g_backends[i]->name, name ? name : ENG_GL_DEFAULT) == 0)
+            return g_backends[i];
+    return NULL;
+}
+
+int eng_gl_backend_known(const char *name)
+{
+    return name && backend_named(name) != NULL;
+}
+
+static ispm_gl_proc load_proc(void *user, const char *name)
+{
+    const eng_glctx *c = user;
+    return c->backend->get_proc(c->impl, name);
+}
+
+eng_result glctx_create_on(const char *backend, int use_device, int device, eng_glctx **out, eng_error *err)
 {
     *out = NULL;
+    const glctx_backend *b = backend_named(backend);
+    if (!b)
+        return eng_fail(err, ENG_ERR_INVALID, "GL: unknown backend \"%s\" (%s)", backend, ENG_GL_BACKENDS);
     eng_glctx *c = calloc(1, sizeof *c);
     if (!c)
         return eng_fail(err, ENG_ERR_NOMEM, "GL: out of memory");
-    const int attribs[] = {
-        OSMESA_FORMAT, OSMESA_RGBA,
-        OSMESA_DEPTH_BITS, 24,
-        OSMESA_PROFILE, OSMESA_CORE_PROFILE,
-        OSMESA_CONTEXT_MAJOR_VERSION, 4,
-        OSMESA_CONTEXT_MINOR_VERSION, 5,
-        0,
-    };
-    c->ctx = OSMesaCreateContextAttribs(attribs, NULL);
-    if (!c->ctx) {
+    c->backend = b;
+    eng_result r = b->open(use_device, device, &c->impl, c->where, sizeof c->where, err);
+    if (r != ENG_OK) {
         free(c);
-        return eng_fail(err, ENG_ERR_GL, "OSMesa: cannot create a GL 4.5 core context (is libosmesa6 from Mesa >= 20 installed?)");
+        return r;
     }
-    if (!OSMesaMakeCurrent(c->ctx, c->dummy, GL_UNSIGNED_BYTE, 16, 16)) {
-        OSMesaDestroyContext(c->ctx);
+    ispm_gl_load(load_proc, c);
+    GLint major = 0, minor = 0;
+    if (glGetIntegerv && glGetString) {
+        glGetIntegerv(GL_MAJOR_VERSION, &major);
+        glGetIntegerv(GL_MINOR_VERSION, &minor);
+    }
+    if (major * 10 + minor < 45) {
+        b->close(c->impl);
         free(c);
-        return eng_fail(err, ENG_ERR_GL, "OSMesa: cannot make the context current");
+        return eng_fail(err, ENG_ERR_GL, "%s: the context is GL %d.%d, the engine needs 4.5 core", b->name, major, minor);
     }
     snprintf(c->version, sizeof c->version, "%s", (const char *)glGetString(GL_VERSION));
     snprintf(c->renderer, sizeof c->renderer, "%s", (const char *)glGetString(GL_RENDERER));
@@ -81,13 +108,20 @@ eng_result glctx_create(eng_glctx **out, eng_error *err)
     return ENG_OK;
 }
 
+eng_result glctx_create(eng_glctx **out, eng_error *err)
+{
+    return glctx_create_on(ENG_GL_DEFAULT, 0, 0, out, err);
+}
+
 void glctx_destroy(eng_glctx *c)
 {
     if (!c)
         return;
-    OSMesaDestroyContext(c->ctx);
+    c->backend->close(c->impl);
     free(c);
 }
 
 const char *glctx_version(const eng_glctx *c) { return c->version; }
 const char *glctx_renderer(const eng_glctx *c) { return c->renderer; }
+const char *glctx_backend_name(const eng_glctx *c) { return c->backend->name; }
+const char *glctx_where(const eng_glctx *c) { return c->where; }

@@ -98,6 +98,7 @@ typedef struct rep_run {
     char *manifest_path;
     int width, height; /* "resolution" */
     char *sequence_name; /* may be NULL */
+    char *gl_renderer;   /* the manifest's gl.renderer (GL_RENDERER); NULL if absent */
     int frame_count;
     rep_frame_info *frames;
 } rep_run;
@@ -152,7 +153,15 @@ typedef struct rep_tolerances {
     rep_tol def;
     int rule_count;
     rep_tol_rule *rules;
+    /* The set used when the run comes from another renderer than the golden (renderer.c): the
+     * file's "cross_renderer" section (same keys: "default", "buffers"; path "FILE#cross_renderer"),
+     * else the built-in cross-renderer defaults (path NULL). Never NULL in a loaded set. */
+    struct rep_tolerances *cross;
 } rep_tolerances;
+
+/* The built-in cross-renderer defaults (a run from another GL renderer than its golden's): no
+ * bit-exact rule, fail 0.02 absolute and 5 % relative on at most 1 % of the pixels, RMSE 0.02. */
+void rep_tol_cross_builtin(rep_tol *t);
 
 /* The built-in defaults: warn 0, fail 1e-4, failrelative 1e-4, failpercent 0, hardfail 1e-2,
  * everything else 0 or disabled. */
@@ -266,7 +275,22 @@ typedef struct rep_report {
     rep_exit exit;
     eng_error error;         /* the unreadable input, when exit is UNREADABLE */
     struct rep_stab_report *stab; /* temporal stability (stability_internal.h); NULL: not measured */
+    /* GL renderers (renderer.c): renderer_differs when both manifests name one and they
+     * differ; then the buffers were compared under the cross-renderer tolerances. */
+    char *run_renderer, *golden_renderer; /* owned; NULL if not recorded */
+    int renderer_differs;
 } rep_report;
+
+/* ---------------------------------------------------------------- renderer.c */
+
+/* Records both runs' GL renderers in r and returns the tolerance set to compare with: tols,
+ * or tols->cross when the run comes from another renderer than the golden (a GPU's EGL run
+ * against an llvmpipe golden). Manifests without gl.renderer (older runs) count as the same. */
+const rep_tolerances *rep_renderer_tolerances(rep_report *r, const rep_run *run, const rep_run *gold,
+                                              const rep_tolerances *tols);
+/* One line on the renderers for the reports ("different renderer: run …, golden …; …"), or
+ * NULL when they are the same. Caller frees. */
+char *rep_renderer_note(const rep_report *r);
 
 /* Appends a zeroed entry for (frame, buffer) and returns it. */
 rep_entry *rep_report_add(rep_report *r, int frame, const char *buffer);

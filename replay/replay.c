@@ -280,8 +280,12 @@ static eng_result walk(const rep_options *o, const char *report_dir, rep_report 
             tol_default = rep_path_join(o->golden_dir, "tolerances.json");
             res = rep_tol_load(tol_default, 1, &tols, err);
         }
-        if (res == ENG_OK && tols->path)
-            r->tol_path = rep_xstrdup(tols->path);
+    }
+    const rep_tolerances *use = tols;
+    if (res == ENG_OK && gold) {
+        use = rep_renderer_tolerances(r, run, gold, tols);
+        if (use->path || use != tols)
+            r->tol_path = rep_xstrdup(use->path ? use->path : "built-in cross-renderer defaults");
     }
     if (res != ENG_OK)
         goto done;
@@ -311,7 +315,7 @@ static eng_result walk(const rep_options *o, const char *report_dir, rep_report 
             else if (!gf)
                 one_side(r, rf, REP_PROB_FRAME_EXTRA);
             else
-                compare_frame(r, tols, rf, rp, gf, gp);
+                compare_frame(r, use, rf, rp, gf, gp);
             res = stab_frame(&sw, i, rf, rp, gf, gp, err);
         }
         if (rf)
@@ -320,7 +324,7 @@ static eng_result walk(const rep_options *o, const char *report_dir, rep_report 
             rep_parts_free(gp, gf->buffer_count);
     }
     if (res == ENG_OK)
-        res = stab_end(&sw, r, run, tols, report_dir, err);
+        res = stab_end(&sw, r, run, use, report_dir, err);
 done:
     stab_walk_free(&sw);
     free(tol_default);

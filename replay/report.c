@@ -42,11 +42,14 @@ void rep_report_free(rep_report *r)
     free(r->entries);
     free(r->digest_buffer);
     free(r->tol_path);
+    free(r->run_renderer);
+    free(r->golden_renderer);
     rep_stab_report_free(r->stab);
     r->stab = NULL;
     r->entries = NULL;
     r->digest_buffer = NULL;
     r->tol_path = NULL;
+    r->run_renderer = r->golden_renderer = NULL;
     r->count = r->cap = 0;
 }
 
@@ -214,6 +217,10 @@ char *rep_report_text(const rep_report *r, int quiet)
                           r->tol_path ? r->tol_path : "built-in");
         else
             rep_sb_printf(&sb, "        no golden: integrity and non-finite values only\n");
+        char *note = rep_renderer_note(r);
+        if (note)
+            rep_sb_printf(&sb, "        %s\n", note);
+        free(note);
         rep_sb_printf(&sb, "        %d frames, %d buffers per frame\n", r->frames, r->buffers_per_frame);
         if (r->golden_dir && r->exit != REP_UNREADABLE) {
             if (r->digest_frame >= 0)
@@ -369,6 +376,12 @@ char *rep_report_json(const rep_report *r)
     add_str(root, "run", r->run_dir);
     add_str(root, "golden", r->golden_dir);
     add_str(root, "tolerances", r->golden_dir ? (r->tol_path ? r->tol_path : "built-in") : NULL);
+    if (r->golden_dir && (r->run_renderer || r->golden_renderer)) {
+        cJSON *rd = cJSON_AddObjectToObject(root, "renderer");
+        add_str(rd, "run", r->run_renderer);
+        add_str(rd, "golden", r->golden_renderer);
+        cJSON_AddBoolToObject(rd, "different", r->renderer_differs);
+    }
     cJSON_AddStringToObject(root, "verdict", rep_exit_word(r->exit));
     cJSON_AddNumberToObject(root, "exit_code", (double)r->exit);
     if (r->exit == REP_UNREADABLE)

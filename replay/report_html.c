@@ -600,6 +600,12 @@ static void summary(rep_sb *sb, const page *pg, size_t listed)
         rep_sb_printf(sb, "</dd><dt>tolerances</dt><dd>");
         esc(sb, r->tol_path ? r->tol_path : "built-in");
     }
+    char *note = rep_renderer_note(r);
+    if (note) {
+        rep_sb_printf(sb, "</dd><dt>renderer</dt><dd>");
+        esc(sb, note);
+    }
+    free(note);
     rep_sb_printf(sb, "</dd><dt>frames</dt><dd>%d, %d buffers per frame</dd>", r->frames, r->buffers_per_frame);
     if (r->golden_dir && r->exit != REP_UNREADABLE) {
         rep_sb_printf(sb, "<dt>first digest difference</dt><dd>");

@@ -91,6 +91,7 @@ void rep_run_close(rep_run *run)
     }
     free(run->frames);
     free(run->sequence_name);
+    free(run->gl_renderer);
     free(run->manifest_path);
     free(run->dir);
     free(run);
@@ -257,6 +258,10 @@ static eng_result parse_manifest(rep_run *run, const cJSON *root, eng_error *err
     const char *sname = cJSON_IsObject(seq) ? get_string(seq, "name") : NULL;
     if (sname)
         run->sequence_name = rep_xstrdup(sname);
+    const cJSON *gl = cJSON_GetObjectItemCaseSensitive(root, "gl");
+    const char *renderer = cJSON_IsObject(gl) ? get_string(gl, "renderer") : NULL;
+    if (renderer)
+        run->gl_renderer = rep_xstrdup(renderer);
     int64_t fc;
     if ((r = get_int(mf, "top level", root, "frame_count", 1, 1e7, &fc, err)) != ENG_OK)
         return r;

@@ -14,6 +14,11 @@
  * (the run may flicker at most the golden run's own value × (1 + golden_margin)). A rule's
  * stability object replaces the default's whole: limits do not merge key by key, so what a
  * rule checks is what it says.
+ *
+ * A file may also hold "cross_renderer": a separate, looser set with the same "default" and
+ * "buffers" keys, used instead of the rest when the run was rendered by another GL renderer
+ * than the golden (a GPU through EGL against an llvmpipe golden: renderer.c). Without it such
+ * a run is compared under the built-in cross-renderer defaults (rep_tol_cross_builtin).
  */
 #define _POSIX_C_SOURCE 200809L
 
@@ -128,10 +133,22 @@ static eng_result parse_block(const char *path, const char *where, const cJSON *
     return ENG_OK;
 }
 
+void rep_tol_cross_builtin(rep_tol *t)
+{
+    rep_tol_builtin(t);
+    t->warn = 1e-4;
+    t->fail = 0.02;
+    t->failrelative = 0.05;
+    t->failpercent = 1;
+    t->hardfail = INFINITY;
+    t->rmse_fail = 0.02;
+}
+
 void rep_tol_free(rep_tolerances *t)
 {
     if (!t)
         return;
+    rep_tol_free(t->cross);
     for (int i = 0; i < t->rule_count; i++)
         free(t->rules[i].match);
     free(t->rules);
@@ -139,12 +156,16 @@ void rep_tol_free(rep_tolerances *t)
     free(t);
 }
 
+/* A "cross_renderer" section, or the built-in cross-renderer set where the file has none. */
+static eng_result parse_cross(const char *path, const cJSON *root, rep_tolerances *t, eng_error *err);
+
 static eng_result parse_root(const char *path, const cJSON *root, rep_tolerances *t, eng_error *err)
 {
     if (!cJSON_IsObject(root))
         return eng_fail(err, ENG_ERR_INVALID, "%s: must be a JSON object", path);
     for (const cJSON *v = root->child; v; v = v->next)
-        if (strcmp(v->string, "default") != 0 && strcmp(v->string, "buffers") != 0)
+        if (strcmp(v->string, "default") != 0 && strcmp(v->string, "buffers") != 0 &&
+            (t->cross || strcmp(v->string, "cross_renderer") != 0))
             return eng_fail(err, ENG_ERR_INVALID, "%s: unknown key \"%s\"", path, v->string);
     const cJSON *def = cJSON_GetObjectItemCaseSensitive(root, "default");
     eng_result r;
@@ -173,6 +194,30 @@ static eng_result parse_root(const char *path, const cJSON *root, rep_tolerances
     return ENG_OK;
 }
 
+static rep_tolerances *cross_builtin(void)
+{
+    rep_tolerances *c = rep_xcalloc(1, sizeof *c);
+    rep_tol_cross_builtin(&c->def);
+    return c;
+}
+
+static eng_result parse_cross(const char *path, const cJSON *root, rep_tolerances *t, eng_error *err)
+{
+    const cJSON *sec = cJSON_GetObjectItemCaseSensitive(root, "cross_renderer");
+    t->cross = cross_builtin();
+    if (!sec)
+        return ENG_OK;
+    /* The section starts from the built-in defaults, not the cross-renderer ones: what it
+     * checks is what it says. A non-NULL cross marks it as a section (no nested one). */
+    rep_tol_builtin(&t->cross->def);
+    t->cross->cross = t->cross;
+    char *where = rep_xprintf("%s#cross_renderer", path);
+    eng_result r = parse_root(where, sec, t->cross, err);
+    t->cross->cross = NULL;
+    t->cross->path = where;
+    return r;
+}
+
 eng_result rep_tol_parse(const char *path, const char *json, size_t len, rep_tolerances **out, eng_error *err)
 {
     *out = NULL;
@@ -186,6 +231,8 @@ eng_result rep_tol_parse(const char *path, const char *json, size_t len, rep_tol
         r = eng_fail(err, ENG_ERR_PARSE, "%s: byte %zu: not valid JSON", path, at);
     } else {
         r = parse_root(path, root, t, err);
+        if (r == ENG_OK)
+            r = parse_cross(path, root, t, err);
     }
     cJSON_Delete(root);
     if (r != ENG_OK) {
@@ -203,6 +250,7 @@ eng_result rep_tol_load(const char *path, int missing_ok, rep_tolerances **out, 
     if (missing_ok && !rep_is_file(path) && !rep_is_dir(path)) {
         rep_tolerances *t = rep_xcalloc(1, sizeof *t);
         rep_tol_builtin(&t->def);
+        t->cross = cross_builtin();
         *out = t;
         return ENG_OK;
     }

@@ -5,7 +5,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 BUILD_DIR=${BUILD_DIR:-build}
 PKGS=(build-essential cmake pkg-config git
-      libosmesa6-dev libembree-dev libopenexr-dev libopenimageio-dev openimageio-tools
+      libosmesa6-dev libegl-dev libegl-mesa0 libgl-dev libembree-dev libopenexr-dev libopenimageio-dev openimageio-tools
       libtinygltf-dev nlohmann-json3-dev libcjson-dev check libsubunit-dev libxxhash-dev
       libplplot-dev plplot-driver-cairo
       chromium libxml2-utils

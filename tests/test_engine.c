@@ -85,7 +85,7 @@ static void setup_json(fixture *f, const char *json)
     eng_error err;
     ck_assert_msg(seq_parse("inline.json", json, strlen(json), &f->seq, &err) == ENG_OK, "%s", err.msg);
     ck_assert_msg(scn_load_gltf(f->seq.scene_path, &f->scene, &err) == ENG_OK, "%s", err.msg);
-    eng_desc d = {f->scene, &f->seq};
+    eng_desc d = {.scene = f->scene, .sequence = &f->seq};
     ck_assert_msg(eng_create(&d, &f->eng, &err) == ENG_OK, "%s", err.msg);
     eng_listener l = {&f->keep, NULL, keep_buffer, keep_end};
     ck_assert_int_eq(eng_add_listener(f->eng, &l), ENG_OK);

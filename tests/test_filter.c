@@ -562,7 +562,7 @@ static void engine_open(engine_fixture *f, grab *g, int size, const char *settin
     memset(f, 0, sizeof *f);
     ck_assert_msg(seq_parse("filters.json", json, strlen(json), &f->seq, &err) == ENG_OK, "%s", err.msg);
     ck_assert_msg(scn_load_gltf(f->seq.scene_path, &f->scene, &err) == ENG_OK, "%s", err.msg);
-    eng_desc d = {f->scene, &f->seq};
+    eng_desc d = {.scene = f->scene, .sequence = &f->seq};
     ck_assert_msg(eng_create(&d, &f->eng, &err) == ENG_OK, "%s", err.msg);
     eng_listener l = {g, NULL, grab_buffer, NULL};
     ck_assert_int_eq(eng_add_listener(f->eng, &l), ENG_OK);

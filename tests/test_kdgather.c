@@ -150,7 +150,7 @@ static void render_cornell(const char *indirect, keeper *k, seq_sequence *seq)
     scn_scene *scene = NULL;
     ck_assert_msg(scn_load_gltf(seq->scene_path, &scene, &err) == ENG_OK, "%s", err.msg);
     eng_engine *eng = NULL;
-    eng_desc d = {scene, seq};
+    eng_desc d = {.scene = scene, .sequence = seq};
     ck_assert_msg(eng_create(&d, &eng, &err) == ENG_OK, "%s", err.msg);
     eng_listener l = {k, NULL, keep_buffer, NULL};
     ck_assert_int_eq(eng_add_listener(eng, &l), ENG_OK);

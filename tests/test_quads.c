@@ -120,7 +120,7 @@ static void render_cornell(const char *indirect, int view, int threads, const ch
     REQUIRE(scn_load_gltf(seq->scene_path, &scene, &err) == ENG_OK, "%s", err.msg);
     k->settings = seq->settings;
     eng_engine *eng = NULL;
-    eng_desc d = {scene, seq};
+    eng_desc d = {.scene = scene, .sequence = seq};
     REQUIRE(eng_create(&d, &eng, &err) == ENG_OK, "%s", err.msg);
     eng_listener l = {k, NULL, keep_buffer, keep_eye};
     REQUIRE(eng_add_listener(eng, &l) == ENG_OK, "listener");

@@ -87,7 +87,7 @@ static void setup_open(setup *s, const char *seq_path, const char *json, int siz
     s->seq.settings.threads = threads;
     r = scn_load_gltf(s->seq.scene_path, &s->scene, &err);
     ck_assert_msg(r == ENG_OK, "%s", err.msg);
-    eng_desc ed = {s->scene, &s->seq};
+    eng_desc ed = {.scene = s->scene, .sequence = &s->seq};
     r = eng_create(&ed, &s->engine, &err);
     ck_assert_msg(r == ENG_OK, "%s", err.msg);
 }

@@ -29,7 +29,7 @@ int main(int argc, char **argv)
         free(seq);
         return 2;
     }
-    eng_desc ed = {scene, seq};
+    eng_desc ed = {.scene = scene, .sequence = seq};
     cap_desc cd = {.run_dir = argv[2], .sequence = seq, .scene = scene, .tool_version = "test",
                    .git_revision = "test", .overwrite = 1, .determinism = eng_determinism_info()};
     if (eng_create(&ed, &eng, &err) != ENG_OK || cap_create(&cd, &cap, &err) != ENG_OK) {
