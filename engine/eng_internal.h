@@ -104,6 +104,7 @@ typedef struct eng_light_pose {
     float direction[3]; /* world, unit, where the light points (spot, directional) */
     float radiance_scale[3]; /* colour × intensity: W/sr (point, spot) or W/m² (directional) */
     float range, inner_cone, outer_cone;
+    float radius; /* scn_light.radius: sphere radius (m) or disc angular radius (rad); 0 punctual */
 } eng_light_pose;
 
 typedef struct eng_frame_scene {
@@ -171,8 +172,10 @@ void pass_shadow_destroy(pass_shadow *p);
  * shadow lookups; attachment 0 holds radiance RGB. */
 typedef struct pass_direct pass_direct;
 eng_result pass_direct_create(int width, int height, pass_direct **out, eng_error *err);
+/* extra[l]: light l's shadow-method map (shadow.h; the blocker map of a light with a size). */
 const glu_target *pass_direct_run(pass_direct *p, const eng_frame_scene *fs, const glu_target *gbuf,
-                                  const shadow_map *const *shadows, const eng_settings *s);
+                                  const shadow_map *const *shadows, const glu_target *const *extra,
+                                  const eng_settings *s);
 void pass_direct_destroy(pass_direct *p);
 
 /* Light-space G-buffer (pass_lightgbuffer.c, ISPM §3 step 1b) and bounce map
@@ -405,6 +408,11 @@ typedef struct eng_rt eng_rt;
 /* Closest hit of the ray org + t·dir, t in [tnear, tfar], dir unit, against the scene as
  * last posed by rt_update. Returns 1 and fills hit, or 0 (hit untouched). Thread-safe. */
 int rt_intersect(const eng_rt *rt, const float org[3], const float dir[3], float tnear, float tfar, rt_hit *hit);
+/* The lamps of lights with a size (rt.c): the light index of the nearest lamp the ray enters
+ * at t in (tmin, tmax), other than light skip (−1: none skipped), with *t; −1 when none. A
+ * ray that starts inside a lamp ignores it. rt_intersect returns 0 where a lamp comes first. */
+int rt_lamp_hit(const eng_rt *rt, const float org[3], const float dir[3], float tmin, float tmax, int skip,
+                float *t);
 
 /* CPU photon trace (photon_trace.c, ISPM §4.3): traces every bounce-map photon with power > 0
  * through the scene posed in rt and fills out (its previous contents are replaced; out may

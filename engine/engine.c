@@ -10,6 +10,7 @@
 #define _POSIX_C_SOURCE 200809L /* clock_gettime */
 #include "eng_internal.h"
 #include "indirect.h"
+#include "shadow.h"
 #include "progressive.h"
 
 #include <math.h>
@@ -31,6 +32,7 @@ struct eng_engine {
     eng_gpu_prim *gpu;
     pass_gbuffer *gbuffer;
     pass_shadow *shadow;
+    void *shadow_state[SHADOW_METHOD_COUNT]; /* shadow.h: every shadow method's state */
     pass_direct *direct;
     pass_composite *composite;
     /* Indirect light (ISPM): random maps, per-light light G-buffer + bounce map, the CPU
@@ -172,6 +174,8 @@ eng_result eng_create(const eng_desc *desc, eng_engine **out, eng_error *err)
         r = pass_gbuffer_create(e->width, e->height, &e->gbuffer, err);
     if (r == ENG_OK)
         r = pass_shadow_create(e->settings.shadow_map_size, nlights, &e->shadow, err);
+    for (int m = 0; m < SHADOW_METHOD_COUNT && r == ENG_OK; m++)
+        r = shadow_methods[m]->create(e->settings.shadow_map_size, nlights, &e->shadow_state[m], err);
     if (r == ENG_OK)
         r = pass_direct_create(e->width, e->height, &e->direct, err);
     if (r == ENG_OK)
@@ -252,6 +256,8 @@ void eng_destroy(eng_engine *e)
         pass_composite_destroy(e->composite);
         pass_direct_destroy(e->direct);
         pass_shadow_destroy(e->shadow);
+        for (int m = 0; m < SHADOW_METHOD_COUNT; m++)
+            shadow_methods[m]->destroy(e->shadow_state[m]);
         pass_gbuffer_destroy(e->gbuffer);
         if (e->gpu)
             for (uint32_t i = 0; i < e->scene->primitive_count; i++) {
@@ -398,6 +404,7 @@ static void pose_frame(eng_engine *e, int frame)
         lp->range = sl->range;
         lp->inner_cone = sl->inner_cone;
         lp->outer_cone = sl->outer_cone;
+        lp->radius = sl->radius;
         if (sl->type == SCN_LIGHT_DIRECTIONAL) {
             /* The ortho shadow box's near plane: one scene radius behind the centre. */
             float half = 0.0f, centre[3];
@@ -477,6 +484,44 @@ static const char *const CH_PHOTON[] = {"position.X", "position.Y", "position.Z"
                                         "direction.Z", "power.R", "power.G", "power.B", "normal.X",
                                         "normal.Y", "normal.Z", "density", "bounce"};
 static const char *const CH_Y[] = {"Y"};
+
+/* Runs light l's shadow method after its shadow map (shadow.h), timed as the method's pass,
+ * and announces the map it returns per face as shadow.light<l>[.face<f>].<buffer>. */
+static eng_result shadow_method_pass(eng_engine *e, int frame, uint32_t l, const shadow_map *sm,
+                                     const glu_target **out, eng_error *err)
+{
+    int m = shadow_method_index(&e->fs.lights[l]);
+    const shadow_method *method = shadow_methods[m];
+    double t0 = now_ms();
+    int failed = 0;
+    *out = method->run(e->shadow_state[m], &e->fs.lights[l], sm, l, &failed);
+    glFinish();
+    if (method->pass)
+        add_time(e, method->pass, now_ms() - t0);
+    if (failed)
+        return eng_fail(err, ENG_ERR_GL, "frame %d: cannot allocate the %s map of light %u", frame, method->name, l);
+    for (int f = 0; *out && f < sm->faces; f++) {
+        char name[64];
+        if (sm->faces > 1)
+            snprintf(name, sizeof name, "shadow.light%u.face%d.%s", l, f, method->buffer);
+        else
+            snprintf(name, sizeof name, "shadow.light%u.%s", l, method->buffer);
+        static const int p0[] = {0};
+        if (read_and_announce(e, frame, name, *out, 0, f, 1, p0, CH_Z))
+            return eng_fail(err, ENG_ERR_ABORTED, "frame %d: capture failed at %s", frame, name);
+    }
+    return ENG_OK;
+}
+
+/* Whether a light of this frame has a size (direct.penumbra is announced only then, so that
+ * runs of punctual lights keep today's buffers). */
+static int any_sized_light(const eng_frame_scene *fs)
+{
+    for (uint32_t l = 0; l < fs->light_count; l++)
+        if (fs->lights[l].radius > 0.0f)
+            return 1;
+    return 0;
+}
 
 #define PHOTON_ROW 1024 /* photons.map is PHOTON_ROW photons wide */
 
@@ -830,6 +875,7 @@ eng_result eng_render_frame(eng_engine *e, int frame, eng_error *err)
 
     /* Shadow maps, one per light. */
     const shadow_map *maps[8] = {0};
+    const glu_target *shadow_extra[8] = {0}; /* the shadow method's map per light (shadow.h) */
     for (uint32_t l = 0; l < e->fs.light_count; l++) {
         t0 = now_ms();
         maps[l] = pass_shadow_run(e->shadow, &e->fs, l);
@@ -846,6 +892,9 @@ eng_result eng_render_frame(eng_engine *e, int frame, eng_error *err)
             if (read_and_announce(e, frame, name, &maps[l]->target, 0, f, 1, p0, CH_Z))
                 return eng_fail(err, ENG_ERR_ABORTED, "frame %d: capture failed at %s", frame, name);
         }
+        eng_result r = shadow_method_pass(e, frame, l, maps[l], &shadow_extra[l], err);
+        if (r != ENG_OK)
+            return r;
     }
 
     /* Light G-buffers, bounce maps and the CPU photon trace (ISPM §3 1b–d). */
@@ -920,11 +969,13 @@ eng_result eng_render_frame(eng_engine *e, int frame, eng_error *err)
 
     /* Direct light. */
     t0 = now_ms();
-    const glu_target *direct = pass_direct_run(e->direct, &e->fs, gb, maps, &e->settings);
+    const glu_target *direct = pass_direct_run(e->direct, &e->fs, gb, maps, shadow_extra, &e->settings);
     glFinish();
     add_time(e, "direct", now_ms() - t0);
     if (read_and_announce(e, frame, "direct.radiance", direct, 0, 0, 3, p012, CH_RGB))
         return eng_fail(err, ENG_ERR_ABORTED, "frame %d: capture failed at direct.radiance", frame);
+    if (any_sized_light(&e->fs) && read_and_announce(e, frame, "direct.penumbra", direct, 1, 0, 1, p0, CH_Y))
+        return eng_fail(err, ENG_ERR_ABORTED, "frame %d: capture failed at direct.penumbra", frame);
 
     /* Indirect light: the photon estimate of the `indirect` method (ISPM §3 step 4), at full
      * resolution, or reconstructed by the filters. */

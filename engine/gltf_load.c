@@ -441,6 +441,31 @@ static eng_result load_cameras(loader *L)
     return ENG_OK;
 }
 
+/* extras.ispm.radius (point, spot: metres, below 10) or extras.ispm.angular_radius
+ * (directional: radians, below π/4); absent or 0 keeps the punctual light (issue 15). */
+static eng_result light_size(loader *L, uint32_t i, const gls_light *g, scn_light *d)
+{
+    int directional = d->type == SCN_LIGHT_DIRECTIONAL;
+    const gls_number *n = directional ? &g->angular_radius : &g->radius;
+    const gls_number *other = directional ? &g->radius : &g->angular_radius;
+    const char *key = directional ? "angular_radius" : "radius";
+    if (other->state != GLS_NUM_ABSENT)
+        return fail(L, ENG_ERR_INVALID, "light %u: extras.ispm.%s is for %s lights, use extras.ispm.%s", i,
+                    directional ? "radius" : "angular_radius", directional ? "point and spot" : "directional",
+                    key);
+    d->radius = 0.0f;
+    if (n->state == GLS_NUM_NOT_A_NUMBER)
+        return fail(L, ENG_ERR_INVALID, "light %u: extras.ispm.%s is not a number (or extras.ispm not an object)",
+                    i, key);
+    if (n->state == GLS_NUM_ABSENT)
+        return ENG_OK;
+    double limit = directional ? PI / 4.0 : 10.0;
+    if (!isfinite(n->value) || n->value < 0.0 || n->value >= limit)
+        return fail(L, ENG_ERR_INVALID, "light %u: extras.ispm.%s %g is not in [0, %g)", i, key, n->value, limit);
+    d->radius = (float)n->value;
+    return ENG_OK;
+}
+
 static eng_result load_lights(loader *L)
 {
     const gls_model *m = L->m;
@@ -490,6 +515,9 @@ static eng_result load_lights(loader *L)
             d->inner_cone = (float)g->inner_cone;
             d->outer_cone = (float)g->outer_cone;
         }
+        eng_result r = light_size(L, i, g, d);
+        if (r != ENG_OK)
+            return r;
     }
     return ENG_OK;
 }

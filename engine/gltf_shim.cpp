@@ -101,23 +101,17 @@ gls_doubles doubles(const std::vector<double> &v)
     return d;
 }
 
-/* ext_name.member of an extension map; *has tells whether ext_name was there at all. */
-gls_number ext_number(const tinygltf::ExtensionMap &ext, const char *ext_name, const char *member,
-                      int *has)
+/* obj.member as a number: absent, present, or NOT_A_NUMBER (also when obj is no object). */
+gls_number member_number(const tinygltf::Value &obj, const char *member)
 {
     gls_number n = {GLS_NUM_ABSENT, 0.0};
-    auto it = ext.find(ext_name);
-    if (has)
-        *has = it != ext.end();
-    if (it == ext.end())
-        return n;
-    if (!it->second.IsObject()) {
+    if (!obj.IsObject()) {
         n.state = GLS_NUM_NOT_A_NUMBER;
         return n;
     }
-    if (!it->second.Has(member))
+    if (!obj.Has(member))
         return n;
-    const tinygltf::Value &v = it->second.Get(member);
+    const tinygltf::Value &v = obj.Get(member);
     if (!v.IsNumber()) {
         n.state = GLS_NUM_NOT_A_NUMBER;
         return n;
@@ -125,6 +119,26 @@ gls_number ext_number(const tinygltf::ExtensionMap &ext, const char *ext_name, c
     n.state = GLS_NUM_PRESENT;
     n.value = v.GetNumberAsDouble();
     return n;
+}
+
+/* ext_name.member of an extension map; *has tells whether ext_name was there at all. */
+gls_number ext_number(const tinygltf::ExtensionMap &ext, const char *ext_name, const char *member,
+                      int *has)
+{
+    auto it = ext.find(ext_name);
+    if (has)
+        *has = it != ext.end();
+    if (it == ext.end())
+        return gls_number{GLS_NUM_ABSENT, 0.0};
+    return member_number(it->second, member);
+}
+
+/* extras.<group>.<member> of a glTF object's extras, in the states of ext_number. */
+gls_number extras_number(const tinygltf::Value &extras, const char *group, const char *member)
+{
+    if (!extras.IsObject() || !extras.Has(group))
+        return gls_number{GLS_NUM_ABSENT, 0.0};
+    return member_number(extras.Get(group), member);
 }
 
 bool starts_with(const std::string &s, const char *prefix)
@@ -221,7 +235,9 @@ void build_view(gls_impl &g)
                              c.perspective.aspectRatio, c.perspective.znear, c.perspective.zfar});
     for (const tinygltf::Light &l : m.lights)
         g.lights.push_back({l.name.c_str(), l.type.c_str(), doubles(l.color), l.intensity, l.range,
-                            l.spot.innerConeAngle, l.spot.outerConeAngle});
+                            l.spot.innerConeAngle, l.spot.outerConeAngle,
+                            extras_number(l.extras, "ispm", "radius"),
+                            extras_number(l.extras, "ispm", "angular_radius")});
     for (const tinygltf::Material &mat : m.materials) {
         gls_material c;
         c.name = mat.name.c_str();

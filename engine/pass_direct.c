@@ -10,6 +10,7 @@
 
 #define DIRECT_MAX_LIGHTS 8
 #define SHADOW_UNIT0 4
+#define BLOCKER_UNIT0 (SHADOW_UNIT0 + DIRECT_MAX_LIGHTS)
 
 struct pass_direct {
     glu_pass pass;
@@ -21,7 +22,8 @@ eng_result pass_direct_create(int width, int height, pass_direct **out, eng_erro
     pass_direct *p = calloc(1, sizeof *p);
     if (!p)
         return eng_fail(err, ENG_ERR_NOMEM, "direct: out of memory");
-    eng_result r = glu_pass_create(&p->pass, "direct.frag.glsl", 1, width, height, err);
+    /* Attachments: 0 radiance, 1 penumbra (shadow_pcss.glsl). */
+    eng_result r = glu_pass_create(&p->pass, "direct.frag.glsl", 2, width, height, err);
     if (r != ENG_OK) {
         free(p);
         return r;
@@ -36,6 +38,8 @@ eng_result pass_direct_create(int width, int height, pass_direct **out, eng_erro
         char name[32];
         snprintf(name, sizeof name, "u_shadow[%d]", i);
         glUniform1i(glGetUniformLocation(g, name), SHADOW_UNIT0 + i);
+        snprintf(name, sizeof name, "u_blocker[%d]", i);
+        glUniform1i(glGetUniformLocation(g, name), BLOCKER_UNIT0 + i);
     }
     *out = p;
     return ENG_OK;
@@ -49,7 +53,8 @@ static GLint loc(GLuint prog, const char *fmt, int i)
 }
 
 const glu_target *pass_direct_run(pass_direct *p, const eng_frame_scene *fs, const glu_target *gbuf,
-                                  const shadow_map *const *shadows, const eng_settings *s)
+                                  const shadow_map *const *shadows, const glu_target *const *extra,
+                                  const eng_settings *s)
 {
     GLuint g = p->pass.program;
     glUseProgram(g);
@@ -82,11 +87,23 @@ const glu_target *pass_direct_run(pass_direct *p, const eng_frame_scene *fs, con
             glUniformMatrix4fv(loc(g, "u_shadow_view_proj[%d]", i * 6 + f), 1, GL_FALSE, sm->view_proj[f]);
         glActiveTexture(GL_TEXTURE0 + SHADOW_UNIT0 + i);
         glBindTexture(GL_TEXTURE_2D_ARRAY, sm->target.color[0]);
+        /* Soft shadows (shadow_pcss.glsl): the light's size and its blocker map. A sphere's
+         * radius, or tan of a disc's angular radius. */
+        float radius = extra[i] ? (type == 2 ? tanf(l->radius) : l->radius) : 0.0f;
+        glUniform1f(loc(g, "u_light_radius[%d]", i), radius);
+        if (extra[i]) {
+            glActiveTexture(GL_TEXTURE0 + BLOCKER_UNIT0 + i);
+            glBindTexture(GL_TEXTURE_2D_ARRAY, extra[i]->color[0]);
+        }
     }
     glUniform1i(glGetUniformLocation(g, "u_shadow_size"), s->shadow_map_size);
     glUniform1i(glGetUniformLocation(g, "u_pcf_radius"), s->pcf_radius);
     glUniform1f(glGetUniformLocation(g, "u_shadow_bias"), s->shadow_bias);
     glUniform3fv(glGetUniformLocation(g, "u_eye"), 1, fs->camera.eye);
+    float inv[16];
+    m4_invert(inv, fs->camera.view_proj);
+    glUniformMatrix4fv(glGetUniformLocation(g, "u_inv_view_proj"), 1, GL_FALSE, inv);
+    glUniform2f(glGetUniformLocation(g, "u_viewport"), (float)p->pass.target.width, (float)p->pass.target.height);
 
     glu_pass_draw(&p->pass);
     return &p->pass.target;

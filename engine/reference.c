@@ -244,6 +244,15 @@ static float pdf_mix(const scn_material *m, const float ns[3], const float wi[3]
 
 /* ---------------------------------------------------------------- lights */
 
+/* A spot light's KHR_lights_punctual falloff t² for cd, the cosine between its axis and the
+ * direction light leaves it by. */
+static float spot_falloff(const eng_light_pose *l, float cd)
+{
+    float ci = cosf(l->inner_cone), co = cosf(l->outer_cone);
+    float t = clamp01((cd - co) / fmaxf(ci - co, 1e-4f));
+    return t * t;
+}
+
 /* Irradiance at normal incidence that light l delivers to p (no visibility), the unit
  * direction toward it and the distance (INFINITY for directional): direct.frag.glsl's model. */
 static int light_at(const eng_light_pose *l, const float p[3], float wl[3], float *dist, float e[3])
@@ -269,16 +278,52 @@ static int light_at(const eng_light_pose *l, const float p[3], float wl[3], floa
         float w = clamp01(1.0f - r * r * r * r);
         k *= w * w;
     }
-    if (l->type == SCN_LIGHT_SPOT) {
-        float cd = -dot3(l->direction, wl);
-        float ci = cosf(l->inner_cone), co = cosf(l->outer_cone);
-        float t = clamp01((cd - co) / fmaxf(ci - co, 1e-4f));
-        k *= t * t;
-    }
+    if (l->type == SCN_LIGHT_SPOT)
+        k *= spot_falloff(l, -dot3(l->direction, wl));
     for (int i = 0; i < 3; i++)
         e[i] = l->radiance_scale[i] * k;
     *dist = len;
     return nonzero3(e);
+}
+
+/* Lights with a size (scn_light.radius; issue 15): the point a shadow ray aims at and the
+ * direction wl toward it, from two uniform numbers. A sphere of radius R and uniform radiance
+ * I/(πR²) seen from p delivers light_at's irradiance I/d² (d to its centre) spread over its
+ * disc, so the sample is uniform on the disc through the centre facing p; a directional disc
+ * of angular radius α, uniform on the disc of radius tan α about the direction. Punctual
+ * lights keep the centre (target = position, wl unchanged). */
+#define REF_AREA_DIM0 0x40000000u /* random dimensions of the samples: apart from the path's */
+static void light_area_point(const eng_light_pose *l, const float p[3], float u1, float u2, float target[3],
+                             float wl[3])
+{
+    memcpy(target, l->position, 3 * sizeof(float));
+    if (!(l->radius > 0.0f))
+        return;
+    float r = sqrtf(u1), phi = (float)(2.0 * ENG_PI) * u2;
+    float w[3] = {wl[0], wl[1], wl[2]}, t[3], b[3];
+    bsdf_basis(w, t, b);
+    float rad = l->type == SCN_LIGHT_DIRECTIONAL ? tanf(l->radius) : l->radius;
+    float a = rad * r * cosf(phi), bb = rad * r * sinf(phi);
+    if (l->type == SCN_LIGHT_DIRECTIONAL) {
+        float d[3], len2 = 0.0f;
+        for (int i = 0; i < 3; i++) {
+            d[i] = w[i] + a * t[i] + bb * b[i];
+            len2 += d[i] * d[i];
+        }
+        float inv = 1.0f / sqrtf(len2);
+        for (int i = 0; i < 3; i++)
+            wl[i] = d[i] * inv;
+        return;
+    }
+    float d[3], len2 = 0.0f;
+    for (int i = 0; i < 3; i++) {
+        target[i] = l->position[i] + a * t[i] + bb * b[i];
+        d[i] = target[i] - p[i];
+        len2 += d[i] * d[i];
+    }
+    float inv = 1.0f / sqrtf(len2);
+    for (int i = 0; i < 3; i++)
+        wl[i] = d[i] * inv;
 }
 
 /* ---------------------------------------------------------------- caustic photons */
@@ -454,6 +499,35 @@ static void scatter_normal(const rt_hit *h, const float wi[3], float n[3])
     memcpy(n, ((cg >= 0.0f) == (cs >= 0.0f)) ? h->normal : h->geom_normal, 3 * sizeof(float));
 }
 
+/* ---------------------------------------------------------------- lamps */
+
+/* Lamps (issue 15): the emitters of point and spot lights with a size are opaque spheres
+ * that reflect nothing (rt.c's rt_lamp_hit; rt_intersect already stops at them, rt_occluded
+ * does not). */
+
+/* Whether a lamp other than light skip is on the segment from → to. */
+static int lamp_blocks(const eng_rt *rt, const float from[3], const float to[3], int skip)
+{
+    float d[3] = {to[0] - from[0], to[1] - from[1], to[2] - from[2]};
+    float len = sqrtf(dot3(d, d)), t;
+    if (!(len > 0.0f))
+        return 0;
+    for (int i = 0; i < 3; i++)
+        d[i] /= len;
+    return rt_lamp_hit(rt, from, d, 0.0f, len, skip, &t) >= 0;
+}
+
+/* Radiance a lamp sends along -dir from its surface: uniform I/(πR²), times the spot cone
+ * falloff for the direction it leaves the centre by. */
+static void lamp_radiance(const eng_light_pose *lp, const float dir[3], float out[3])
+{
+    float k = 1.0f / ((float)ENG_PI * lp->radius * lp->radius);
+    if (lp->type == SCN_LIGHT_SPOT)
+        k *= spot_falloff(lp, -dot3(lp->direction, dir));
+    for (int i = 0; i < 3; i++)
+        out[i] = lp->radiance_scale[i] * k;
+}
+
 /* Area density (1/m² at x, geometric normal ng) with which estimator 1b's light sampling
  * lands on x as the first surface light l reaches: q_l · p_ω · |cos|/d² for point and spot
  * lights, q_l · |cos|/(πR²) for directional ones (0 outside a spot's cone). */
@@ -541,12 +615,8 @@ static int trace_photon(const frame_ctx *c, uint32_t g, uint32_t pass, photon_bu
             dir[i] = st * cosf(phi) * t[i] + st * sinf(phi) * b[i] + ct * pl->axis[l][i];
         }
         normalize3(dir);
-        if (lp->type == SCN_LIGHT_SPOT) {
-            float cd = dot3(lp->direction, dir);
-            float ci = cosf(lp->inner_cone), co = cosf(lp->outer_cone);
-            float s = clamp01((cd - co) / fmaxf(ci - co, 1e-4f));
-            k = s * s;
-        }
+        if (lp->type == SCN_LIGHT_SPOT)
+            k = spot_falloff(lp, dot3(lp->direction, dir));
         for (int i = 0; i < 3; i++)
             power[i] = pl->power[l][i] * k;
     }
@@ -557,7 +627,7 @@ static int trace_photon(const frame_ctx *c, uint32_t g, uint32_t pass, photon_bu
     for (int k = 0; k <= c->max_depth; k++) {
         rt_hit h;
         if (!rt_intersect(c->rt, org, dir, tnear, INFINITY, &h))
-            break;
+            break; /* left the scene, or absorbed by a lamp */
         if (k == 0 && lp->type != SCN_LIGHT_DIRECTIONAL && lp->range > 0.0f) {
             float r = h.t / lp->range; /* the range window at the distance the light reaches */
             float w = clamp01(1.0f - r * r * r * r);
@@ -717,7 +787,8 @@ static void gather(const frame_ctx *c, const scn_material *m, const float p[3], 
  * same path, and w_l is the balance heuristic (Veach 1997 §9.2.2) p_A/(p_A + p_B,l) in area
  * measure at p; otherwise w_l = 1. */
 static void next_event(const frame_ctx *c, const scn_material *m, const float p[3], const float ng[3],
-                       const float ns[3], const float wi[3], const float *prev, float prev_pdf, float out[3])
+                       const float ns[3], const float wi[3], const float *prev, float prev_pdf, uint64_t key,
+                       uint32_t dim, float out[3])
 {
     out[0] = out[1] = out[2] = 0.0f;
     float gi = dot3(ng, wi);
@@ -732,6 +803,9 @@ static void next_event(const frame_ctx *c, const scn_material *m, const float p[
         float wl[3], dist, e[3], f[3];
         if (!light_at(lp, p, wl, &dist, e))
             continue;
+        float target[3];
+        light_area_point(lp, p, rnd(key, REF_AREA_DIM0 + 16u * dim + 2u * l),
+                         rnd(key, REF_AREA_DIM0 + 16u * dim + 2u * l + 1u), target, wl);
         float cosl = dot3(ns, wl), gl = dot3(ng, wl);
         if (!(cosl > 0.0f) || (gl >= 0.0f) != (gi >= 0.0f)) /* light behind the true surface */
             continue;
@@ -746,9 +820,9 @@ static void next_event(const frame_ctx *c, const scn_material *m, const float p[
         float from[3], to[3];
         for (int i = 0; i < 3; i++) {
             from[i] = p[i] + eps * ng[i];
-            to[i] = isinf(dist) ? p[i] + c->far_dist * wl[i] : lp->position[i];
+            to[i] = isinf(dist) ? p[i] + c->far_dist * wl[i] : target[i];
         }
-        if (rt_occluded(c->rt, from, to))
+        if (rt_occluded(c->rt, from, to) || lamp_blocks(c->rt, from, to, (int)l))
             continue;
         for (int i = 0; i < 3; i++)
             out[i] += w * f[i] * e[i] * cosl;
@@ -807,7 +881,7 @@ static void light_vertex(const frame_ctx *c, uint64_t key, uint32_t dim0, const 
         from[i] = x1[i] + e1 * ng1[i];
         to[i] = x2[i] + e2 * ng2[i];
     }
-    if (rt_occluded(c->rt, from, to))
+    if (rt_occluded(c->rt, from, to) || lamp_blocks(c->rt, from, to, -1))
         return;
     float k = dot3(ns1, w12) * g2 * cosl / (p_a + p_b);
     for (int i = 0; i < 3; i++)
@@ -875,9 +949,21 @@ static void trace_eye(const frame_ctx *c, int x, int y, uint32_t sample, double 
                 }
                 tnear = h.t + bsdf_offset_eps(h.position);
             }
+            /* A lamp in front: the camera sees its emission (path L E, direct light). */
+            float tl;
+            int lamp = hit ? -1 : rt_lamp_hit(c->rt, org, dir, tnear, tfar, -1, &tl);
+            if (lamp >= 0) {
+                float le[3];
+                lamp_radiance(&c->fs->lights[lamp], dir, le);
+                for (int i = 0; i < 3; i++)
+                    direct[i] += (double)le[i];
+                return;
+            }
             if (!hit)
                 return;
         } else {
+            /* Later vertices: a lamp ends the path (rt_intersect; next-event estimation
+             * counted its light). */
             if (!rt_intersect(c->rt, org, dir, 0.0f, INFINITY, &h))
                 return;
             m = eng_material_of(scene, h.material);
@@ -891,7 +977,7 @@ static void trace_eye(const frame_ctx *c, int x, int y, uint32_t sample, double 
         float ns[3] = {s * n[0], s * n[1], s * n[2]};
         if (d_vertex) {
             float l[3];
-            next_event(c, &m, h.position, h.geom_normal, ns, wi, prev_ok ? prev : NULL, prev_pdf, l);
+            next_event(c, &m, h.position, h.geom_normal, ns, wi, prev_ok ? prev : NULL, prev_pdf, key, dim, l);
             double *dst = depth == 0 ? direct : indirect;
             for (int i = 0; i < 3; i++)
                 dst[i] += (double)(thr[i] * l[i]);

@@ -8,6 +8,11 @@
  * inverse transpose, m4_normal_matrix), re-posed with the positions, so rt_intersect can
  * return the interpolated shading normal the photon tracer scatters about.
  *
+ * Lamps (issue 15): the emitter of a point or spot light with a size is an opaque sphere that
+ * reflects nothing, tested analytically (rt_lamp_hit): a ray that meets one before any
+ * surface hits nothing (rt_intersect returns 0: the photon or path is absorbed), except a ray
+ * that starts inside it (light vertices and photons leaving their own light's centre).
+ *
  * Determinism: the device is made with a pinned ISA (isa=sse2) and thread count, recorded in
  * the manifest, so ray results do not follow the host's SIMD width. */
 #include "eng_internal.h"
@@ -17,6 +22,8 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+
+#define RT_MAX_LAMPS 8
 
 typedef struct rt_geom {
     RTCGeometry geom;
@@ -33,6 +40,9 @@ struct eng_rt {
     RTCScene rtscene;
     uint32_t geom_count;
     rt_geom *geoms;
+    uint32_t lamp_count;
+    float lamp[RT_MAX_LAMPS][4]; /* centre, radius */
+    int lamp_light[RT_MAX_LAMPS];
 };
 
 eng_result rt_create(const scn_scene *scene, int threads, eng_rt **out, eng_error *err)
@@ -86,6 +96,15 @@ static void pose(rt_geom *g, const scn_primitive *p, const float world[16])
 
 void rt_update(eng_rt *rt, const eng_frame_scene *fs)
 {
+    rt->lamp_count = 0;
+    for (uint32_t l = 0; l < fs->light_count && rt->lamp_count < RT_MAX_LAMPS; l++) {
+        const eng_light_pose *lp = &fs->lights[l];
+        if (!(lp->radius > 0.0f) || lp->type == SCN_LIGHT_DIRECTIONAL)
+            continue;
+        memcpy(rt->lamp[rt->lamp_count], lp->position, 3 * sizeof(float));
+        rt->lamp[rt->lamp_count][3] = lp->radius;
+        rt->lamp_light[rt->lamp_count++] = (int)l;
+    }
     if (!rt->geoms) {
         rt->geom_count = fs->draw_count;
         rt->geoms = calloc(fs->draw_count ? fs->draw_count : 1, sizeof *rt->geoms);
@@ -165,6 +184,31 @@ static void normalize_or(float v[3], const float fallback[3])
     }
 }
 
+int rt_lamp_hit(const eng_rt *rt, const float org[3], const float dir[3], float tmin, float tmax, int skip,
+                float *t)
+{
+    int best = -1;
+    for (uint32_t k = 0; k < rt->lamp_count; k++) {
+        if (rt->lamp_light[k] == skip)
+            continue;
+        const float *c = rt->lamp[k];
+        float oc[3] = {org[0] - c[0], org[1] - c[1], org[2] - c[2]};
+        float b = oc[0] * dir[0] + oc[1] * dir[1] + oc[2] * dir[2];
+        float cc = oc[0] * oc[0] + oc[1] * oc[1] + oc[2] * oc[2] - c[3] * c[3];
+        float disc = b * b - cc;
+        if (cc < 0.0f || !(disc > 0.0f))
+            continue; /* starts inside, or misses */
+        float t0 = -b - sqrtf(disc);
+        if (t0 > tmin && t0 < tmax) {
+            tmax = t0;
+            best = rt->lamp_light[k];
+        }
+    }
+    if (best >= 0)
+        *t = tmax;
+    return best;
+}
+
 int rt_intersect(const eng_rt *rt, const float org[3], const float dir[3], float tnear, float tfar, rt_hit *hit)
 {
     struct RTCIntersectContext ctx;
@@ -183,7 +227,11 @@ int rt_intersect(const eng_rt *rt, const float org[3], const float dir[3], float
     rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
     rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
     rtcIntersect1(rt->rtscene, &ctx, &rh);
-    if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID || rh.hit.geomID >= rt->geom_count)
+    int found = rh.hit.geomID != RTC_INVALID_GEOMETRY_ID && rh.hit.geomID < rt->geom_count;
+    float tl;
+    if (rt->lamp_count && rt_lamp_hit(rt, org, dir, tnear, found ? rh.ray.tfar : tfar, -1, &tl) >= 0)
+        return 0; /* absorbed by a lamp */
+    if (!found)
         return 0;
     const rt_geom *g = &rt->geoms[rh.hit.geomID];
     const scn_primitive *p = &rt->scene->primitives[g->primitive];

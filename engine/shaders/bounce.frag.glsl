@@ -22,6 +22,8 @@
 // uniform and cosine tables as the CPU reads entry seed + k at its k-th event. With stratified
 // sampling across frames (002_… §4.2) the numbers are Cranley–Patterson rotated by this frame's
 // offsets first, exactly as photon_trace.c does.
+//
+// Lights with a size (issue 15) emit from a point of their surface: see main.
 
 uniform sampler2DArray u_lpos;
 uniform sampler2DArray u_lnrm;
@@ -37,6 +39,7 @@ uniform vec3 u_light_direction;
 uniform vec3 u_light_scale;      // I (W/sr) or E (W/m²) per channel
 uniform vec3 u_light_params;     // range, cos inner, cos outer
 uniform float u_extent;          // tan(half-angle) (point: 1, spot) or half-width (directional)
+uniform float u_radius;          // light size: sphere radius (m) or tan of the disc's angular radius
 uniform uint u_salt;
 uniform int u_stratified;        // 1: rotate the random numbers by u_offset (bsdf_stratify)
 uniform vec4 u_offset;
@@ -128,6 +131,18 @@ void main()
                         lp.z == 0.0 ? 0u : floatBitsToUint(lp.z), uint(px.x), uint(px.y), uint(u_layer), u_salt);
     vec4 u = rmap(0, seed, 0u);
     vec4 cosdir = rmap(1, seed, 0u);
+    if (u_radius > 0.0) {
+        // A light with a size (issue 15): the photon leaves a point of the light's disc facing
+        // x (sphere: radius u_radius about the centre; directional: tan α about −direction),
+        // uniform on it from entry seed + 1 of the uniform table, so it is the same point every
+        // frame. Its power stays the texel's: the sphere's intensity is the point light's.
+        vec4 ua = rmap(0, seed, 1u);
+        float r = sqrt(ua.x), phi = 6.28318530717958647692 * ua.y;
+        vec3 t = normalize(abs(wi.x) > 0.5 ? cross(wi, vec3(0.0, 1.0, 0.0)) : cross(wi, vec3(1.0, 0.0, 0.0)));
+        vec3 b = cross(wi, t);
+        vec3 off = u_radius * r * (cos(phi) * t + sin(phi) * b);
+        wi = u_type == 2 ? normalize(wi + off) : normalize(u_light_position + off - x);
+    }
     if (u_stratified != 0)
         bsdf_stratify(u, u_offset, u, cosdir);
     // The photon arrives from the light through air.

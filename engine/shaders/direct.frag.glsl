@@ -12,9 +12,9 @@
 //
 // Lights: point and spot are radiant intensity I (W/sr): E = I·cosθ/d²; spot cones use the
 // KHR_lights_punctual smooth falloff; directional lights are irradiance E (W/m²).
-// Visibility: percentage-closer filtering over (2r+1)² texels of the light's shadow map,
-// comparing metric distances (see shadow.frag.glsl), with a normal offset that grows with
-// the shadow texel's world size.
+// Visibility: lights without a size, percentage-closer filtering (shadow_pcf.glsl); lights
+// with a size, percentage-closer soft shadows (shadow_pcss.glsl, 001 §3.4). The shadow
+// methods are listed in engine/shadow.h.
 #define MAX_LIGHTS 8
 #define PI 3.14159265358979323846
 
@@ -36,60 +36,77 @@ uniform float u_shadow_texel[MAX_LIGHTS];    // world size of a texel at unit di
 uniform int u_pcf_radius;
 uniform float u_shadow_bias;
 uniform vec3 u_eye;
+uniform float u_light_radius[MAX_LIGHTS];    // light size (shadow_pcss.glsl); 0: hard shadows
+uniform sampler2DArray u_blocker[MAX_LIGHTS]; // blocker maps of the lights with a size
+uniform mat4 u_inv_view_proj;                // the camera's, for the rays of background pixels
+uniform vec2 u_viewport;
 
 layout(location = 0) out vec4 o_radiance;
+layout(location = 1) out vec4 o_penumbra;    // x: widest penumbra at the pixel (texels), y: its blocker
 
-int cube_face(vec3 d)
-{
-    vec3 a = abs(d);
-    if (a.x >= a.y && a.x >= a.z)
-        return d.x > 0.0 ? 0 : 1;
-    if (a.y >= a.z)
-        return d.y > 0.0 ? 2 : 3;
-    return d.z > 0.0 ? 4 : 5;
-}
-
-float visibility(int i, vec3 p, vec3 n)
-{
-    int type = u_light_type[i];
-    float dist = distance(p, u_light_position[i]);
-    // Normal offset: a few millimetres plus 1.5 texels of the map at this distance.
-    float texel = type == 2 ? u_shadow_texel[i] : u_shadow_texel[i] * dist;
-    vec3 q = p + n * (u_shadow_bias + 1.5 * texel);
-    int face = 0;
-    float value;
-    if (type == 2) {
-        value = dot(q - u_light_position[i], u_light_direction[i]);
-    } else {
-        value = distance(q, u_light_position[i]);
-        if (type == 0)
-            face = cube_face(q - u_light_position[i]);
-    }
-    vec4 c = u_shadow_view_proj[i * 6 + face] * vec4(q, 1.0);
-    vec2 uv = c.xy / c.w * 0.5 + 0.5;
-    if (type != 0 && (uv.x < 0.0 || uv.x > 1.0 || uv.y < 0.0 || uv.y > 1.0))
-        return type == 2 ? 1.0 : 0.0; // outside a spot frustum: unlit; outside the ortho box: lit
-    ivec2 base = ivec2(floor(uv * float(u_shadow_size)));
-    float lit = 0.0;
-    float taps = 0.0;
-    for (int dy = -u_pcf_radius; dy <= u_pcf_radius; dy++)
-        for (int dx = -u_pcf_radius; dx <= u_pcf_radius; dx++) {
-            ivec2 t = clamp(base + ivec2(dx, dy), ivec2(0), ivec2(u_shadow_size - 1));
-            float stored = texelFetch(u_shadow[i], ivec3(t, face), 0).r;
-            lit += value <= stored + texel ? 1.0 : 0.0;
-            taps += 1.0;
-        }
-    return lit / taps;
-}
+#pragma ispm_include "shadow_pcf.glsl"
+#pragma ispm_include "shadow_pcss.glsl"
 
 #pragma ispm_include "ggx.glsl"
+
+// Lamps (issue 15): a point or spot light with a size is an opaque sphere of uniform radiance
+// I/(πR²) (times the spot falloff toward the eye). True when one is nearer along the pixel's
+// eye ray than the G-buffer's surface (or the pixel is background); its radiance in le.
+bool lamp_in_front(vec4 pos, out vec3 le)
+{
+    vec3 d;
+    float t_surface;
+    if (pos.w != 0.0) {
+        d = pos.xyz - u_eye;
+        t_surface = length(d);
+        d /= t_surface;
+    } else {
+        vec4 f = u_inv_view_proj * vec4(gl_FragCoord.xy / u_viewport * 2.0 - 1.0, 1.0, 1.0);
+        d = normalize(f.xyz / f.w - u_eye);
+        t_surface = 1e30;
+    }
+    int lamp = -1;
+    for (int i = 0; i < u_light_count; i++) {
+        float r = u_light_radius[i];
+        if (!(r > 0.0) || u_light_type[i] == 2)
+            continue;
+        vec3 oc = u_eye - u_light_position[i];
+        float b = dot(oc, d), c = dot(oc, oc) - r * r;
+        float disc = b * b - c;
+        if (c < 0.0 || disc <= 0.0)
+            continue;
+        float t = -b - sqrt(disc);
+        if (t > 0.0 && t < t_surface) {
+            t_surface = t;
+            lamp = i;
+        }
+    }
+    if (lamp < 0)
+        return false;
+    float r = u_light_radius[lamp];
+    le = u_light_scale[lamp] / (PI * r * r);
+    if (u_light_type[lamp] == 1) {
+        float cd = dot(u_light_direction[lamp], -d);
+        float cos_inner = u_light_params[lamp].y, cos_outer = u_light_params[lamp].z;
+        float t = clamp((cd - cos_outer) / max(cos_inner - cos_outer, 1e-4), 0.0, 1.0);
+        le *= t * t;
+    }
+    return true;
+}
 
 void main()
 {
     ivec2 px = ivec2(gl_FragCoord.xy);
     vec4 pos = texelFetch(u_position, px, 0);
+    vec3 le;
+    if (lamp_in_front(pos, le)) {
+        o_radiance = vec4(le, 1.0);
+        o_penumbra = vec4(0.0);
+        return;
+    }
     if (pos.w == 0.0) {
         o_radiance = vec4(0.0);
+        o_penumbra = vec4(0.0);
         return;
     }
     vec3 p = pos.xyz;
@@ -103,6 +120,7 @@ void main()
     float a2 = alpha * alpha;
 
     vec3 sum = vec3(0.0);
+    vec2 widest = vec2(0.0);
     for (int i = 0; i < u_light_count; i++) {
         vec3 l;
         vec3 e;
@@ -130,7 +148,15 @@ void main()
         float nol = dot(n, l);
         if (nol <= 0.0)
             continue;
-        float vis = visibility(i, p, n);
+        float vis;
+        if (u_light_radius[i] > 0.0) {
+            vec2 pen;
+            vis = pcss_visibility(i, p, n, pen);
+            if (pen.x > widest.x)
+                widest = pen;
+        } else {
+            vis = visibility(i, p, n);
+        }
         if (vis == 0.0)
             continue;
         vec3 f = kd;
@@ -146,4 +172,5 @@ void main()
         sum += f * e * nol * vis;
     }
     o_radiance = vec4(sum, 1.0);
+    o_penumbra = vec4(widest, 0.0, 1.0);
 }

@@ -10,6 +10,9 @@ point or spot light (KHR_lights_punctual, radiant intensity in W/sr as the engin
                  volumes wider than the partition leak light into the dark right half
   divider.gltf   a floor split by a 1.2 m wall, a point light above it; a small cube moves on the
                  left only, so nothing that changes can send light to the right half
+  soft-rNNN.gltf a 0.4 m box on a 3 m floor under a spherical light of radius 0.NN m (glTF light
+                 extras.ispm.radius, issue 15), 2 m up and 0.3 m to the side: the box's shadow edge
+                 at x = 0.575 has a penumbra as wide as the light is large (bench/penumbra.sh)
 Stdlib only; the output is committed. Run from anywhere: writes beside this file."""
 import base64, json, math, os, struct
 
@@ -178,3 +181,15 @@ cube = g.mesh("cube", [((-0.1, 0, -0.1), (0.1, 0.2, 0.1))], cubem)
 g.animate(cube, "translation", [0.0, 1.0], [(-1.1, 0.0, 0.2), (-0.8, 0.0, -0.3)])
 g.light("Light", {"name": "light0", "type": "point", "color": [1, 1, 1], "intensity": 3.0}, [0.0, 2.0, 0.0])
 g.write("divider.gltf")
+
+# soft shadows: one scene per light radius (the radius is part of the light); radius 0 is the
+# punctual light of the same scene, the hard-shadow baseline of bench/penumbra.sh.
+for radius in (0.0, 0.05, 0.15, 0.3):
+    g = Gltf()
+    white = g.material("white", (0.75, 0.75, 0.75))
+    boxm = g.material("box", (0.6, 0.6, 0.65))
+    g.mesh("floor", [((-1.5, -0.02, -1.5), (1.5, 0, 1.5))], white)
+    g.mesh("box", [((0.0, 0.0, -0.2), (0.4, 0.4, 0.2))], boxm)
+    g.light("Light", {"name": "sphere", "type": "point", "color": [1, 1, 1], "intensity": 6.0,
+                      "extras": {"ispm": {"radius": radius}}}, [-0.3, 2.0, 0.0])
+    g.write("soft-r%03d.gltf" % round(radius * 100))
