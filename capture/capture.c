@@ -762,6 +762,7 @@ static cJSON *manifest_json(const cap_capture *c)
     jadd(st, "atrous_gamma", jfloat(s.atrous_gamma));
     jadd(st, "kernel_scaling", jstr(eng_scaling_name(s.kernel_scaling)));
     jadd(st, "progressive", cJSON_CreateBool(s.progressive));
+    jadd(st, "boundary", jstr(eng_boundary_name(s.boundary)));
     jadd(root, "settings", st);
 
     cJSON *det = jok(cJSON_CreateObject());

@@ -177,6 +177,12 @@ void eng_settings_defaults(eng_settings *s)
     if (s->atrous_detail == ENG_DETAIL_DEFAULT) s->atrous_detail = ENG_DETAIL_CLIPPED;
     if (s->atrous_gamma == 0.0f) s->atrous_gamma = 0.05f;
     if (s->kernel_scaling == ENG_SCALING_DEFAULT) s->kernel_scaling = ENG_SCALING_PATH_DENSITY;
+    if (s->boundary == ENG_BOUNDARY_DEFAULT) s->boundary = ENG_BOUNDARY_NONE;
+}
+
+const char *eng_boundary_name(eng_boundary m)
+{
+    return m == ENG_BOUNDARY_RENORMALIZE ? "renormalize" : "none";
 }
 
 const char *eng_scaling_name(eng_kernel_scaling m)

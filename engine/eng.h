@@ -226,10 +226,18 @@ typedef enum eng_kernel_scaling {
     ENG_SCALING_BANDWIDTH     /* 004 §6: variable bandwidth C = C0/√p, p = cos θ / d² */
 } eng_kernel_scaling;
 
+/* The kernel's boundary correction (engine/boundary.h). */
+typedef enum eng_boundary {
+    ENG_BOUNDARY_DEFAULT = 0, /* = none */
+    ENG_BOUNDARY_NONE,
+    ENG_BOUNDARY_RENORMALIZE  /* each pixel's estimate over the kernel mass on its surface */
+} eng_boundary;
+
 const char *eng_indirect_name(eng_indirect m);
 const char *eng_scaling_name(eng_kernel_scaling m);
 const char *eng_random_name(eng_random_mode m);
 const char *eng_detail_name(eng_atrous_detail m);
+const char *eng_boundary_name(eng_boundary m);
 
 /* Engine settings. A zero-initialised struct means defaults (eng_settings_defaults fills
  * them in explicitly so the manifest can record the values used). */
@@ -264,6 +272,7 @@ typedef struct eng_settings {
     eng_kernel_scaling kernel_scaling; /* default path-density */
     int progressive;          /* 1: running mean of the indirect estimate while nothing moves, the
                                * kernel shrinking as in progressive photon mapping; default 0 */
+    eng_boundary boundary;    /* kernel boundary correction after the method; default none */
 } eng_settings;
 
 void eng_settings_defaults(eng_settings *s);

@@ -10,6 +10,7 @@
 #define _POSIX_C_SOURCE 200809L /* clock_gettime */
 #include "eng_internal.h"
 #include "indirect.h"
+#include "boundary.h"
 #include "shadow.h"
 #include "progressive.h"
 
@@ -59,6 +60,7 @@ struct eng_engine {
     /* Progressive accumulation (progressive.h): state, the G-buffer and the method's output
      * read back, and the target the mean is uploaded into. */
     prog_state *prog;
+    bnd_pass *bnd; /* the kernel's boundary correction (boundary.h), NULL when off */
     ind_gbuffer prog_gb;
     float *prog_in[2], *prog_mean[2], *prog_count, *prog_radius;
     size_t prog_pixels;
@@ -210,6 +212,8 @@ eng_result eng_create(const eng_desc *desc, eng_engine **out, eng_error *err)
             r = ind_cpu_target_create(&e->prog_target, w, h, e->filtered, err);
             e->prog_target_ok = r == ENG_OK;
         }
+        if (r == ENG_OK && st->boundary == ENG_BOUNDARY_RENORMALIZE)
+            r = bnd_pass_create(w, h, e->filtered ? 2 : 1, &e->bnd, err);
     }
     e->radius_scale = 1.0f;
     if (r != ENG_OK) {
@@ -274,6 +278,7 @@ void eng_destroy(eng_engine *e)
     free(e->bounce);
     free(e->radius);
     prog_destroy(e->prog);
+    bnd_pass_destroy(e->bnd);
     ind_gbuffer_free(&e->prog_gb);
     for (int a = 0; a < 2; a++) {
         free(e->prog_in[a]);
@@ -704,6 +709,22 @@ static eng_result run_method(eng_engine *e, int frame, const glu_target *gb, con
     return ENG_OK;
 }
 
+/* The kernel's boundary correction (boundary.h) of the method's output *sp against the
+ * G-buffer gb it ran on; *sp becomes the corrected target, boundary.weight is announced. */
+static eng_result boundary_run(eng_engine *e, int frame, const glu_target *gb, const glu_target **sp, eng_error *err)
+{
+    if (!e->bnd)
+        return ENG_OK;
+    double t0 = now_ms();
+    ind_input in = {&e->fs, gb, &e->pmap, e->radius, &e->settings};
+    const float *wt = bnd_pass_run(e->bnd, gb, sp, &in);
+    glFinish();
+    add_time(e, "boundary", now_ms() - t0);
+    if (announce(e, frame, "boundary.weight", gb->width, gb->height, 1, CH_Y, wt))
+        return eng_fail(err, ENG_ERR_ABORTED, "frame %d: capture failed in the boundary pass", frame);
+    return ENG_OK;
+}
+
 /* Progressive accumulation (progressive.h) of the method's output *sp against the G-buffer gb
  * it ran on: reads both back, adds the frame to the running mean, uploads the mean into a
  * target of the same layout, announces progressive.{radiance,count,radius} and replaces *sp
@@ -784,6 +805,8 @@ static eng_result filtered_indirect(eng_engine *e, int frame, const glu_target *
     aborted = aborted || read_and_announce(e, frame, name, sp, 0, 0, 1, p3, CH_Y);
     snprintf(name, sizeof name, "%s.glossy", pre);
     aborted = aborted || read_and_announce(e, frame, name, sp, 1, 0, 3, p012, CH_RGB);
+    if (!aborted && (r = boundary_run(e, frame, lvl[e->levels], &sp, err)) != ENG_OK)
+        return r;
     if (!aborted && e->prog && (r = progressive_run(e, frame, lvl[e->levels], &sp, err)) != ENG_OK)
         return r;
     GLuint irradiance = sp->color[0], glossy = sp->color[1];
@@ -996,6 +1019,9 @@ eng_result eng_render_frame(eng_engine *e, int frame, eng_error *err)
         int aborted = read_and_announce(e, frame, name, sp, 0, 0, 3, p012, CH_RGB);
         snprintf(name, sizeof name, "%s.count", e->method->prefix);
         aborted = aborted || read_and_announce(e, frame, name, sp, 0, 0, 1, p3, CH_Y);
+        if (!aborted && (r = boundary_run(e, frame, gb, &sp, err)) != ENG_OK)
+            return r;
+        indirect_tex = sp->color[0];
         if (!aborted && e->prog) {
             r = progressive_run(e, frame, gb, &sp, err);
             if (r != ENG_OK)

@@ -153,7 +153,7 @@ static eng_result parse_settings(parser *P, const cJSON *obj, eng_settings *s)
                                        "normal_compression", "random", "random_map_size", "random_seed",
                                        "stratified_cycle",
                                        "splat_subsample", "temporal", "temporal_alpha", "atrous_iterations",
-                                       "atrous_detail", "atrous_gamma", "kernel_scaling", "progressive", NULL};
+                                       "atrous_detail", "atrous_gamma", "kernel_scaling", "progressive", "boundary", NULL};
     char v[80];
     eng_result r;
     if (!cJSON_IsObject(obj))
@@ -305,6 +305,14 @@ static eng_result parse_settings(parser *P, const cJSON *obj, eng_settings *s)
         if (!cJSON_IsBool(it))
             return bad(P, "settings.progressive: expected true or false, got %s", show(it, v, sizeof v));
         s->progressive = cJSON_IsTrue(it) ? 1 : 0;
+    }
+    if ((it = cJSON_GetObjectItemCaseSensitive(obj, "boundary"))) {
+        if (cJSON_IsString(it) && !strcmp(it->valuestring, "none"))
+            s->boundary = ENG_BOUNDARY_NONE;
+        else if (cJSON_IsString(it) && !strcmp(it->valuestring, "renormalize"))
+            s->boundary = ENG_BOUNDARY_RENORMALIZE;
+        else
+            return bad(P, "settings.boundary: %s is not one of \"none\", \"renormalize\"", show(it, v, sizeof v));
     }
     return ENG_OK;
 }
