@@ -763,6 +763,8 @@ static cJSON *manifest_json(const cap_capture *c)
     jadd(st, "kernel_scaling", jstr(eng_scaling_name(s.kernel_scaling)));
     jadd(st, "progressive", cJSON_CreateBool(s.progressive));
     jadd(st, "boundary", jstr(eng_boundary_name(s.boundary)));
+    jadd(st, "specular", jstr(eng_specular_name(s.specular)));
+    jadd(st, "specular_depth", cJSON_CreateNumber(s.specular_depth));
     jadd(root, "settings", st);
 
     cJSON *det = jok(cJSON_CreateObject());

@@ -298,7 +298,7 @@ static const char *const SETTING_KEYS[] = {
     "indirect", "photon_count", "bounces", "kernel_radius", "normal_compression", "splat_subsample", "temporal",
     "temporal_alpha", "atrous_iterations", "atrous_detail", "atrous_gamma", "random", "random_map_size",
     "random_seed", "stratified_cycle", "shadow_map_size", "pcf_radius", "shadow_bias", "exposure", "threads",
-    "kernel_scaling", "progressive", "boundary", NULL};
+    "kernel_scaling", "progressive", "boundary", "specular", "specular_depth", NULL};
 
 /* The value the engine uses for a settings key, as text; 0 for a key it does not know. */
 static int setting_text(const eng_settings *s, const char *key, char *out, size_t size)
@@ -323,6 +323,9 @@ static int setting_text(const eng_settings *s, const char *key, char *out, size_
         return snprintf(out, size, "%s", s->progressive ? "true" : "false"), 1;
     if (!strcmp(key, "boundary"))
         return snprintf(out, size, "%s", eng_boundary_name(s->boundary)), 1;
+    if (!strcmp(key, "specular"))
+        return snprintf(out, size, "%s", eng_specular_name(s->specular)), 1;
+    INT_KEY(specular_depth)
     INT_KEY(photon_count)
     INT_KEY(bounces)
     INT_KEY(splat_subsample)

@@ -178,11 +178,24 @@ void eng_settings_defaults(eng_settings *s)
     if (s->atrous_gamma == 0.0f) s->atrous_gamma = 0.05f;
     if (s->kernel_scaling == ENG_SCALING_DEFAULT) s->kernel_scaling = ENG_SCALING_PATH_DENSITY;
     if (s->boundary == ENG_BOUNDARY_DEFAULT) s->boundary = ENG_BOUNDARY_NONE;
+    if (s->specular == ENG_SPECULAR_DEFAULT) s->specular = ENG_SPECULAR_TRACED;
+    if (s->specular_depth == 0) s->specular_depth = 4;
 }
 
 const char *eng_boundary_name(eng_boundary m)
 {
     return m == ENG_BOUNDARY_RENORMALIZE ? "renormalize" : "none";
+}
+
+const char *eng_specular_name(eng_specular m)
+{
+    switch (m) {
+    case ENG_SPECULAR_OFF: return "off";
+    case ENG_SPECULAR_ENVMAP: return "envmap";
+    case ENG_SPECULAR_TRACED:
+    case ENG_SPECULAR_DEFAULT: return "traced";
+    }
+    return "unknown";
 }
 
 const char *eng_scaling_name(eng_kernel_scaling m)

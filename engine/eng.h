@@ -74,7 +74,7 @@ typedef struct scn_material {
     float roughness;     /* roughnessFactor, default 1 */
     float transmission;  /* KHR_materials_transmission transmissionFactor, default 0 */
     float ior;           /* KHR_materials_ior, default 1.5 */
-    float emissive[3];   /* emissiveFactor */
+    float emissive[3];   /* emissiveFactor × KHR_materials_emissive_strength (W/m²/sr) */
     int double_sided;
 } scn_material;
 
@@ -232,8 +232,16 @@ typedef enum eng_boundary {
     ENG_BOUNDARY_NONE,
     ENG_BOUNDARY_RENORMALIZE  /* each pixel's estimate over the kernel mass on its surface */
 } eng_boundary;
+/* What the eye sees in and through specular surfaces (mirrors, glass; 003 §3 step 5). */
+typedef enum eng_specular {
+    ENG_SPECULAR_DEFAULT = 0, /* = traced */
+    ENG_SPECULAR_TRACED,      /* eye rays continued on the CPU with Embree (003 §3 option 1) */
+    ENG_SPECULAR_ENVMAP,      /* a cube map per specular object, made at its centre (003 §3 option 3) */
+    ENG_SPECULAR_OFF          /* specular surfaces show only their non-specular lobes */
+} eng_specular;
 
 const char *eng_indirect_name(eng_indirect m);
+const char *eng_specular_name(eng_specular m);
 const char *eng_scaling_name(eng_kernel_scaling m);
 const char *eng_random_name(eng_random_mode m);
 const char *eng_detail_name(eng_atrous_detail m);
@@ -273,6 +281,9 @@ typedef struct eng_settings {
     int progressive;          /* 1: running mean of the indirect estimate while nothing moves, the
                                * kernel shrinking as in progressive photon mapping; default 0 */
     eng_boundary boundary;    /* kernel boundary correction after the method; default none */
+    /* Specular eye paths (issue 14, specular.h). */
+    eng_specular specular;    /* default traced */
+    int specular_depth;       /* specular surfaces an eye path crosses, 1..16; default 4 */
 } eng_settings;
 
 void eng_settings_defaults(eng_settings *s);

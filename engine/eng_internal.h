@@ -288,12 +288,13 @@ eng_result pass_resolve_create(int width, int height, pass_resolve **out, eng_er
 const glu_target *pass_resolve_run(pass_resolve *p, const glu_target *gb, GLuint irradiance, GLuint glossy);
 void pass_resolve_destroy(pass_resolve *p);
 
-/* Composite (pass_composite.c): attachment 0 = direct + indirect (linear radiance),
- * attachment 1 = display transform (exposure, clamp, sRGB encoding). indirect may be 0. */
+/* Composite (pass_composite.c): attachment 0 = direct + indirect + specular + emission
+ * (linear radiance), attachment 1 = display transform (exposure, clamp, sRGB encoding).
+ * indirect, specular and emission may be 0 (not added). */
 typedef struct pass_composite pass_composite;
 eng_result pass_composite_create(int width, int height, pass_composite **out, eng_error *err);
 const glu_target *pass_composite_run(pass_composite *p, GLuint direct_tex, GLuint indirect_tex,
-                                     const eng_settings *s);
+                                     GLuint specular_tex, GLuint emission_tex, const eng_settings *s);
 void pass_composite_destroy(pass_composite *p);
 
 /* ---------------------------------------------------------------- GL context (glctx.c) */
@@ -441,6 +442,12 @@ int rt_occluded(const eng_rt *rt, const float a[3], const float b[3]);
 void rt_destroy(eng_rt *rt);
 
 /* ---------------------------------------------------------------- for CPU renderers */
+
+/* Irradiance at normal incidence that light l delivers to p (no visibility), the unit
+ * direction toward it and the distance (INFINITY for directional): shaders/direct.frag.glsl's
+ * light model on the CPU (reference.c; the specular pass shades with it too). Returns 0 when
+ * the light delivers nothing there. */
+int ref_light_at(const eng_light_pose *l, const float p[3], float wl[3], float *dist, float e[3]);
 
 /* Poses the scene at frame `frame` (t = frame / fps) exactly as eng_render_frame does (world
  * matrices, draws, lights, camera, Embree scene) without rendering anything, and returns the

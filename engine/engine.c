@@ -13,6 +13,7 @@
 #include "boundary.h"
 #include "shadow.h"
 #include "progressive.h"
+#include "specular.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -48,6 +49,13 @@ struct eng_engine {
     size_t radius_capacity;
     const ind_method *method; /* indirect.h: the `indirect` setting's method, NULL for none */
     void *method_state;
+    const spec_method *spec;  /* specular.h: NULL when "off" or the scene has no specular surface */
+    void *spec_state;
+    /* Emission seen by the eye (only in scenes with an emissive material): per pixel from the
+     * G-buffer's material id, uploaded for the composite. */
+    int emissive;
+    ind_cpu_target emission;
+    float *emission_rgba, *emission_rgb, *emission_id;
     /* Reconstruction filters (DESIGN.md step 7), on when any of splat_subsample > 1,
      * temporal, atrous_iterations is set: G-buffers at 1/2^l resolution (gbuffer_lo[l-1]),
      * upsampling to level l (upsample[l]), temporal accumulation, À-Trous, BSDF resolve. */
@@ -215,6 +223,22 @@ eng_result eng_create(const eng_desc *desc, eng_engine **out, eng_error *err)
         if (r == ENG_OK && st->boundary == ENG_BOUNDARY_RENORMALIZE)
             r = bnd_pass_create(w, h, e->filtered ? 2 : 1, &e->bnd, err);
     }
+    e->spec = spec_scene_has_specular(s) ? spec_method_of(e->settings.specular) : NULL;
+    if (r == ENG_OK && e->spec)
+        r = e->spec->create(e->width, e->height, &e->spec_state, err);
+    for (uint32_t i = 0; i < s->material_count; i++)
+        if (s->materials[i].emissive[0] > 0.0f || s->materials[i].emissive[1] > 0.0f ||
+            s->materials[i].emissive[2] > 0.0f)
+            e->emissive = 1;
+    if (r == ENG_OK && e->emissive) {
+        size_t n = (size_t)e->width * (size_t)e->height;
+        e->emission_rgba = xcalloc(n * 4, sizeof(float));
+        e->emission_rgb = xcalloc(n * 3, sizeof(float));
+        e->emission_id = xcalloc(n, sizeof(float));
+        r = ind_cpu_target_create(&e->emission, e->width, e->height, 0, err);
+        if (r != ENG_OK)
+            e->emissive = 0;
+    }
     e->radius_scale = 1.0f;
     if (r != ENG_OK) {
         eng_destroy(e);
@@ -248,6 +272,10 @@ void eng_destroy(eng_engine *e)
         pass_lightmaps_destroy(e->lightmaps);
         if (e->method && e->method_state)
             e->method->destroy(e->method_state);
+        if (e->spec && e->spec_state)
+            e->spec->destroy(e->spec_state);
+        if (e->emissive)
+            ind_cpu_target_destroy(&e->emission);
         for (int l = 0; l < 3; l++) {
             pass_gbuffer_destroy(e->gbuffer_lo[l]);
             pass_upsample_destroy(e->upsample[l]);
@@ -286,6 +314,9 @@ void eng_destroy(eng_engine *e)
     }
     free(e->prog_count);
     free(e->prog_radius);
+    free(e->emission_rgba);
+    free(e->emission_rgb);
+    free(e->emission_id);
     free(e->gpu);
     free(e->world);
     free(e->prev_world);
@@ -767,6 +798,55 @@ static eng_result progressive_run(eng_engine *e, int frame, const glu_target *gb
     return ENG_OK;
 }
 
+/* What the eye sees in and through mirrors and glass (specular.h), announced as specular.*;
+ * *tex gets the radiance texture the composite adds. */
+static eng_result specular_pass(eng_engine *e, int frame, const glu_target *gb, GLuint *tex, eng_error *err)
+{
+    static const char *const CH_RGB3[] = {"R", "G", "B"}, *const CH_Y1[] = {"Y"};
+    spec_input in = {&e->fs, e->rt, gb, e->method ? &e->pmap : NULL, e->radius, &e->settings};
+    spec_output out;
+    double t0 = now_ms();
+    eng_result r = e->spec->run(e->spec_state, &in, &out, err);
+    glFinish();
+    add_time(e, "specular", now_ms() - t0);
+    if (r != ENG_OK)
+        return r;
+    const char *names[3] = {"specular.radiance", "specular.depth", "specular.throughput"};
+    const float *data[3] = {out.radiance, out.depth, out.throughput};
+    for (int k = 0; k < 3; k++)
+        if (seq_wants(e->seq, names[k]) && announce(e, frame, names[k], gb->width, gb->height, k == 1 ? 1 : 3,
+                                                    k == 1 ? CH_Y1 : CH_RGB3, data[k]))
+            return eng_fail(err, ENG_ERR_ABORTED, "frame %d: capture failed at %s", frame, names[k]);
+    *tex = out.target->color[0];
+    return ENG_OK;
+}
+
+/* The emitted radiance of the surface each pixel shows (the emissiveFactor × strength of its
+ * G-buffer material id), announced as gbuffer.emission; *tex gets the texture the composite
+ * adds. Emitters are seen, not light sources: they send no photons and no shadow rays. */
+static eng_result emission_pass(eng_engine *e, int frame, const glu_target *gb, GLuint *tex, eng_error *err)
+{
+    static const char *const CH_RGB3[] = {"R", "G", "B"};
+    double t0 = now_ms();
+    glu_read(gb, 4, 0, 1, (const int[]){1}, e->emission_id);
+    size_t n = (size_t)gb->width * (size_t)gb->height;
+    for (size_t i = 0; i < n; i++) {
+        int32_t id = (int32_t)e->emission_id[i];
+        scn_material m = eng_material_of(e->scene, id);
+        for (int c = 0; c < 3; c++)
+            e->emission_rgb[3 * i + (size_t)c] = e->emission_rgba[4 * i + (size_t)c] = id >= 0 ? m.emissive[c] : 0.0f;
+        e->emission_rgba[4 * i + 3] = 1.0f;
+    }
+    ind_cpu_target_upload(&e->emission, 0, e->emission_rgba);
+    glFinish();
+    add_time(e, "emission", now_ms() - t0);
+    if (seq_wants(e->seq, "gbuffer.emission") &&
+        announce(e, frame, "gbuffer.emission", gb->width, gb->height, 3, CH_RGB3, e->emission_rgb))
+        return eng_fail(err, ENG_ERR_ABORTED, "frame %d: capture failed at gbuffer.emission", frame);
+    *tex = e->emission.target.color[0];
+    return ENG_OK;
+}
+
 /* The indirect light through the reconstruction filters (DESIGN.md steps 6–7): G-buffers at
  * the subsampled levels, photon volumes as irradiance at the coarsest level, upsampling level
  * by level, temporal accumulation, À-Trous, and the BSDF. Announces every level; *tex gets
@@ -1033,9 +1113,23 @@ eng_result eng_render_frame(eng_engine *e, int frame, eng_error *err)
             return eng_fail(err, ENG_ERR_ABORTED, "frame %d: capture failed in the %s pass", frame, e->method->pass);
     }
 
+    /* Specular eye paths (003 §3 step 5), only in scenes with a mirror or glass. */
+    GLuint specular_tex = 0, emission_tex = 0;
+    if (e->spec) {
+        eng_result r = specular_pass(e, frame, gb, &specular_tex, err);
+        if (r != ENG_OK)
+            return r;
+    }
+    if (e->emissive) {
+        eng_result r = emission_pass(e, frame, gb, &emission_tex, err);
+        if (r != ENG_OK)
+            return r;
+    }
+
     /* Composite and display transform. */
     t0 = now_ms();
-    const glu_target *comp = pass_composite_run(e->composite, direct->color[0], indirect_tex, &e->settings);
+    const glu_target *comp =
+        pass_composite_run(e->composite, direct->color[0], indirect_tex, specular_tex, emission_tex, &e->settings);
     glFinish();
     add_time(e, "composite", now_ms() - t0);
     if (read_and_announce(e, frame, "composite.radiance", comp, 0, 0, 3, p012, CH_RGB) ||

@@ -386,6 +386,20 @@ static eng_result load_materials(loader *L)
                             where, e);
             d->emissive[c] = (float)e;
         }
+        if (g->emissive_strength.state == GLS_NUM_NOT_A_NUMBER)
+            return fail(L, ENG_ERR_INVALID, "%s: KHR_materials_emissive_strength.emissiveStrength is not a number",
+                        where);
+        if (g->emissive_strength.state == GLS_NUM_PRESENT) {
+            double k = g->emissive_strength.value;
+            if (!isfinite(k) || k < 0.0 || k > 1e30)
+                return fail(L, ENG_ERR_INVALID, "%s: emissiveStrength %g is negative, too large or not finite", where,
+                            k);
+            for (int c = 0; c < 3; c++) {
+                d->emissive[c] = (float)(d->emissive[c] * k);
+                if (!isfinite(d->emissive[c]))
+                    return fail(L, ENG_ERR_INVALID, "%s: emissiveFactor × emissiveStrength overflows a float", where);
+            }
+        }
         d->double_sided = g->double_sided;
         d->transmission = 0.0f;
         if (g->transmission.state == GLS_NUM_NOT_A_NUMBER)
@@ -994,7 +1008,8 @@ static eng_result load_animations(loader *L, const int32_t *remap)
 
 static eng_result check_extensions(loader *L)
 {
-    static const char *const known[] = {"KHR_lights_punctual", "KHR_materials_transmission", "KHR_materials_ior"};
+    static const char *const known[] = {"KHR_lights_punctual", "KHR_materials_transmission", "KHR_materials_ior",
+                                        "KHR_materials_emissive_strength"};
     for (uint32_t i = 0; i < L->m->extensions_required_count; i++) {
         const char *e = L->m->extensions_required[i];
         int ok = 0;

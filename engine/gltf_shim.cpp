@@ -249,6 +249,8 @@ void build_view(gls_impl &g)
         c.transmission = ext_number(mat.extensions, "KHR_materials_transmission",
                                     "transmissionFactor", nullptr);
         c.ior = ext_number(mat.extensions, "KHR_materials_ior", "ior", nullptr);
+        c.emissive_strength = ext_number(mat.extensions, "KHR_materials_emissive_strength", "emissiveStrength",
+                                         nullptr);
         g.materials.push_back(c);
     }
 

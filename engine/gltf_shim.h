@@ -132,6 +132,7 @@ typedef struct gls_material {
     int double_sided;
     gls_number transmission; /* KHR_materials_transmission.transmissionFactor */
     gls_number ior;          /* KHR_materials_ior.ior */
+    gls_number emissive_strength; /* KHR_materials_emissive_strength.emissiveStrength */
 } gls_material;
 
 typedef struct gls_channel {

@@ -191,6 +191,29 @@ static int cmp_u32(const void *a, const void *b)
     return (x > y) - (x < y);
 }
 
+void kd_gather_point(const kd_tree *tree, const eng_photon_map *map, const float *r_xy, float radius,
+                     float compression, const gk_pixel *px, uint32_t **list, size_t *cap, float acc[4], float *glossy)
+{
+    const float *p = px->s;
+    size_t n = 0, kept = 0;
+    kd_tree_range(tree, p, radius, list, &n, cap);
+    /* Photons whose own kernel cannot reach s (t >= |d|/r_xy >= 1) are dropped before
+     * sorting; the margin keeps every photon the kernel could accept. */
+    uint32_t *l = *list;
+    for (size_t k = 0; k < n; k++) {
+        const float *x = map->photons[l[k]].position;
+        float dx = p[0] - x[0], dy = p[1] - x[1], dz = p[2] - x[2], r = r_xy[l[k]];
+        if (dx * dx + dy * dy + dz * dz <= r * r * 1.001f)
+            l[kept++] = l[k];
+    }
+    n = kept;
+    if (n > 1)
+        qsort(l, n, sizeof *l, cmp_u32);
+    /* shaders/splat.frag.glsl's main() summed over the photons in index order. */
+    for (size_t k = 0; k < n; k++)
+        gk_add(px, &map->photons[l[k]], r_xy[l[k]], compression, acc, glossy);
+}
+
 static eng_result gather(const eng_photon_map *map, const float *radii, int w, int h, const float *position,
                          const float *normal, const float *albedo, const float *material, const float eye[3],
                          const eng_settings *s, float *out, float *glossy, eng_error *err)
@@ -227,25 +250,10 @@ static eng_result gather(const eng_photon_map *map, const float *radii, int w, i
                 const float *p = position + 4 * i;
                 if (p[3] == 0.0f)
                     continue;
-                size_t n = 0, kept = 0;
-                kd_tree_range(&tree, p, radius, &list, &n, &cap);
-                /* Photons whose own kernel cannot reach s (t >= |d|/r_xy >= 1) are dropped
-                 * before sorting; the margin keeps every photon the kernel could accept. */
-                for (size_t k = 0; k < n; k++) {
-                    const float *x = map->photons[list[k]].position;
-                    float dx = p[0] - x[0], dy = p[1] - x[1], dz = p[2] - x[2], r = r_xy[list[k]];
-                    if (dx * dx + dy * dy + dz * dz <= r * r * 1.001f)
-                        list[kept++] = list[k];
-                }
-                n = kept;
-                if (n > 1)
-                    qsort(list, n, sizeof *list, cmp_u32);
-                /* shaders/splat.frag.glsl's main() summed over the photons in index order. */
                 gk_pixel px;
                 gk_pixel_init(&px, p, normal + 3 * i, albedo + 3 * i, material + 4 * i, eye);
-                float *acc = out + 4 * i, *gl = glossy ? glossy + 4 * i : NULL;
-                for (size_t k = 0; k < n; k++)
-                    gk_add(&px, &map->photons[list[k]], r_xy[list[k]], compression, acc, gl);
+                kd_gather_point(&tree, map, r_xy, radius, compression, &px, &list, &cap, out + 4 * i,
+                                glossy ? glossy + 4 * i : NULL);
             }
         }
         free(list);

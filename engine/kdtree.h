@@ -13,7 +13,8 @@
 #include <stddef.h>
 #include <stdint.h>
 
-#include "eng.h"
+#include "eng_internal.h"
+#include "gather_kernel.h"
 
 typedef struct kd_tree {
     size_t count;
@@ -30,5 +31,13 @@ void kd_tree_free(kd_tree *t); /* accepts a zeroed tree */
 /* Input indices of every point p with |p − q|² <= r², appended to *out (grown with realloc;
  * out of memory ends the process) in tree order, *n updated. Thread-safe (reads only). */
 void kd_tree_range(const kd_tree *t, const float q[3], float r, uint32_t **out, size_t *n, size_t *cap);
+
+/* The k-d gather's sum at one surface point px (kdgather.c): the photons of map within
+ * `radius` of px->s (the largest r_xy) whose own kernel (radius r_xy[i]) reaches it, added
+ * with gk_add in photon-index order. list/cap: the caller's scratch (grown with realloc).
+ * Used per eye pixel by the k-d gather and per secondary hit by the specular pass
+ * (spec_traced.c), so both see the same estimate. Thread-safe with per-thread scratch. */
+void kd_gather_point(const kd_tree *tree, const eng_photon_map *map, const float *r_xy, float radius,
+                     float compression, const gk_pixel *px, uint32_t **list, size_t *cap, float acc[4], float *glossy);
 
 #endif

@@ -1,5 +1,6 @@
 /* pass_composite.c — the last pass (ISPM 003_… §3: "composite direct and indirect"): linear
- * radiance = direct + indirect, and a display-referred copy (exposure, clamp, sRGB). The
+ * radiance = direct + indirect + specular (what the eye sees through mirrors and glass,
+ * specular.h) + emission (gbuffer.emission), and a display-referred copy (exposure, clamp, sRGB). The
  * indirect input is 0 until the photon passes exist; the pass is written for both. */
 #include "eng_internal.h"
 
@@ -24,12 +25,14 @@ eng_result pass_composite_create(int width, int height, pass_composite **out, en
     glUseProgram(g);
     glUniform1i(glGetUniformLocation(g, "u_direct"), 0);
     glUniform1i(glGetUniformLocation(g, "u_indirect"), 1);
+    glUniform1i(glGetUniformLocation(g, "u_specular"), 2);
+    glUniform1i(glGetUniformLocation(g, "u_emission"), 3);
     *out = p;
     return ENG_OK;
 }
 
 const glu_target *pass_composite_run(pass_composite *p, GLuint direct_tex, GLuint indirect_tex,
-                                     const eng_settings *s)
+                                     GLuint specular_tex, GLuint emission_tex, const eng_settings *s)
 {
     GLuint g = p->pass.program;
     glUseProgram(g);
@@ -38,6 +41,13 @@ const glu_target *pass_composite_run(pass_composite *p, GLuint direct_tex, GLuin
     glActiveTexture(GL_TEXTURE1);
     glBindTexture(GL_TEXTURE_2D, indirect_tex);
     glUniform1i(glGetUniformLocation(g, "u_has_indirect"), indirect_tex ? 1 : 0);
+    glActiveTexture(GL_TEXTURE2);
+    glBindTexture(GL_TEXTURE_2D, specular_tex);
+    glUniform1i(glGetUniformLocation(g, "u_has_specular"), specular_tex ? 1 : 0);
+    glActiveTexture(GL_TEXTURE3);
+    glBindTexture(GL_TEXTURE_2D, emission_tex);
+    glUniform1i(glGetUniformLocation(g, "u_has_emission"), emission_tex ? 1 : 0);
+    glActiveTexture(GL_TEXTURE0);
     glUniform1f(glGetUniformLocation(g, "u_exposure"), s->exposure);
     glu_pass_draw(&p->pass);
     return &p->pass.target;

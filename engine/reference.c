@@ -7,7 +7,10 @@
  * bsdf_scatter (bsdf.c: Lambert, GGX metal, delta mirror below roughness 0.01, smooth
  * dielectric with exact Fresnel and total internal reflection, Russian roulette), and
  * next-event estimation evaluates the same mixture's non-delta lobes (eval_f; Walter et al.
- * 2007 GGX with separable Smith G, as bsdf.c samples it). Emission is ignored, as in the engine.
+ * 2007 GGX with separable Smith G, as bsdf.c samples it). Emission (emissiveFactor × strength)
+ * is seen, as in the engine, where an eye path meets an emitter after delta lobes only (directly:
+ * reference.direct; through mirrors and glass: reference.indirect); emitters are not light
+ * sources (no photons, no next-event estimation), as in the engine.
  *
  * Estimators and the path classes they cover (light side first; a vertex is "D" when the
  * scattering there uses a diffuse or glossy lobe, "S" when it uses a delta lobe):
@@ -933,6 +936,7 @@ static void trace_eye(const frame_ctx *c, int x, int y, uint32_t sample, double 
     const scn_scene *scene = c->fs->scene;
     float prev[3] = {0.0f, 0.0f, 0.0f}, prev_pdf = 0.0f; /* the last D vertex, if the path left it by a D lobe */
     int prev_ok = 0;
+    int seen = 1; /* every vertex so far scattered by a delta lobe: emission reaches the eye */
     for (int depth = 0; depth < c->max_depth; depth++) {
         rt_hit h;
         scn_material m;
@@ -969,6 +973,9 @@ static void trace_eye(const frame_ctx *c, int x, int y, uint32_t sample, double 
             m = eng_material_of(scene, h.material);
         }
         const float wi[3] = {-dir[0], -dir[1], -dir[2]};
+        if (seen)
+            for (int i = 0; i < 3; i++)
+                (depth == 0 ? direct : indirect)[i] += (double)(thr[i] * m.emissive[i]);
         float n[3];
         scatter_normal(&h, wi, n);
         uint32_t dim = EYE_DIM0 + EYE_DIMS_PER_VERTEX * (uint32_t)depth;
@@ -1002,6 +1009,7 @@ static void trace_eye(const frame_ctx *c, int x, int y, uint32_t sample, double 
         if (lobe == BSDF_ABSORBED)
             return;
         prev_ok = d_vertex && (lobe == BSDF_DIFFUSE || lobe == BSDF_GLOSSY);
+        seen = seen && (lobe == BSDF_MIRROR || lobe == BSDF_REFLECT || lobe == BSDF_REFRACT);
         if (prev_ok) {
             memcpy(prev, h.position, sizeof prev);
             prev_pdf = pdf_mix(&m, ns, wi, wo);
@@ -1241,4 +1249,9 @@ eng_result ref_render_frame(ref_renderer *r, int frame, eng_error *err)
         if (r->listeners[i].frame_end && r->listeners[i].frame_end(r->listeners[i].user, &st) != 0)
             return eng_fail(err, ENG_ERR_ABORTED, "frame %d: a listener failed to finish the frame", frame);
     return ENG_OK;
+}
+
+int ref_light_at(const eng_light_pose *l, const float p[3], float wl[3], float *dist, float e[3])
+{
+    return light_at(l, p, wl, dist, e);
 }

@@ -153,7 +153,7 @@ static eng_result parse_settings(parser *P, const cJSON *obj, eng_settings *s)
                                        "normal_compression", "random", "random_map_size", "random_seed",
                                        "stratified_cycle",
                                        "splat_subsample", "temporal", "temporal_alpha", "atrous_iterations",
-                                       "atrous_detail", "atrous_gamma", "kernel_scaling", "progressive", "boundary", NULL};
+                                       "atrous_detail", "atrous_gamma", "kernel_scaling", "progressive", "boundary", "specular", "specular_depth", NULL};
     char v[80];
     eng_result r;
     if (!cJSON_IsObject(obj))
@@ -314,6 +314,20 @@ static eng_result parse_settings(parser *P, const cJSON *obj, eng_settings *s)
         else
             return bad(P, "settings.boundary: %s is not one of \"none\", \"renormalize\"", show(it, v, sizeof v));
     }
+    if ((it = cJSON_GetObjectItemCaseSensitive(obj, "specular"))) {
+        if (cJSON_IsString(it) && !strcmp(it->valuestring, "traced"))
+            s->specular = ENG_SPECULAR_TRACED;
+        else if (cJSON_IsString(it) && !strcmp(it->valuestring, "envmap"))
+            s->specular = ENG_SPECULAR_ENVMAP;
+        else if (cJSON_IsString(it) && !strcmp(it->valuestring, "off"))
+            s->specular = ENG_SPECULAR_OFF;
+        else
+            return bad(P, "settings.specular: %s is not one of \"traced\", \"envmap\", \"off\"",
+                       show(it, v, sizeof v));
+    }
+    if ((it = cJSON_GetObjectItemCaseSensitive(obj, "specular_depth")) &&
+        (r = get_int(P, it, "settings.specular_depth", 1, 16, &s->specular_depth)))
+        return r;
     return ENG_OK;
 }
 

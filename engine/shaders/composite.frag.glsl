@@ -1,9 +1,15 @@
 #version 450 core
-// Composite: final linear radiance = direct + indirect (ISPM §3 last step), and the display
+// Composite: final linear radiance = direct + indirect (ISPM §3 last step) + specular (eye
+// paths continued through mirrors and glass, engine/specular.h) + emission of the visible
+// surface (gbuffer.emission), and the display
 // transform: exposure in stops, clamp to [0,1], sRGB encoding (IEC 61966-2-1).
 uniform sampler2D u_direct;
 uniform sampler2D u_indirect;
 uniform int u_has_indirect;
+uniform sampler2D u_specular;
+uniform int u_has_specular;
+uniform sampler2D u_emission;
+uniform int u_has_emission;
 uniform float u_exposure;
 
 layout(location = 0) out vec4 o_radiance;
@@ -22,6 +28,10 @@ void main()
     vec3 l = texelFetch(u_direct, px, 0).rgb;
     if (u_has_indirect == 1)
         l += texelFetch(u_indirect, px, 0).rgb;
+    if (u_has_specular == 1)
+        l += texelFetch(u_specular, px, 0).rgb;
+    if (u_has_emission == 1)
+        l += texelFetch(u_emission, px, 0).rgb;
     o_radiance = vec4(l, 1.0);
     o_display = vec4(srgb_encode(clamp(l * exp2(u_exposure), 0.0, 1.0)), 1.0);
 }

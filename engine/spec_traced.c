@@ -1,0 +1,430 @@
+/* spec_traced.c — the "traced" specular method (specular.h): backward tracing of the eye
+ * paths that the eye G-buffer ends at a mirror or at glass (003_d0bf8e920b03f4e1.txt §3 step
+ * 5, option 1: "trace the specular eye paths on the CPU"), with Embree (rt.c).
+ *
+ * From every pixel whose surface has a delta lobe the path splits into both delta branches,
+ * reflection and refraction, weighted by their Fresnel weights (spec_split) instead of one
+ * random choice, so the image has no noise; total internal reflection leaves one branch.
+ * Each branch continues through further specular surfaces until it has crossed
+ * `specular_depth` of them (what is left beyond the cap is dropped: that light is missing,
+ * never invented). At every non-specular surface a branch reaches, its throughput times
+ *   direct light: Σ_l f(ω_l, ω_o)·E_l·cosθ_l·V_l, a shadow ray per light (rt_occluded) with
+ *                 the light model of shaders/direct.frag.glsl (ref_light_at), and
+ *   indirect light: the same photon map and kernel as the pixels the G-buffer sees, gathered
+ *                 at that point (kd_gather_point: κ of 003 §5.1 Eq. 2–3, gk_add's BSDF),
+ * where f is the engine's BSDF (gather_kernel.h: Lambert for the non-metallic, non-
+ * transmissive part and the GGX lobe of metals rougher than the mirror threshold), is added
+ * to the pixel, and so is the emission of every surface a branch meets (emitters are seen, not
+ * light sources). A surface that is both (e.g. transmission 0.5) is shaded and split.
+ * Refraction carries no η² factor, as in bsdf.c and the reference renderer: for a path that
+ * enters and leaves a dielectric the factors cancel.
+ *
+ * Determinism: each pixel is computed by one thread with a fixed amount of work (its branch
+ * tree, depth first, reflection before refraction) and the k-d gather sums in photon-index
+ * order, so the result is bit-identical for any thread count. */
+#include "specular.h"
+
+#include "bsdf.h"
+#include "gather_kernel.h"
+#include "indirect.h"
+#include "kdtree.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define SPEC_MAX_DEPTH 16
+
+struct spec_tracer {
+    const eng_frame_scene *fs;
+    const eng_rt *rt;
+    const eng_photon_map *map; /* NULL: no indirect light at the surfaces reached */
+    const float *r_xy;
+    kd_tree tree;
+    float radius, compression, far_dist;
+    int depth;
+};
+
+static float dot3(const float a[3], const float b[3])
+{
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+}
+
+int spec_is_specular(const scn_material *m)
+{
+    float metallic = fminf(fmaxf(m->metallic, 0.0f), 1.0f), transmission = fminf(fmaxf(m->transmission, 0.0f), 1.0f);
+    return (metallic > 0.0f && m->roughness < BSDF_MIRROR_ROUGHNESS) || (metallic < 1.0f && transmission > 0.0f);
+}
+
+int spec_scene_has_specular(const scn_scene *scene)
+{
+    for (uint32_t i = 0; i < scene->primitive_count; i++) {
+        scn_material m = eng_material_of(scene, scene->primitives[i].material);
+        if (spec_is_specular(&m))
+            return 1;
+    }
+    return 0;
+}
+
+const spec_method *spec_method_of(eng_specular m)
+{
+    return m == ENG_SPECULAR_OFF ? NULL : (m == ENG_SPECULAR_ENVMAP ? &spec_envmap_method : &spec_traced_method);
+}
+
+int spec_split(const scn_material *m, const float n[3], const float wi[3], float eta, spec_branch out[2])
+{
+    float metallic = fminf(fmaxf(m->metallic, 0.0f), 1.0f), transmission = fminf(fmaxf(m->transmission, 0.0f), 1.0f);
+    float cos_n = dot3(wi, n);
+    float s = cos_n >= 0.0f ? 1.0f : -1.0f;
+    float ns[3] = {s * n[0], s * n[1], s * n[2]};
+    float cos_i = fabsf(cos_n);
+    if (!(cos_i > 0.0f))
+        return 0;
+    float mirror = metallic > 0.0f && m->roughness < BSDF_MIRROR_ROUGHNESS ? metallic : 0.0f;
+    float glass = (1.0f - metallic) * transmission;
+    int entering = cos_n > 0.0f;
+    float n1 = entering ? eta : m->ior, n2 = entering ? m->ior : 1.0f;
+    float r = glass > 0.0f ? bsdf_fresnel_dielectric(cos_i, n1, n2) : 0.0f;
+    int count = 0;
+    spec_branch *b = &out[count];
+    float k = 1.0f - cos_i, k5 = k * k * k * k * k; /* Schlick, as bsdf.c's mirror */
+    for (int c = 0; c < 3; c++) {
+        b->dir[c] = 2.0f * cos_i * ns[c] - wi[c];
+        b->weight[c] = mirror * (m->base_color[c] + (1.0f - m->base_color[c]) * k5) + glass * r;
+    }
+    b->eta = eta;
+    if (b->weight[0] > 0.0f || b->weight[1] > 0.0f || b->weight[2] > 0.0f)
+        count++;
+    if (glass > 0.0f && r < 1.0f) {
+        /* 002_… §4.5: ωr = −e·wi + (e·cosθi − cosθt)·ns, e = n1/n2 (no TIR: r < 1). */
+        b = &out[count];
+        float e = n1 / n2;
+        float cos_t = sqrtf(fmaxf(0.0f, 1.0f - e * e * (1.0f - cos_i * cos_i)));
+        float len = 0.0f;
+        for (int c = 0; c < 3; c++) {
+            b->dir[c] = -e * wi[c] + (e * cos_i - cos_t) * ns[c];
+            len += b->dir[c] * b->dir[c];
+        }
+        len = sqrtf(len);
+        for (int c = 0; c < 3; c++) {
+            b->dir[c] /= len;
+            b->weight[c] = glass * (1.0f - r) * m->base_color[c];
+        }
+        b->eta = n2;
+        if (b->weight[0] > 0.0f || b->weight[1] > 0.0f || b->weight[2] > 0.0f)
+            count++;
+    }
+    return count;
+}
+
+spec_tracer *spec_tracer_create(const eng_frame_scene *fs, const eng_rt *rt, const eng_photon_map *map,
+                                const float *radius, const eng_settings *s, eng_error *err)
+{
+    spec_tracer *t = calloc(1, sizeof *t);
+    if (!t) {
+        eng_fail(err, ENG_ERR_NOMEM, "specular: out of memory");
+        return NULL;
+    }
+    t->fs = fs;
+    t->rt = rt;
+    t->depth = s->specular_depth < 1 ? 1 : (s->specular_depth > SPEC_MAX_DEPTH ? SPEC_MAX_DEPTH : s->specular_depth);
+    t->compression = s->normal_compression;
+    float diag = 0.0f;
+    for (int c = 0; c < 3; c++) {
+        float e = fs->bounds_max[c] - fs->bounds_min[c];
+        diag += e * e;
+    }
+    t->far_dist = 2.0f * sqrtf(diag) + 1.0f;
+    if (map && map->count > 0 && radius) {
+        if (kd_tree_build(map->photons[0].position, map->count, sizeof(eng_photon) / sizeof(float), &t->tree, err) !=
+            ENG_OK) {
+            free(t);
+            return NULL;
+        }
+        t->map = map;
+        t->r_xy = radius;
+        for (size_t i = 0; i < map->count; i++)
+            t->radius = fmaxf(t->radius, radius[i]);
+    }
+    return t;
+}
+
+void spec_tracer_destroy(spec_tracer *t)
+{
+    if (!t)
+        return;
+    kd_tree_free(&t->tree);
+    free(t);
+}
+
+/* Light leaving the non-specular lobes of m at hit h toward `from` (the previous vertex):
+ * direct light by shadow rays and the photon gather. ns: the shading normal turned toward wi. */
+static void shade(const spec_tracer *t, const rt_hit *h, const scn_material *m, const float ns[3], const float wi[3],
+                  const float from[3], spec_scratch *sc, float out[3])
+{
+    const float mat[4] = {m->roughness, m->metallic, m->transmission, m->ior};
+    gk_pixel px;
+    gk_pixel_init(&px, h->position, ns, m->base_color, mat, from);
+    float kd = (1.0f - m->metallic) * (1.0f - m->transmission) / (float)ENG_PI;
+    int glossy = m->metallic > 0.0f && m->roughness >= BSDF_MIRROR_ROUGHNESS;
+    const float *ng = h->geom_normal;
+    float gi = dot3(ng, wi);
+    out[0] = out[1] = out[2] = 0.0f;
+    for (uint32_t l = 0; l < t->fs->light_count; l++) {
+        const eng_light_pose *lp = &t->fs->lights[l];
+        float wl[3], dist, e[3];
+        if (!ref_light_at(lp, h->position, wl, &dist, e))
+            continue;
+        float cosl = dot3(ns, wl), gl = dot3(ng, wl);
+        if (!(cosl > 0.0f) || (gl >= 0.0f) != (gi >= 0.0f)) /* the light is behind the true surface */
+            continue;
+        float f[3], g[3] = {0.0f, 0.0f, 0.0f};
+        if (glossy)
+            gk_glossy(&px, wl, cosl, g);
+        for (int c = 0; c < 3; c++)
+            f[c] = kd * m->base_color[c] + g[c];
+        float eps = gl >= 0.0f ? bsdf_offset_eps(h->position) : -bsdf_offset_eps(h->position);
+        float a[3], b[3];
+        for (int c = 0; c < 3; c++) {
+            a[c] = h->position[c] + eps * ng[c];
+            b[c] = isinf(dist) ? h->position[c] + t->far_dist * wl[c] : lp->position[c];
+        }
+        if (rt_occluded(t->rt, a, b))
+            continue;
+        for (int c = 0; c < 3; c++)
+            out[c] += f[c] * e[c] * cosl;
+    }
+    if (t->map) {
+        float acc[4] = {0.0f, 0.0f, 0.0f, 0.0f};
+        kd_gather_point(&t->tree, t->map, t->r_xy, t->radius, t->compression, &px, &sc->list, &sc->cap, acc, NULL);
+        for (int c = 0; c < 3; c++)
+            out[c] += acc[c];
+    }
+}
+
+typedef struct spec_ray {
+    float org[3], dir[3], thr[3], eta;
+    int bounce; /* specular surfaces crossed so far */
+} spec_ray;
+
+/* Pushes the branches of a split at point p (normal n used for the offset) onto the stack. */
+static int push_branches(spec_ray *stack, int top, const spec_branch *b, int count, const float p[3],
+                         const float n[3], const float thr[3], int bounce)
+{
+    float eps = bsdf_offset_eps(p);
+    /* Reflection first on top of the stack's order: pushed last, popped first. */
+    for (int k = count - 1; k >= 0; k--) {
+        spec_ray *r = &stack[top++];
+        float side = dot3(n, b[k].dir) >= 0.0f ? eps : -eps;
+        for (int c = 0; c < 3; c++) {
+            r->org[c] = p[c] + side * n[c];
+            r->dir[c] = b[k].dir[c];
+            r->thr[c] = thr[c] * b[k].weight[c];
+        }
+        r->eta = b[k].eta;
+        r->bounce = bounce;
+    }
+    return top;
+}
+
+/* Follows the branch tree on the stack depth first, adding to radiance/throughput/depth as
+ * spec_tracer_pixel documents. Hits on draw `skip` (UINT32_MAX: none) are passed through by
+ * rays that have not yet met another surface (the envmap's rays leave their own object). */
+static void trace_tree(const spec_tracer *t, spec_ray *stack, int top, uint32_t skip, spec_scratch *sc,
+                       float radiance[3], float *depth, float throughput[3])
+{
+    spec_branch b[2];
+    const scn_scene *scene = t->fs->scene;
+    int passes = 0;
+    while (top > 0) {
+        spec_ray r = stack[--top];
+        rt_hit h;
+        if (!rt_intersect(t->rt, r.org, r.dir, 0.0f, INFINITY, &h))
+            continue; /* nothing emits in the background */
+        if (h.draw == skip && r.bounce == 1 && passes < 16) {
+            float eps = bsdf_offset_eps(h.position);
+            for (int c = 0; c < 3; c++)
+                r.org[c] = h.position[c] + eps * r.dir[c];
+            stack[top++] = r;
+            passes++;
+            continue;
+        }
+        if ((float)r.bounce > *depth)
+            *depth = (float)r.bounce;
+        scn_material hm = eng_material_of(scene, h.material);
+        const float hwi[3] = {-r.dir[0], -r.dir[1], -r.dir[2]};
+        for (int c = 0; c < 3; c++) /* an emitter seen in the mirror (not a light source) */
+            radiance[c] += r.thr[c] * hm.emissive[c];
+        /* The scattering normal: the interpolated one unless it puts wi on the other side
+         * than the true surface does (photon_trace.c's and reference.c's rule). */
+        const float *hn = (dot3(h.geom_normal, hwi) >= 0.0f) == (dot3(h.normal, hwi) >= 0.0f) ? h.normal
+                                                                                            : h.geom_normal;
+        if (bsdf_stores_photons(&hm)) {
+            float s = dot3(hn, hwi) >= 0.0f ? 1.0f : -1.0f;
+            float ns[3] = {s * hn[0], s * hn[1], s * hn[2]}, l[3];
+            shade(t, &h, &hm, ns, hwi, r.org, sc, l);
+            for (int c = 0; c < 3; c++) {
+                radiance[c] += r.thr[c] * l[c];
+                throughput[c] += r.thr[c];
+            }
+        }
+        if (r.bounce < t->depth && spec_is_specular(&hm))
+            top = push_branches(stack, top, b, spec_split(&hm, hn, hwi, r.eta, b), h.position, h.geom_normal, r.thr,
+                                r.bounce + 1);
+    }
+}
+
+void spec_tracer_pixel(const spec_tracer *t, const float p[3], const float n[3], const scn_material *m,
+                       const float eye[3], spec_scratch *sc, float radiance[3], float *depth, float throughput[3])
+{
+    for (int c = 0; c < 3; c++)
+        radiance[c] = throughput[c] = 0.0f;
+    *depth = 0.0f;
+    if (!spec_is_specular(m))
+        return;
+    float wi[3] = {eye[0] - p[0], eye[1] - p[1], eye[2] - p[2]};
+    float len = sqrtf(dot3(wi, wi));
+    if (!(len > 0.0f))
+        return;
+    for (int c = 0; c < 3; c++)
+        wi[c] /= len;
+    /* Depth first: at most one pending branch per level besides the one being followed. */
+    spec_ray stack[2 * SPEC_MAX_DEPTH + 2];
+    spec_branch b[2];
+    const float one[3] = {1.0f, 1.0f, 1.0f};
+    int top = push_branches(stack, 0, b, spec_split(m, n, wi, 1.0f, b), p, n, one, 1);
+    trace_tree(t, stack, top, UINT32_MAX, sc, radiance, depth, throughput);
+}
+
+void spec_tracer_ray(const spec_tracer *t, const float org[3], const float dir[3], uint32_t skip_draw,
+                     spec_scratch *sc, float radiance[3])
+{
+    spec_ray stack[2 * SPEC_MAX_DEPTH + 2];
+    float depth = 0.0f, throughput[3] = {0.0f, 0.0f, 0.0f};
+    for (int c = 0; c < 3; c++) {
+        stack[0].org[c] = org[c];
+        stack[0].dir[c] = dir[c];
+        stack[0].thr[c] = 1.0f;
+        radiance[c] = 0.0f;
+    }
+    stack[0].eta = 1.0f;
+    stack[0].bounce = 1;
+    trace_tree(t, stack, 1, skip_draw, sc, radiance, &depth, throughput);
+}
+
+/* ---------------------------------------------------------------- the methods' buffers */
+
+eng_result spec_buffers_create(spec_buffers *b, int width, int height, eng_error *err)
+{
+    memset(b, 0, sizeof *b);
+    b->width = width;
+    b->height = height;
+    size_t n = (size_t)width * (size_t)height;
+    b->rgba = eng_xmalloc(n * 4 * sizeof(float));
+    b->radiance = eng_xmalloc(n * 3 * sizeof(float));
+    b->depth = eng_xmalloc(n * sizeof(float));
+    b->throughput = eng_xmalloc(n * 3 * sizeof(float));
+    eng_result r = ind_cpu_target_create(&b->target, width, height, 0, err);
+    if (r != ENG_OK)
+        spec_buffers_destroy(b);
+    else
+        b->target_ok = 1;
+    return r;
+}
+
+void spec_buffers_destroy(spec_buffers *b)
+{
+    if (b->target_ok)
+        ind_cpu_target_destroy(&b->target);
+    ind_gbuffer_free(&b->gb);
+    free(b->rgba);
+    free(b->radiance);
+    free(b->depth);
+    free(b->throughput);
+    memset(b, 0, sizeof *b);
+}
+
+void spec_buffers_material(const spec_buffers *b, size_t i, scn_material *m)
+{
+    const float *mat = b->gb.material + 4 * i;
+    memset(m, 0, sizeof *m);
+    memcpy(m->base_color, b->gb.albedo + 3 * i, 3 * sizeof(float));
+    m->roughness = mat[0];
+    m->metallic = mat[1];
+    m->transmission = mat[2];
+    m->ior = mat[3];
+    if (b->gb.position[4 * i + 3] == 0.0f)
+        m->metallic = m->transmission = 0.0f; /* background: nothing to continue */
+}
+
+void spec_buffers_finish(spec_buffers *b, spec_output *out)
+{
+    size_t n = (size_t)b->width * (size_t)b->height;
+    for (size_t i = 0; i < n; i++) {
+        for (int c = 0; c < 3; c++)
+            b->rgba[4 * i + (size_t)c] = b->radiance[3 * i + (size_t)c];
+        b->rgba[4 * i + 3] = b->depth[i];
+    }
+    ind_cpu_target_upload(&b->target, 0, b->rgba);
+    out->target = &b->target.target;
+    out->radiance = b->radiance;
+    out->depth = b->depth;
+    out->throughput = b->throughput;
+}
+
+/* ---------------------------------------------------------------- the method */
+
+static void traced_destroy(void *state)
+{
+    if (!state)
+        return;
+    spec_buffers_destroy(state);
+    free(state);
+}
+
+static eng_result traced_create(int width, int height, void **state, eng_error *err)
+{
+    spec_buffers *b = calloc(1, sizeof *b);
+    if (!b)
+        return eng_fail(err, ENG_ERR_NOMEM, "specular: out of memory");
+    eng_result r = spec_buffers_create(b, width, height, err);
+    if (r != ENG_OK) {
+        free(b);
+        return r;
+    }
+    *state = b;
+    return ENG_OK;
+}
+
+/* Read-back, tracing and upload all count as the method's time. */
+static eng_result traced_run(void *state, const spec_input *in, spec_output *out, eng_error *err)
+{
+    spec_buffers *st = state;
+    ind_gbuffer_read(in->gbuf, &st->gb);
+    spec_tracer *t = spec_tracer_create(in->fs, in->rt, in->map, in->radius, in->s, err);
+    if (!t)
+        return ENG_ERR_NOMEM;
+    const int w = st->width, h = st->height;
+    const float *eye = in->fs->camera.eye;
+    int threads = in->s->threads > 0 ? in->s->threads : 2;
+#pragma omp parallel num_threads(threads)
+    {
+        spec_scratch sc = {NULL, 0};
+#pragma omp for schedule(dynamic, 1)
+        for (int y = 0; y < h; y++) {
+            for (int x = 0; x < w; x++) {
+                size_t i = (size_t)y * (size_t)w + (size_t)x;
+                scn_material m;
+                spec_buffers_material(st, i, &m);
+                spec_tracer_pixel(t, st->gb.position + 4 * i, st->gb.normal + 3 * i, &m, eye, &sc,
+                                  st->radiance + 3 * i, &st->depth[i], st->throughput + 3 * i);
+            }
+        }
+        free(sc.list);
+    }
+    spec_tracer_destroy(t);
+    spec_buffers_finish(st, out);
+    return ENG_OK;
+}
+
+const spec_method spec_traced_method = {"traced", traced_create, traced_run, traced_destroy};
