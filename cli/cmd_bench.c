@@ -1343,11 +1343,17 @@ int cmd_bench(int argc, char **argv, const char *command_line)
     if (!quiet)
         fprintf(stderr, "ispm bench: %d points (%d methods), frames %d..., %d repeats, %dx%d\n", n, c.method_count,
                 c.frames[0], c.repeats, pts[0].seq->width, pts[0].seq->height);
+    rep_progress prog;
+    rep_progress_begin(&prog, quiet ? NULL : stderr, "ispm bench", "point", n);
+    prog.tty = 0; /* the per-point bias lines follow each step: plain lines */
     for (int i = 0; i < n && r == ENG_OK; i++) {
         r = run_point(&c, scene, &pts[i], &passes, &ref, &err);
-        if (r == ENG_OK && !quiet)
-            fprintf(stderr, "  [%d/%d] %-32s frame %8.2f ms  indirect rmse %.4g  full rmse %.4g\n", i + 1, n,
-                    pts[i].label, pts[i].frame_ms, pts[i].indirect.rmse, pts[i].full.rmse);
+        if (r == ENG_OK && !quiet) {
+            char detail[256];
+            snprintf(detail, sizeof detail, "%-32s frame %8.2f ms  indirect rmse %.4g  full rmse %.4g", pts[i].label,
+                     pts[i].frame_ms, pts[i].indirect.rmse, pts[i].full.rmse);
+            rep_progress_step(&prog, i + 1, detail);
+        }
         if (r == ENG_OK && !quiet)
             print_bias(&c, &pts[i]);
     }

@@ -9,6 +9,7 @@
 #include "cap.h"
 #include "eng.h"
 #include "ref.h"
+#include "rep.h" /* rep_progress */
 
 #include <getopt.h>
 #include <stdio.h>
@@ -241,8 +242,11 @@ int cmd_reference(int argc, char **argv, const char *command_line)
         fprintf(stderr, "ispm reference: %s (%s), frames %d-%d, %dx%d, %d spp, max depth %d, %s, %d threads\n",
                 eseq->name, scene->path, first, last, eseq->width, eseq->height, s->spp, s->max_depth,
                 s->no_caustics ? "no caustics" : "caustic photon passes", s->threads);
+    rep_progress prog;
+    rep_progress_begin(&prog, rd.quiet ? NULL : stderr, "ispm reference", "frame", last - first + 1);
     for (int f = first; f <= last; f++) {
         r = ref_render_frame(ref, f, &err);
+        rep_progress_step(&prog, f - first + 1, NULL);
         if (r != ENG_OK) {
             eng_error cerr = {{0}};
             fprintf(stderr, "ispm reference: %s\n", cap_status(cap, &cerr) != ENG_OK ? cerr.msg : err.msg);
@@ -251,6 +255,7 @@ int cmd_reference(int argc, char **argv, const char *command_line)
             goto done;
         }
     }
+    rep_progress_end(&prog);
     r = cap_finish(cap, &err);
     if (r != ENG_OK) {
         fprintf(stderr, "ispm reference: %s\n", err.msg);

@@ -12,6 +12,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 enum { EXIT_OK = 0, EXIT_RUNTIME = 1, EXIT_INPUT = 2 };
 
@@ -27,7 +28,10 @@ static void usage(FILE *f)
             "commands:\n"
             "  record SEQUENCE -o RUN     render every frame of a sequence, capture every pass to RUN\n"
             "  replay RUN [--golden DIR]  compare a run buffer by buffer against a golden\n"
-            "  bless RUN DIR              make a complete run the golden in DIR\n"
+            "  bless RUN DIR [--accept]   review a run against the golden in DIR, then make it the golden\n"
+            "  check SEQUENCE             record to a temporary run and replay it (for git bisect run)\n"
+            "  info RUN                   frames, buffers, settings, provenance, last replay's verdict\n"
+            "  export RUN --frame F --buffer NAME -o FILE.png|.exr   one buffer as an image\n"
             "  reference SEQUENCE -o RUN  render ground truth (path tracing + photon mapping) to RUN\n"
             "  bench CONFIG -o OUTDIR     speed vs accuracy of engine settings against a reference run\n"
             "\n"
@@ -62,7 +66,9 @@ static void record_usage(FILE *f)
 static void replay_usage(FILE *f)
 {
     fprintf(f,
-            "usage: ispm replay RUN [--golden DIR] [--tolerances FILE] [--report DIR] [--reference REFRUN] [--quiet]\n"
+            "usage: ispm replay RUN [--golden DIR] [--tolerances FILE] [-fail X ...] [--provenance-fail]\n"
+            "                       [--timing-fail RATIO] [--frames A-B] [--buffers GLOB] [--report DIR]\n"
+            "                       [--reference REFRUN] [--quiet]\n"
             "\n"
             "Decodes every buffer of every frame of RUN, verifies it against the run's manifest,\n"
             "counts NaN/Inf, and compares it with the golden's buffer of the same name using the\n"
@@ -77,30 +83,62 @@ static void replay_usage(FILE *f)
             "  -r, --report DIR        where to write report.txt and report.json\n"
             "  -R, --reference REFRUN  a run whose frames hold reference.full/.indirect/.direct: the\n"
             "                          temporal error of composite/indirect/direct against them\n"
+            "  -fail X, -failrelative X, -failpercent P, -hardfail X, -warn X, -warnrelative X,\n"
+            "  -warnpercent P, -hardwarn X   (also --fail ...) idiff's thresholds: each replaces the\n"
+            "                          tolerance file's default entry (and rules that inherit it)\n"
+            "      --provenance-fail   a different sequence, scene or setting fails (default: warns);\n"
+            "                          tool version, git revision, GL, Embree and pins are information\n"
+            "      --timing-fail RATIO fail when a pass's share of the frame time (median over frames)\n"
+            "                          is over RATIO times the golden's (default: timing is reported only)\n"
+            "      --frames A-B        compare frames A to B only (no stability measurement then)\n"
+            "      --buffers GLOB      compare the buffers whose names match GLOB only\n"
             "  -q, --quiet             print only failures and the verdict\n"
             "  -h, --help              this text\n"
             "\n"
-            "exit (idiff's convention): 0 ok, 1 warnings, 2 failures (incl. any NaN/Inf not in the\n"
-            "golden, missing or extra buffers), 3 size mismatch, 4 unreadable run, golden or file\n");
+            "Before the pixels it compares the two manifests: every difference in provenance is\n"
+            "listed (info, warn or fail) and per-pass timing is reported as run/golden ratios.\n"
+            "\n"
+            "exit (idiff's convention): 0 ok, 1 warnings (incl. a different sequence, scene or\n"
+            "settings), 2 failures (incl. any NaN/Inf not in the golden, missing or extra buffers)\n"
+            "or bad arguments, 3 size mismatch, 4 unreadable run, golden or file\n");
 }
 
 static void bless_usage(FILE *f)
 {
     fprintf(f,
-            "usage: ispm bless RUN DIR\n"
+            "usage: ispm bless RUN DIR [--accept] [--review REVIEWDIR]\n"
             "\n"
-            "Copies the complete run RUN to the golden folder DIR (atomically), keeping DIR's\n"
-            "tolerances.json if it has one. Regenerate a golden only for an intended image change.\n"
+            "Makes the complete run RUN the golden in DIR, after a review. When DIR already holds a\n"
+            "golden, RUN is first replayed against it: provenance changes (settings, scene, tool, GL,\n"
+            "Embree), every buffer that is not bit-exact and by how much, and per-pass timing are\n"
+            "printed and written as an HTML review with thumbnails to REVIEWDIR (default RUN/bless).\n"
+            "  - bit-exact and made from the same inputs: nothing to do, the golden is left unchanged;\n"
+            "  - different: nothing changes unless --accept is given; with it the golden is replaced\n"
+            "    (atomically, keeping its tolerances.json) and DIR/BLESS.md records the review, so the\n"
+            "    commit that moves a golden carries its own evidence.\n"
+            "A new golden (DIR absent, empty, or holding only tolerances.json) needs no --accept.\n"
             "\n"
-            "exit: 0 blessed; 2 RUN incomplete or invalid; 1 writing failed\n");
+            "  -a, --accept            replace a golden that differs from RUN (an intended change)\n"
+            "  -r, --review DIR        where the HTML review goes (default RUN/bless)\n"
+            "  -h, --help              this text\n"
+            "\n"
+            "exit: 0 blessed, or unchanged (bit-exact); 1 RUN differs from the golden and --accept was\n"
+            "      not given (nothing changed); 2 bad arguments, RUN incomplete or invalid, DIR not a\n"
+            "      golden; 3 writing failed\n");
 }
 
-/* Progress listener: one line per frame with the per-pass times. */
+/* Progress listener: one line per frame (refreshed in place on a terminal) with elapsed time,
+ * time left and the per-pass times. */
+typedef struct record_progress {
+    rep_progress p;
+    int done;
+} record_progress;
+
 static int progress_frame_end(void *user, const eng_frame_stats *st)
 {
-    const seq_sequence *seq = user;
+    record_progress *rp = user;
     char line[512];
-    int n = snprintf(line, sizeof line, "  frame %d/%d  t=%.4f s ", st->frame + 1, seq->frame_count, st->time);
+    int n = snprintf(line, sizeof line, "t=%.4f s ", st->time);
     for (int i = 0; i < st->pass_count && n > 0 && (size_t)n < sizeof line; i++)
         n += snprintf(line + n, sizeof line - (size_t)n, " %s %.1f", st->passes[i].name, st->passes[i].ms);
     if (st->photons_emitted) {
@@ -111,10 +149,10 @@ static int progress_frame_end(void *user, const eng_frame_stats *st)
                 n += snprintf(line + n, sizeof line - (size_t)n, " %llu", (unsigned long long)st->photons_stored[b]);
         if (st->photons_truncated && n > 0 && (size_t)n < sizeof line)
             snprintf(line + n, sizeof line - (size_t)n, ", %llu truncated", (unsigned long long)st->photons_truncated);
-        fprintf(stderr, "%s\n", line);
-        return 0;
+    } else if (n > 0 && (size_t)n < sizeof line) {
+        snprintf(line + n, sizeof line - (size_t)n, " ms");
     }
-    fprintf(stderr, "%s ms\n", line);
+    rep_progress_step(&rp->p, ++rp->done, line);
     return 0;
 }
 
@@ -235,7 +273,13 @@ static int cmd_record(int argc, char **argv, const char *command_line)
     }
     eng_listener l = cap_listener(cap);
     eng_add_listener(eng, &l);
-    eng_listener progress = {seq, NULL, NULL, progress_frame_end};
+    record_progress prog;
+    int to_render = 0;
+    for (int i = 0; i < seq->frame_count; i++)
+        to_render += !cap_frame_done(cap, i);
+    rep_progress_begin(&prog.p, stderr, "ispm record", "frame", to_render);
+    prog.done = 0;
+    eng_listener progress = {&prog, NULL, NULL, progress_frame_end};
     if (!quiet)
         eng_add_listener(eng, &progress);
     if (!quiet)
@@ -250,6 +294,8 @@ static int cmd_record(int argc, char **argv, const char *command_line)
             continue;
         r = eng_render_frame(eng, i, &err);
         if (r != ENG_OK) {
+            if (!quiet)
+                rep_progress_end(&prog.p);
             eng_error cerr = {{0}};
             if (cap_status(cap, &cerr) != ENG_OK)
                 fprintf(stderr, "ispm record: %s\n", cerr.msg);
@@ -260,6 +306,8 @@ static int cmd_record(int argc, char **argv, const char *command_line)
             goto done;
         }
     }
+    if (!quiet)
+        rep_progress_end(&prog.p);
     r = cap_finish(cap, &err);
     if (r != ENG_OK) {
         fprintf(stderr, "ispm record: %s\n", err.msg);
@@ -276,17 +324,66 @@ done:
     return rc;
 }
 
+/* idiff spells its thresholds with one dash (-fail 0.1); getopt_long wants two: the eight
+ * names are rewritten in place before parsing (argv's pointers only). */
+static void idiff_dashes(int argc, char **argv)
+{
+    static char spelled[8][16];
+    static const char *const names[8] = {"warn", "warnrelative", "warnpercent", "hardwarn",
+                                         "fail", "failrelative", "failpercent", "hardfail"};
+    for (int i = 1; i < argc; i++) {
+        if (strcmp(argv[i], "--") == 0)
+            return;
+        for (int k = 0; k < 8; k++)
+            if (argv[i][0] == '-' && strcmp(argv[i] + 1, names[k]) == 0) {
+                snprintf(spelled[k], sizeof spelled[k], "--%s", names[k]);
+                argv[i] = spelled[k];
+            }
+    }
+}
+
+/* "A-B" or "A" (frame indices, A <= B) into o. */
+static int parse_frames(const char *s, rep_options *o)
+{
+    char *end;
+    long a = strtol(s, &end, 10), b = a;
+    if (end == s || a < 0)
+        return 0;
+    if (*end == '-') {
+        const char *t = end + 1;
+        b = strtol(t, &end, 10);
+        if (end == t)
+            return 0;
+    }
+    if (*end || b < a || b > 1000000)
+        return 0;
+    o->frames_set = 1;
+    o->frame_first = (int)a;
+    o->frame_last = (int)b;
+    return 1;
+}
+
 static int cmd_replay(int argc, char **argv)
 {
+    enum { OPT_TOL = 1000, OPT_TIMING_FAIL = 1100, OPT_PROV_FAIL, OPT_FRAMES, OPT_BUFFERS };
     static const struct option opts[] = {
         {"golden", required_argument, NULL, 'g'}, {"tolerances", required_argument, NULL, 't'},
         {"report", required_argument, NULL, 'r'}, {"quiet", no_argument, NULL, 'q'},
-        {"reference", required_argument, NULL, 'R'}, {"help", no_argument, NULL, 'h'}, {NULL, 0, NULL, 0},
+        {"reference", required_argument, NULL, 'R'}, {"help", no_argument, NULL, 'h'},
+        {"warn", required_argument, NULL, OPT_TOL}, {"warnrelative", required_argument, NULL, OPT_TOL},
+        {"warnpercent", required_argument, NULL, OPT_TOL}, {"hardwarn", required_argument, NULL, OPT_TOL},
+        {"fail", required_argument, NULL, OPT_TOL}, {"failrelative", required_argument, NULL, OPT_TOL},
+        {"failpercent", required_argument, NULL, OPT_TOL}, {"hardfail", required_argument, NULL, OPT_TOL},
+        {"timing-fail", required_argument, NULL, OPT_TIMING_FAIL},
+        {"provenance-fail", no_argument, NULL, OPT_PROV_FAIL},
+        {"frames", required_argument, NULL, OPT_FRAMES}, {"buffers", required_argument, NULL, OPT_BUFFERS},
+        {NULL, 0, NULL, 0},
     };
     rep_options o;
     memset(&o, 0, sizeof o);
-    int c;
-    while ((c = getopt_long(argc, argv, "g:t:r:R:qh", opts, NULL)) != -1) {
+    int c, idx = 0;
+    idiff_dashes(argc, argv);
+    while ((c = getopt_long(argc, argv, "g:t:r:R:qh", opts, &idx)) != -1) {
         switch (c) {
         case 'g': o.golden_dir = optarg; break;
         case 'R': o.reference_dir = optarg; break;
@@ -294,14 +391,45 @@ static int cmd_replay(int argc, char **argv)
         case 'r': o.report_dir = optarg; break;
         case 'q': o.quiet = 1; break;
         case 'h': replay_usage(stdout); return EXIT_OK;
-        default: replay_usage(stderr); return REP_UNREADABLE;
+        case OPT_TOL:
+            if (rep_tol_flag_parse(&o.flags, opts[idx].name, optarg) != 1) {
+                fprintf(stderr, "ispm replay: -%s: '%s' is not a number >= 0\n", opts[idx].name, optarg);
+                return EXIT_INPUT;
+            }
+            break;
+        case OPT_TIMING_FAIL: {
+            char *end;
+            o.timing_fail = strtod(optarg, &end);
+            if (*end || !(o.timing_fail > 0) || o.timing_fail > 1e9) {
+                fprintf(stderr, "ispm replay: --timing-fail: '%s' is not a ratio > 0\n", optarg);
+                return EXIT_INPUT;
+            }
+            break;
+        }
+        case OPT_PROV_FAIL: o.provenance_fail = 1; break;
+        case OPT_FRAMES:
+            if (!parse_frames(optarg, &o)) {
+                fprintf(stderr, "ispm replay: --frames: '%s' is not A-B (frame indices, A <= B)\n", optarg);
+                return EXIT_INPUT;
+            }
+            break;
+        case OPT_BUFFERS: o.buffers = optarg; break;
+        default: replay_usage(stderr); return EXIT_INPUT;
         }
     }
     if (optind + 1 != argc) {
         replay_usage(stderr);
-        return REP_UNREADABLE;
+        return EXIT_INPUT;
+    }
+    if ((o.flags.set || o.timing_fail > 0 || o.provenance_fail) && !o.golden_dir) {
+        fprintf(stderr, "ispm replay: thresholds, --timing-fail and --provenance-fail need --golden\n");
+        return EXIT_INPUT;
     }
     o.run_dir = argv[optind];
+    rep_progress prog;
+    /* on a terminal only: in a log, stderr keeps its one line per error */
+    rep_progress_begin(&prog, !o.quiet && isatty(STDERR_FILENO) ? stderr : NULL, "ispm replay", "frame", 0);
+    o.progress = &prog;
     eng_error err = {{0}};
     rep_exit rc = rep_replay(&o, stdout, &err);
     if (rc == REP_UNREADABLE)
@@ -316,31 +444,45 @@ static int cmd_replay(int argc, char **argv)
 
 static int cmd_bless(int argc, char **argv)
 {
-    static const struct option opts[] = {{"help", no_argument, NULL, 'h'}, {NULL, 0, NULL, 0}};
+    static const struct option opts[] = {{"accept", no_argument, NULL, 'a'}, {"review", required_argument, NULL, 'r'},
+                                         {"help", no_argument, NULL, 'h'}, {NULL, 0, NULL, 0}};
+    rep_bless_options o;
+    memset(&o, 0, sizeof o);
     int c;
-    while ((c = getopt_long(argc, argv, "h", opts, NULL)) != -1) {
-        if (c == 'h') {
-            bless_usage(stdout);
-            return EXIT_OK;
+    while ((c = getopt_long(argc, argv, "ar:h", opts, NULL)) != -1) {
+        switch (c) {
+        case 'a': o.accept = 1; break;
+        case 'r': o.review_dir = optarg; break;
+        case 'h': bless_usage(stdout); return EXIT_OK;
+        default: bless_usage(stderr); return EXIT_INPUT;
         }
-        bless_usage(stderr);
-        return EXIT_INPUT;
     }
     if (optind + 2 != argc) {
         bless_usage(stderr);
         return EXIT_INPUT;
     }
+    o.run_dir = argv[optind];
+    o.golden_dir = argv[optind + 1];
     eng_error err = {{0}};
-    eng_result r = rep_bless(argv[optind], argv[optind + 1], &err);
+    rep_bless_outcome out;
+    eng_result r = rep_bless_reviewed(&o, stdout, &out, &err);
     if (r != ENG_OK) {
         fprintf(stderr, "ispm bless: %s\n", err.msg);
-        return exit_for(r);
+        return r == ENG_ERR_INVALID || r == ENG_ERR_PARSE ? EXIT_INPUT : 3;
     }
-    printf("golden: %s\n", argv[optind + 1]);
+    switch (out) {
+    case REP_BLESS_REFUSED: return EXIT_RUNTIME;
+    case REP_BLESS_SAME: printf("golden: %s (unchanged)\n", o.golden_dir); break;
+    case REP_BLESS_NEW: printf("golden: %s (new; review in %s/BLESS.md)\n", o.golden_dir, o.golden_dir); break;
+    case REP_BLESS_REPLACED: printf("golden: %s (replaced; review in %s/BLESS.md)\n", o.golden_dir, o.golden_dir); break;
+    }
     return EXIT_OK;
 }
 
 int cmd_bench(int argc, char **argv, const char *command_line); /* cmd_bench.c */
+int cmd_check(int argc, char **argv);                           /* cmd_check.c */
+int cmd_info(int argc, char **argv);                            /* cmd_inspect.c */
+int cmd_export(int argc, char **argv);                          /* cmd_inspect.c */
 
 int main(int argc, char **argv)
 {
@@ -380,6 +522,12 @@ int main(int argc, char **argv)
         return cmd_reference(argc, argv, line);
     if (!strcmp(cmd, "bench"))
         return cmd_bench(argc, argv, line);
+    if (!strcmp(cmd, "check"))
+        return cmd_check(argc, argv);
+    if (!strcmp(cmd, "info"))
+        return cmd_info(argc, argv);
+    if (!strcmp(cmd, "export"))
+        return cmd_export(argc, argv);
     fprintf(stderr, "ispm: unknown command '%s'\n", cmd);
     usage(stderr);
     return EXIT_INPUT;

@@ -9,6 +9,7 @@
 #include "eng_internal.h"
 #include "glctx_backend.h"
 
+#include <embree3/rtcore_config.h> /* RTC_VERSION_STRING: the Embree the engine was built against */
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -31,6 +32,7 @@ static const char *g_info[] = {
     "GALLIUM_OVERRIDE_CPU_CAPS", "sse4.1",
     "LP_NUM_THREADS", g_threads,
     "embree_config", g_embree_cfg,
+    "embree_version", RTC_VERSION_STRING,
     "fp", "-ffp-contract=off, no fast-math",
     NULL, NULL,
 };

@@ -8,6 +8,12 @@
  * one written, and then swapped in with renames, so an interrupted bless leaves the old golden
  * or the new one, never a mixture. Only manifest.json and the frame files are copied: a
  * replay/ report folder inside the run is not part of a golden.
+ *
+ * A golden moves only with a written review: the run is first replayed against the golden it
+ * would replace (provenance, pixels, timing; the HTML review with thumbnails goes to the run's
+ * bless/ folder, outside the committed golden). A bit-exact run made from the same inputs
+ * changes nothing; a run that differs replaces the golden only when accepted, and then the
+ * golden carries BLESS.md, the review in text: what moved, by how much, and why.
  */
 #define _XOPEN_SOURCE 700
 
@@ -19,6 +25,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
+#include <time.h>
 #include <unistd.h>
 
 /* The run must be one replay would accept; any reason it is not becomes ENG_ERR_INVALID with
@@ -142,35 +149,159 @@ static eng_result check_target(const char *golden, eng_error *err)
     return ENG_OK;
 }
 
-eng_result rep_bless(const char *run_dir, const char *golden_dir, eng_error *err)
+/* At most this many buffer lines in BLESS.md: goldens are committed, the HTML review has all. */
+#define BLESS_MAX_LINES 40
+
+/* BLESS.md: the written review that travels with the golden in the commit that moves it. */
+static char *review_md(const char *run_dir, const char *golden, const char *review_dir, const rep_report *r)
 {
-    if (!run_dir || !golden_dir || !golden_dir[0])
+    rep_sb sb = {0};
+    char *origin = rep_manifest_origin(run_dir);
+    time_t now = time(NULL);
+    char when[32] = "?";
+    struct tm tm;
+    if (gmtime_r(&now, &tm))
+        strftime(when, sizeof when, "%Y-%m-%d %H:%M UTC", &tm);
+    rep_sb_printf(&sb, "# Bless review: %s\n\n- reviewed: %s\n- from run: `%s`\n- made by: %s\n", golden, when, run_dir, origin);
+    free(origin);
+    if (!r) {
+        rep_sb_printf(&sb, "- replaces: nothing (new golden)\n");
+        return sb.s;
+    }
+    char *old = rep_manifest_origin(golden);
+    rep_sb_printf(&sb, "- replaces: %s\n- HTML review with thumbnails (not committed): `%s/report.html`\n\n", old,
+                  review_dir);
+    free(old);
+    size_t cnt[REP_V_COUNT] = {0};
+    for (size_t i = 0; i < r->count; i++)
+        cnt[r->entries[i].verdict]++;
+    rep_sb_printf(&sb, "The run against the golden it replaces: **%s** (exit %d) — %zu failed, %zu warned, %zu within "
+                       "tolerance, %zu bit-exact, %zu size mismatch (%zu buffers, %d frames).\n",
+                  rep_exit_word(r->exit), (int)r->exit, cnt[REP_V_FAIL], cnt[REP_V_WARN], cnt[REP_V_WITHIN],
+                  cnt[REP_V_BITEXACT], cnt[REP_V_SIZE], r->count, r->frames);
+    if (r->exit == REP_UNREADABLE)
+        rep_sb_printf(&sb, "\nThe old golden could not be compared: %s\n", r->error.msg);
+    if (r->prov) {
+        rep_sb_printf(&sb, "\n## Provenance changes\n\n```\n");
+        rep_prov_text(&sb, r->prov);
+        rep_sb_printf(&sb, "```\n");
+    }
+    size_t n = 0, listed = 0;
+    const rep_entry **order = rep_report_sorted(r, &n);
+    for (size_t i = 0; i < n; i++)
+        listed += rep_entry_listed(order[i]) ? 1 : 0;
+    rep_sb_printf(&sb, "\n## What changes (%zu buffer%s not bit-exact, worst first", listed, listed == 1 ? "" : "s");
+    if (listed > BLESS_MAX_LINES)
+        rep_sb_printf(&sb, "; the first %d here, all in the HTML review", BLESS_MAX_LINES);
+    rep_sb_printf(&sb, ")\n\n```\n");
+    for (size_t i = 0, shown = 0; i < n && shown < BLESS_MAX_LINES; i++)
+        if (rep_entry_listed(order[i])) {
+            rep_report_line(&sb, r, order[i]);
+            shown++;
+        }
+    free(order);
+    rep_sb_printf(&sb, "```\n");
+    if (r->prov && r->prov->timing_count) {
+        rep_sb_printf(&sb, "\n## Timing\n\n```\n");
+        rep_timing_text(&sb, r->prov);
+        rep_sb_printf(&sb, "```\n");
+    }
+    return sb.s;
+}
+
+static eng_result write_review(const char *tmp, const char *md, eng_error *err)
+{
+    char *p = rep_path_join(tmp, "BLESS.md");
+    eng_result r = rep_write_atomic(p, md, strlen(md), err);
+    free(p);
+    return r;
+}
+
+/* Bit-exact everywhere and no judged provenance difference: blessing would change nothing. */
+static int unchanged(const rep_report *r)
+{
+    if (r->exit == REP_UNREADABLE || !r->prov || r->prov->warn || r->prov->fail || r->count == 0)
+        return 0;
+    for (size_t i = 0; i < r->count; i++)
+        if (r->entries[i].verdict != REP_V_BITEXACT)
+            return 0;
+    return 1;
+}
+
+eng_result rep_bless_reviewed(const rep_bless_options *o, FILE *summary, rep_bless_outcome *outcome, eng_error *err)
+{
+    if (!o || !o->run_dir || !o->golden_dir || !o->golden_dir[0])
         return eng_fail(err, ENG_ERR_INVALID, "bless: a run folder and a golden folder are needed");
     /* "golden/" + ".tmp" must not become "golden/.tmp". */
-    char *golden = rep_xstrdup(golden_dir);
+    char *golden = rep_xstrdup(o->golden_dir);
     for (size_t n = strlen(golden); n > 1 && golden[n - 1] == '/'; n--)
         golden[n - 1] = 0;
     char rp[PATH_MAX], gp[PATH_MAX];
-    if (realpath(run_dir, rp) && realpath(golden, gp) && strcmp(rp, gp) == 0) {
+    if (realpath(o->run_dir, rp) && realpath(golden, gp) && strcmp(rp, gp) == 0) {
         free(golden);
-        return eng_fail(err, ENG_ERR_INVALID, "%s: cannot bless a run onto itself", run_dir);
+        return eng_fail(err, ENG_ERR_INVALID, "%s: cannot bless a run onto itself", o->run_dir);
     }
     rep_run *run = NULL;
     eng_result r = check_target(golden, err);
     if (r == ENG_OK)
-        r = verify_run(run_dir, &run, err);
+        r = verify_run(o->run_dir, &run, err);
     if (r != ENG_OK) {
         free(golden);
         return r;
     }
-    char *tmp = rep_xprintf("%s.tmp", golden);
-    r = build_tmp(run, golden, tmp, err);
-    if (r == ENG_OK)
-        r = swap_in(golden, tmp, err);
-    if (r != ENG_OK)
-        rep_remove_tree(tmp, NULL);
-    free(tmp);
+    char *review_dir = o->review_dir ? rep_xstrdup(o->review_dir) : rep_path_join(o->run_dir, "bless");
+    char *old_manifest = rep_path_join(golden, "manifest.json");
+    int has_old = rep_is_file(old_manifest);
+    free(old_manifest);
+    rep_report rev;
+    memset(&rev, 0, sizeof rev);
+    rep_bless_outcome out = REP_BLESS_NEW;
+    if (has_old) {
+        rep_options ro;
+        memset(&ro, 0, sizeof ro);
+        ro.run_dir = o->run_dir;
+        ro.golden_dir = golden;
+        ro.report_dir = review_dir;
+        eng_error ignored; /* an unreadable old golden is a difference: rev says why */
+        rep_replay_report(&ro, &rev, &ignored);
+        out = unchanged(&rev) ? REP_BLESS_SAME : o->accept ? REP_BLESS_REPLACED : REP_BLESS_REFUSED;
+    }
+    char *md = review_md(o->run_dir, golden, review_dir, has_old ? &rev : NULL);
+    if (summary && out != REP_BLESS_NEW) {
+        if (out == REP_BLESS_SAME) {
+            fprintf(summary, "bless: %s is bit-exact with the run (%zu buffers) and made from the same inputs: "
+                             "nothing to bless, the golden is unchanged\n", golden, rev.count);
+        } else {
+            fputs(md, summary);
+            if (out == REP_BLESS_REFUSED)
+                fprintf(summary, "\nbless: NOT blessed — the run differs from %s (review above; thumbnails in %s/report.html).\n"
+                                 "If the change is intended: ispm bless %s %s --accept\n",
+                        golden, review_dir, o->run_dir, o->golden_dir);
+        }
+    }
+    if (out == REP_BLESS_NEW || out == REP_BLESS_REPLACED) {
+        char *tmp = rep_xprintf("%s.tmp", golden);
+        r = build_tmp(run, golden, tmp, err);
+        if (r == ENG_OK)
+            r = write_review(tmp, md, err);
+        if (r == ENG_OK)
+            r = swap_in(golden, tmp, err);
+        if (r != ENG_OK)
+            rep_remove_tree(tmp, NULL);
+        free(tmp);
+    }
+    if (outcome)
+        *outcome = out;
+    free(md);
+    rep_report_free(&rev);
+    free(review_dir);
     free(golden);
     rep_run_close(run);
     return r;
+}
+
+eng_result rep_bless(const char *run_dir, const char *golden_dir, eng_error *err)
+{
+    rep_bless_options o = {run_dir, golden_dir, 1, NULL};
+    return rep_bless_reviewed(&o, NULL, NULL, err);
 }

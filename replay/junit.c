@@ -104,6 +104,44 @@ static void attr(rep_sb *sb, const char *name, const char *value)
     rep_sb_printf(sb, "\"");
 }
 
+/* One testcase: a <failure> of `type` with text when failed, else the text in <system-out>. */
+static void text_case(rep_sb *sb, const char *cls, const char *name, int failed, const char *type, const char *text)
+{
+    rep_sb_printf(sb, "    <testcase");
+    attr(sb, "classname", cls);
+    attr(sb, "name", name);
+    rep_sb_printf(sb, ">\n");
+    if (failed) {
+        rep_sb_printf(sb, "      <failure");
+        attr(sb, "type", type);
+        attr(sb, "message", text);
+        rep_sb_printf(sb, ">");
+        rep_sb_xml(sb, text);
+        rep_sb_printf(sb, "</failure>\n");
+    } else {
+        rep_sb_printf(sb, "      <system-out>");
+        rep_sb_xml(sb, text);
+        rep_sb_printf(sb, "</system-out>\n");
+    }
+    rep_sb_printf(sb, "    </testcase>\n");
+}
+
+/* The manifests compared, as two test cases of classname ispm.<suite>.manifest: provenance
+ * (every difference in its output; a failure only under --provenance-fail) and timing. */
+static void prov_cases_xml(rep_sb *sb, const rep_prov *p, const char *sname)
+{
+    char *cls = rep_xprintf("%s.manifest", sname);
+    rep_sb t = {0};
+    rep_prov_text(&t, p);
+    text_case(sb, cls, "provenance", p->fail > 0, "provenance", t.s);
+    free(t.s);
+    t = (rep_sb){0};
+    rep_timing_text(&t, p);
+    text_case(sb, cls, "timing", p->timing_failed > 0, "timing", t.s ? t.s : "no per-pass times");
+    free(t.s);
+    free(cls);
+}
+
 char *rep_report_junit(const rep_report *r, const char *suite)
 {
     size_t failures = 0, errors = r->exit == REP_UNREADABLE ? 1 : 0;
@@ -115,7 +153,10 @@ char *rep_report_junit(const rep_report *r, const char *suite)
     for (int k = 0; r->stab && r->stab->verdicts && k < r->stab->run.buffer_count; k++)
         checked += r->stab->verdicts[k].checked;
     failures += r->stab ? (size_t)r->stab->failed : 0;
-    size_t tests = r->count + errors + checked;
+    size_t prov_cases = r->prov ? 2 : 0; /* provenance and timing, before the buffers */
+    if (r->prov)
+        failures += (r->prov->fail ? 1 : 0) + (r->prov->timing_failed ? 1 : 0);
+    size_t tests = r->count + errors + checked + prov_cases;
     char *sname = rep_xprintf("ispm.%s", suite);
 
     rep_sb sb = {0};
@@ -149,6 +190,8 @@ char *rep_report_junit(const rep_report *r, const char *suite)
         rep_sb_xml(&sb, r->error.msg);
         rep_sb_printf(&sb, "</error>\n    </testcase>\n");
     }
+    if (r->prov)
+        prov_cases_xml(&sb, r->prov, sname);
     for (size_t i = 0; i < r->count; i++) {
         const rep_entry *e = &r->entries[i];
         char *cls = rep_xprintf("%s.frame%06d", sname, e->frame);

@@ -22,6 +22,34 @@ extern "C" {
 /* idiff-style exit codes; when several apply, the largest wins. */
 typedef enum rep_exit { REP_OK = 0, REP_WARN = 1, REP_FAIL = 2, REP_SIZE = 3, REP_UNREADABLE = 4 } rep_exit;
 
+/* idiff-style thresholds given on the command line (ispm replay -fail 0.1 ...): each key whose
+ * bit is set replaces the tolerance file's "default" entry, and so every rule that took that
+ * key from the default; a key a rule sets itself stays the rule's. */
+enum {
+    REP_FLAG_WARN = 1, REP_FLAG_WARNRELATIVE = 2, REP_FLAG_WARNPERCENT = 4, REP_FLAG_HARDWARN = 8,
+    REP_FLAG_FAIL = 16, REP_FLAG_FAILRELATIVE = 32, REP_FLAG_FAILPERCENT = 64, REP_FLAG_HARDFAIL = 128
+};
+typedef struct rep_tol_flags {
+    unsigned set; /* REP_FLAG_* bits */
+    double warn, warnrelative, warnpercent, hardwarn, fail, failrelative, failpercent, hardfail;
+} rep_tol_flags;
+
+/* Progress of a long command (progress.c): "<label>: frame 3/8  elapsed 2.1 s  left 3.5 s", one
+ * refreshed line on a terminal, one line per step otherwise. */
+typedef struct rep_progress {
+    FILE *f;            /* NULL: silent */
+    const char *label;  /* "ispm record" */
+    const char *unit;   /* "frame" */
+    int total;
+    double start;
+    int tty, open;
+} rep_progress;
+void rep_progress_begin(rep_progress *p, FILE *f, const char *label, const char *unit, int total);
+/* done of total steps finished; detail (may be NULL) is appended to the line. */
+void rep_progress_step(rep_progress *p, int done, const char *detail);
+/* Ends a refreshed line. */
+void rep_progress_end(rep_progress *p);
+
 typedef struct rep_options {
     const char *run_dir;
     const char *golden_dir;   /* NULL: only check the run's integrity and non-finite values */
@@ -32,15 +60,47 @@ typedef struct rep_options {
     const char *reference_dir;/* NULL, or a run whose frames hold reference.full / reference.indirect /
                                  reference.direct: the temporal error of the matching passes is
                                  measured against them (one frame, or as many as the run) */
+    rep_tol_flags flags;      /* command-line thresholds over the file's default entry */
+    int provenance_fail;      /* a different scene, sequence or settings fails (default: warns) */
+    double timing_fail;       /* > 0: a pass whose share of the frame time is over this many times the
+                                 golden's fails; 0: timing is reported only */
+    int frames_set, frame_first, frame_last; /* frames_set: only frames frame_first..frame_last */
+    const char *buffers;      /* NULL, or an fnmatch pattern: only the buffers it matches are compared */
+    rep_progress *progress;   /* NULL, or stepped once per frame compared (total set by replay) */
 } rep_options;
+
+/* Parses one idiff-style option name ("fail", "-failpercent", "--hardwarn") and its value into
+ * f. Returns 0 when name is not one of the eight, -1 when the value is not a finite number >= 0,
+ * 1 when taken. */
+int rep_tol_flag_parse(rep_tol_flags *f, const char *name, const char *value);
 
 /* Returns the idiff-style exit code; on REP_UNREADABLE err names the file and problem. The
  * human summary goes to `summary` (may be NULL). */
 rep_exit rep_replay(const rep_options *o, FILE *summary, eng_error *err);
 
 /* Copies a complete run to golden_dir atomically (golden_dir.tmp then rename; an existing
- * golden's tolerances.json is kept, otherwise a default one is written). */
+ * golden's tolerances.json is kept, otherwise a default one is written). Same as
+ * rep_bless_reviewed with accept set and no summary. */
 eng_result rep_bless(const char *run_dir, const char *golden_dir, eng_error *err);
+
+typedef struct rep_bless_options {
+    const char *run_dir;
+    const char *golden_dir;
+    int accept;             /* replace a golden that differs from the run */
+    const char *review_dir; /* the HTML review (report.html, img/); NULL: <run_dir>/bless */
+} rep_bless_options;
+
+typedef enum rep_bless_outcome {
+    REP_BLESS_NEW = 0,      /* there was no golden: the run became it */
+    REP_BLESS_SAME,         /* bit-exact, same inputs: the golden is left as it is */
+    REP_BLESS_REPLACED,     /* it differed and accept was given: replaced, BLESS.md says what moved */
+    REP_BLESS_REFUSED       /* it differs and accept was not given: nothing in the golden changed */
+} rep_bless_outcome;
+
+/* Reviewed bless: compares the run with the golden it would replace (as replay does, the
+ * review's report.html with thumbnails in review_dir) and prints what would change to summary;
+ * then blesses per rep_bless_outcome. A blessed golden holds BLESS.md, the written review. */
+eng_result rep_bless_reviewed(const rep_bless_options *o, FILE *summary, rep_bless_outcome *outcome, eng_error *err);
 
 #ifdef __cplusplus
 }

@@ -12,7 +12,8 @@
  *   junit.c      report.junit.xml, and the XML/HTML text escaping both use
  *   thumb.c      float buffers (and their differences) mapped to 8-bit thumbnails
  *   replay.c     rep_replay: walks frames and buffers, builds the report
- *   bless.c      rep_bless: a verified run becomes a golden, atomically
+ *   bless.c      rep_bless: a verified run becomes a golden, atomically, after a review
+ *   provenance.c the run's manifest against the golden's: what made them, per-pass timing
  */
 #ifndef ISPM_REP_INTERNAL_H
 #define ISPM_REP_INTERNAL_H
@@ -146,6 +147,7 @@ typedef struct rep_tol {
 typedef struct rep_tol_rule {
     char *match; /* fnmatch pattern against the buffer name */
     rep_tol tol; /* fully resolved: unspecified keys already taken from "default" */
+    unsigned keys_set; /* REP_FLAG_* bits of the threshold keys the rule itself gives */
 } rep_tol_rule;
 
 typedef struct rep_tolerances {
@@ -179,6 +181,11 @@ void rep_tol_free(rep_tolerances *t);
 /* Tolerances for a buffer: the first rule whose pattern matches wins, else "default". Returns
  * the pattern that matched, or "default". */
 const char *rep_tol_lookup(const rep_tolerances *t, const char *buffer, rep_tol *out);
+
+/* Command-line thresholds (rep.h) over the default entry and the rules that inherit from it. */
+void rep_tol_apply_flags(rep_tolerances *t, const rep_tol_flags *f);
+/* The flags as typed: "-fail 0.1 -failpercent 2"; NULL when none. Caller frees. */
+char *rep_tol_flags_text(const rep_tol_flags *f);
 
 /* The tolerances.json that bless writes for a new golden (the built-in defaults, spelled out). */
 char *rep_tol_default_json(void);
@@ -236,6 +243,71 @@ typedef struct rep_metrics {
 rep_verdict rep_compare(const eng_buffer *run, const eng_buffer *golden, const rep_tol *tol,
                         rep_metrics *m);
 
+/* ---------------------------------------------------------------- provenance.c */
+
+enum { REP_PROV_INFO = 0, REP_PROV_WARN = 1, REP_PROV_FAIL = 2 };
+
+typedef struct rep_prov_item {
+    char *key;            /* dotted manifest path: "settings.photon_count", "gl.renderer" */
+    char *run, *golden;   /* the values as compact JSON; NULL: absent on that side */
+    int level;            /* REP_PROV_* */
+} rep_prov_item;
+
+typedef struct rep_timing_pass {
+    char *name;
+    double run_share, golden_share; /* median over frames of the pass's share of its frame; NAN: absent */
+    double ratio;                   /* run_share / golden_share; NAN when either is absent */
+    double run_ms, golden_ms;       /* median milliseconds */
+    int failed;                     /* ratio over timing_fail */
+} rep_timing_pass;
+
+typedef struct rep_prov {
+    size_t count;
+    rep_prov_item *items; /* in manifest order */
+    int warn, fail;       /* items at those levels */
+    int timing_count;
+    rep_timing_pass *timing;
+    double run_frame_ms, golden_frame_ms; /* median frame time (sum of passes) */
+    double timing_fail;   /* the limit applied, 0: none */
+    int timing_failed;
+} rep_prov;
+
+/* Compares the manifests of run_dir and golden_dir (provenance and timing, module comment). */
+eng_result rep_prov_compare(const char *run_dir, const char *golden_dir, int provenance_fail, double timing_fail,
+                            rep_prov **out, eng_error *err);
+void rep_prov_free(rep_prov *p);
+const char *rep_prov_level_name(int level);
+/* One difference, "warn settings.exposure: golden 0, run 1\n". */
+void rep_prov_line(rep_sb *sb, const rep_prov_item *it);
+/* The provenance block of report.txt (a line saying "same" when nothing differs). */
+void rep_prov_text(rep_sb *sb, const rep_prov *p);
+/* The timing block of report.txt: one line per pass. */
+void rep_timing_text(rep_sb *sb, const rep_prov *p);
+/* report.json's "provenance" and "timing" objects (cJSON *). */
+void *rep_prov_json(const rep_prov *p);
+void *rep_timing_json(const rep_prov *p);
+/* One line on what made the run in dir (sequence, scene, tool, GL, Embree). Caller frees. */
+char *rep_manifest_origin(const char *dir);
+
+/* ---------------------------------------------------------------- photonset.c */
+
+/* photons.map compared as a set of photons keyed by path (photonset.c). Counts are photons. */
+typedef struct rep_photon_diff {
+    uint64_t run, golden;            /* photons in each map */
+    uint64_t added, removed;         /* photons only in the run / only in the golden */
+    uint64_t changed, within;        /* matched photons differing over / within tolerance */
+    uint64_t paths_added, paths_removed;
+    int unaligned;                   /* more path edits than the alignment follows: compared whole */
+} rep_photon_diff;
+
+/* Whether b is a photon map (named photons.map, with the 14 photon channels). */
+int rep_is_photon_map(const eng_buffer *b);
+/* The set comparison; m gets what applies (pixels = photons of the larger map, fail_pixels =
+ * photons added, removed or changed, max_abs over matched photons). Maps of different sizes
+ * are compared too: a size difference is photons added or removed. */
+rep_verdict rep_photon_compare(const eng_buffer *run, const eng_buffer *golden, const rep_tol *tol, rep_metrics *m,
+                               rep_photon_diff *pd);
+
 /* ---------------------------------------------------------------- report.c */
 
 typedef enum rep_problem {
@@ -256,6 +328,8 @@ typedef struct rep_entry {
     rep_metrics m;
     rep_tol tol;
     char *tol_match;      /* pattern that chose tol, or "default" */
+    int photon_set;       /* compared as a photon set: pd holds the counts */
+    rep_photon_diff pd;
     char *run_shape;      /* "WxH C1,C2,.." for size mismatches */
     char *golden_shape;
 } rep_entry;
@@ -275,6 +349,9 @@ typedef struct rep_report {
     rep_exit exit;
     eng_error error;         /* the unreadable input, when exit is UNREADABLE */
     struct rep_stab_report *stab; /* temporal stability (stability_internal.h); NULL: not measured */
+    rep_prov *prov;          /* manifests compared (provenance, timing); NULL without golden */
+    char *flags_text;        /* owned: the command-line thresholds, "-fail 0.1 -failpercent 2", or NULL */
+    char *scope_text;        /* owned: "frames 2-3, buffers final.*" when replay looked at a part only */
     /* GL renderers (renderer.c): renderer_differs when both manifests name one and they
      * differ; then the buffers were compared under the cross-renderer tolerances. */
     char *run_renderer, *golden_renderer; /* owned; NULL if not recorded */
@@ -317,6 +394,12 @@ void rep_report_line(rep_sb *sb, const rep_report *r, const rep_entry *e);
 /* The run's verdict in one word: "OK", "WARN", "FAIL", "SIZE MISMATCH", "UNREADABLE". */
 const char *rep_exit_word(rep_exit x);
 
+/* ---------------------------------------------------------------- replay.c */
+
+/* rep_replay without the summary: fills r (free with rep_report_free) and writes the report
+ * files; returns r->exit. */
+rep_exit rep_replay_report(const rep_options *o, rep_report *r, eng_error *err);
+
 /* ---------------------------------------------------------------- junit.c */
 
 /* Appends s escaped for XML/HTML text and attribute values: & < > " ' become entities;
@@ -358,6 +441,8 @@ void rep_thumb_map_make(const char *buffer, const eng_buffer *run, const eng_buf
 void rep_thumb_size(int w, int h, int *tw, int *th);
 /* b as *tw × *th RGB bytes under m; NaN/Inf pixels magenta. Caller frees. */
 unsigned char *rep_thumb_render(const eng_buffer *b, const rep_thumb_map *m, int *tw, int *th);
+/* The same at any size: the longest side at most max_side (0: full size; ispm export). */
+unsigned char *rep_image_render(const eng_buffer *b, const rep_thumb_map *m, int max_side, int *tw, int *th);
 /* Heatmap of |run − golden| as *tw × *th RGB bytes; *scale gets the largest finite difference
  * (white). NULL when the two differ in size or share no channel. Caller frees. */
 unsigned char *rep_thumb_diff(const eng_buffer *run, const eng_buffer *golden, double *scale, int *tw, int *th);

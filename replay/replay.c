@@ -20,6 +20,7 @@
 #include "rep_internal.h"
 #include "stability_internal.h"
 
+#include <fnmatch.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -75,9 +76,17 @@ static void digest_difference(rep_report *r, const rep_run *run, const rep_run *
     }
 }
 
-static void integrity_only(rep_report *r, const rep_frame_info *f, const rep_part *parts)
+/* --buffers GLOB: whether a buffer is compared. */
+static int wanted(const char *glob, const char *name)
+{
+    return !glob || fnmatch(glob, name, 0) == 0;
+}
+
+static void integrity_only(rep_report *r, const char *glob, const rep_frame_info *f, const rep_part *parts)
 {
     for (int j = 0; j < f->buffer_count; j++) {
+        if (!wanted(glob, f->buffers[j].name))
+            continue;
         rep_entry *e = rep_report_add(r, f->index, f->buffers[j].name);
         eng_buffer b = rep_part_buffer(&parts[j]);
         e->compared = 1;
@@ -94,11 +103,13 @@ static void integrity_only(rep_report *r, const rep_frame_info *f, const rep_par
     }
 }
 
-static void compare_frame(rep_report *r, const rep_tolerances *tols, const rep_frame_info *rf,
+static void compare_frame(rep_report *r, const rep_tolerances *tols, const char *glob, const rep_frame_info *rf,
                           const rep_part *rp, const rep_frame_info *gf, const rep_part *gp)
 {
     for (int j = 0; j < rf->buffer_count; j++) {
         const char *name = rf->buffers[j].name;
+        if (!wanted(glob, name))
+            continue;
         rep_entry *e = rep_report_add(r, rf->index, name);
         int k = rep_frame_find(gf, name);
         if (k < 0) {
@@ -108,7 +119,12 @@ static void compare_frame(rep_report *r, const rep_tolerances *tols, const rep_f
         }
         eng_buffer a = rep_part_buffer(&rp[j]), b = rep_part_buffer(&gp[k]);
         e->tol_match = rep_xstrdup(rep_tol_lookup(tols, name, &e->tol));
-        e->verdict = rep_compare(&a, &b, &e->tol, &e->m);
+        if (rep_is_photon_map(&a) && rep_is_photon_map(&b)) {
+            e->photon_set = 1;
+            e->verdict = rep_photon_compare(&a, &b, &e->tol, &e->m, &e->pd);
+        } else {
+            e->verdict = rep_compare(&a, &b, &e->tol, &e->m);
+        }
         if (e->verdict == REP_V_SIZE) {
             e->run_shape = shape(a.width, a.height, a.channel_count, a.channels);
             e->golden_shape = shape(b.width, b.height, b.channel_count, b.channels);
@@ -117,16 +133,18 @@ static void compare_frame(rep_report *r, const rep_tolerances *tols, const rep_f
         }
     }
     for (int k = 0; k < gf->buffer_count; k++)
-        if (rep_frame_find(rf, gf->buffers[k].name) < 0) {
+        if (wanted(glob, gf->buffers[k].name) && rep_frame_find(rf, gf->buffers[k].name) < 0) {
             rep_entry *e = rep_report_add(r, gf->index, gf->buffers[k].name);
             e->verdict = REP_V_FAIL;
             e->problem = REP_PROB_MISSING;
         }
 }
 
-static void one_side(rep_report *r, const rep_frame_info *f, rep_problem problem)
+static void one_side(rep_report *r, const char *glob, const rep_frame_info *f, rep_problem problem)
 {
     for (int j = 0; j < f->buffer_count; j++) {
+        if (!wanted(glob, f->buffers[j].name))
+            continue;
         rep_entry *e = rep_report_add(r, f->index, f->buffers[j].name);
         e->verdict = REP_V_FAIL;
         e->problem = problem;
@@ -283,9 +301,14 @@ static eng_result walk(const rep_options *o, const char *report_dir, rep_report 
     }
     const rep_tolerances *use = tols;
     if (res == ENG_OK && gold) {
+        rep_tol_apply_flags(tols, &o->flags);
+        if (tols->cross)
+            rep_tol_apply_flags(tols->cross, &o->flags);
         use = rep_renderer_tolerances(r, run, gold, tols);
         if (use->path || use != tols)
             r->tol_path = rep_xstrdup(use->path ? use->path : "built-in cross-renderer defaults");
+        /* what made each run, before any pixel */
+        res = rep_prov_compare(o->run_dir, o->golden_dir, o->provenance_fail, o->timing_fail, &r->prov, err);
     }
     if (res != ENG_OK)
         goto done;
@@ -299,7 +322,17 @@ static eng_result walk(const rep_options *o, const char *report_dir, rep_report 
     }
     if ((res = stab_begin(&sw, o, report_dir, run, gold, err)) != ENG_OK)
         goto done;
-    for (int i = 0; i < r->frames && res == ENG_OK; i++) {
+    if (o->frames_set && (o->frame_first < 0 || o->frame_first >= r->frames || o->frame_last < o->frame_first)) {
+        res = eng_fail(err, ENG_ERR_INVALID, "%s: --frames %d-%d: the run has frames 0-%d", run->manifest_path,
+                       o->frame_first, o->frame_last, r->frames - 1);
+        goto done;
+    }
+    if (o->progress)
+        o->progress->total = o->frames_set ? (o->frame_last < r->frames ? o->frame_last : r->frames - 1) - o->frame_first + 1
+                                           : r->frames;
+    for (int i = 0, done = 0; i < r->frames && res == ENG_OK; i++) {
+        if (o->frames_set && (i < o->frame_first || i > o->frame_last))
+            continue; /* stability needs every frame: it is then not measured */
         rep_part *rp = NULL, *gp = NULL;
         const rep_frame_info *rf = i < run->frame_count ? &run->frames[i] : NULL;
         const rep_frame_info *gf = gold && i < gold->frame_count ? &gold->frames[i] : NULL;
@@ -309,20 +342,24 @@ static eng_result walk(const rep_options *o, const char *report_dir, rep_report 
             res = rep_run_read_frame(gold, i, &gp, err);
         if (res == ENG_OK) {
             if (!gold)
-                integrity_only(r, rf, rp);
+                integrity_only(r, o->buffers, rf, rp);
             else if (!rf)
-                one_side(r, gf, REP_PROB_FRAME_MISSING);
+                one_side(r, o->buffers, gf, REP_PROB_FRAME_MISSING);
             else if (!gf)
-                one_side(r, rf, REP_PROB_FRAME_EXTRA);
+                one_side(r, o->buffers, rf, REP_PROB_FRAME_EXTRA);
             else
-                compare_frame(r, use, rf, rp, gf, gp);
+                compare_frame(r, use, o->buffers, rf, rp, gf, gp);
             res = stab_frame(&sw, i, rf, rp, gf, gp, err);
         }
         if (rf)
             rep_parts_free(rp, rf->buffer_count);
         if (gf)
             rep_parts_free(gp, gf->buffer_count);
+        if (o->progress && res == ENG_OK)
+            rep_progress_step(o->progress, ++done, NULL);
     }
+    if (o->progress)
+        rep_progress_end(o->progress);
     if (res == ENG_OK)
         res = stab_end(&sw, r, run, use, report_dir, err);
 done:
@@ -334,44 +371,60 @@ done:
     return res;
 }
 
+rep_exit rep_replay_report(const rep_options *o, rep_report *r, eng_error *err)
+{
+    memset(r, 0, sizeof *r);
+    r->digest_frame = -1;
+    if (!o || !o->run_dir) {
+        eng_fail(err, ENG_ERR_INVALID, "replay: no run folder given");
+        r->exit = REP_UNREADABLE;
+        r->error = *err;
+        return REP_UNREADABLE;
+    }
+    r->run_dir = o->run_dir;
+    r->golden_dir = o->golden_dir;
+    if (o->golden_dir)
+        r->flags_text = rep_tol_flags_text(&o->flags);
+    if (o->frames_set || o->buffers) {
+        rep_sb scope = {0};
+        if (o->frames_set)
+            rep_sb_printf(&scope, "frames %d-%d", o->frame_first, o->frame_last);
+        if (o->buffers)
+            rep_sb_printf(&scope, "%sbuffers %s", scope.len ? ", " : "", o->buffers);
+        r->scope_text = scope.s;
+    }
+    /* An unreadable run folder that does not exist gets no report folder created inside it. */
+    char *dir = o->report_dir ? rep_xstrdup(o->report_dir) : rep_path_join(o->run_dir, "replay");
+    int writable = o->report_dir || rep_is_dir(o->run_dir);
+    eng_result res = walk(o, writable ? dir : NULL, r, err);
+    if (res != ENG_OK) {
+        r->exit = REP_UNREADABLE;
+        r->error = *err;
+    } else {
+        r->exit = rep_report_exit(r);
+    }
+
+    if (writable) {
+        eng_error werr;
+        if (rep_report_write(r, dir, &werr) != ENG_OK && r->exit != REP_UNREADABLE) {
+            r->exit = REP_UNREADABLE;
+            r->error = werr;
+            *err = werr;
+        }
+    }
+    free(dir);
+    return r->exit;
+}
+
 rep_exit rep_replay(const rep_options *o, FILE *summary, eng_error *err)
 {
     eng_error local;
     if (!err)
         err = &local;
-    if (!o || !o->run_dir) {
-        eng_fail(err, ENG_ERR_INVALID, "replay: no run folder given");
-        if (summary)
-            fprintf(summary, "replay: UNREADABLE — %s\n", err->msg);
-        return REP_UNREADABLE;
-    }
     rep_report r;
-    memset(&r, 0, sizeof r);
-    r.run_dir = o->run_dir;
-    r.golden_dir = o->golden_dir;
-    r.digest_frame = -1;
-    /* An unreadable run folder that does not exist gets no report folder created inside it. */
-    char *dir = o->report_dir ? rep_xstrdup(o->report_dir) : rep_path_join(o->run_dir, "replay");
-    int writable = o->report_dir || rep_is_dir(o->run_dir);
-    eng_result res = walk(o, writable ? dir : NULL, &r, err);
-    if (res != ENG_OK) {
-        r.exit = REP_UNREADABLE;
-        r.error = *err;
-    } else {
-        r.exit = rep_report_exit(&r);
-    }
-
-    if (writable) {
-        eng_error werr;
-        if (rep_report_write(&r, dir, &werr) != ENG_OK && r.exit != REP_UNREADABLE) {
-            r.exit = REP_UNREADABLE;
-            r.error = werr;
-            *err = werr;
-        }
-    }
-    free(dir);
+    rep_replay_report(o, &r, err);
     if (summary) {
-        char *text = rep_report_text(&r, o->quiet);
+        char *text = rep_report_text(&r, o ? o->quiet : 0);
         fputs(text, summary);
         fflush(summary);
         free(text);

@@ -46,6 +46,11 @@ void rep_report_free(rep_report *r)
     free(r->golden_renderer);
     rep_stab_report_free(r->stab);
     r->stab = NULL;
+    rep_prov_free(r->prov);
+    r->prov = NULL;
+    free(r->flags_text);
+    free(r->scope_text);
+    r->flags_text = r->scope_text = NULL;
     r->entries = NULL;
     r->digest_buffer = NULL;
     r->tol_path = NULL;
@@ -69,6 +74,10 @@ rep_exit rep_report_exit(const rep_report *r)
     }
     if (r->stab && r->stab->failed && x < REP_FAIL)
         x = REP_FAIL;
+    if (r->prov && (r->prov->fail || r->prov->timing_failed) && x < REP_FAIL)
+        x = REP_FAIL;
+    if (r->prov && r->prov->warn && x < REP_WARN)
+        x = REP_WARN;
     return x;
 }
 
@@ -131,6 +140,16 @@ const rep_entry **rep_report_sorted(const rep_report *r, size_t *n)
     return order;
 }
 
+/* "3.25%", or where two decimals would round to 0.00% "1/25600 px": a failing pixel is never shown
+ * as none. */
+static void share_text(rep_sb *sb, uint64_t count, uint64_t of, double percent, const char *unit)
+{
+    if (count && percent < 0.005)
+        rep_sb_printf(sb, "%llu/%llu %s", (unsigned long long)count, (unsigned long long)of, unit);
+    else
+        rep_sb_printf(sb, "%.2f%%", percent);
+}
+
 static int is_failure(const rep_entry *e)
 {
     return e->verdict == REP_V_FAIL || e->verdict == REP_V_SIZE;
@@ -190,16 +209,26 @@ void rep_report_line(rep_sb *sb, const rep_report *r, const rep_entry *e)
         rep_sb_printf(sb, "\n");
         return;
     }
-    if (m->max_x >= 0)
+    if (e->photon_set)
+        rep_sb_printf(sb, "photons %llu → %llu: %llu added, %llu removed, %llu changed, %llu within tolerance%s; max |Δ| %.2e%s%s",
+                      (unsigned long long)e->pd.golden, (unsigned long long)e->pd.run, (unsigned long long)e->pd.added,
+                      (unsigned long long)e->pd.removed, (unsigned long long)e->pd.changed,
+                      (unsigned long long)e->pd.within, e->pd.unaligned ? " (too many edits to align paths)" : "",
+                      m->max_abs, m->max_channel[0] ? " in " : "", m->max_channel);
+    else if (m->max_x >= 0)
         rep_sb_printf(sb, "max |Δ| %.2e at (%d,%d).%s  rmse %.1e", m->max_abs, m->max_x, m->max_y,
                       m->max_channel, m->rmse);
     else
         rep_sb_printf(sb, "max |Δ| 0 (%llu values differ in bits only)", (unsigned long long)m->values_differing);
     if (e->verdict == REP_V_FAIL) {
-        rep_sb_printf(sb, "  over fail %.2f%% (tol fail %g, %g%%)", m->fail_percent, e->tol.fail, e->tol.failpercent);
+        rep_sb_printf(sb, "  over fail ");
+        share_text(sb, m->fail_pixels, m->pixels, m->fail_percent, e->photon_set ? "photons" : "px");
+        rep_sb_printf(sb, " (tol fail %g, %g%%)", e->tol.fail, e->tol.failpercent);
         why_text(sb, m->fail_why, m, 1, &e->tol);
     } else if (e->verdict == REP_V_WARN) {
-        rep_sb_printf(sb, "  over warn %.2f%% (tol warn %g, %g%%)", m->warn_percent, e->tol.warn, e->tol.warnpercent);
+        rep_sb_printf(sb, "  over warn ");
+        share_text(sb, m->warn_pixels, m->pixels, m->warn_percent, e->photon_set ? "photons" : "px");
+        rep_sb_printf(sb, " (tol warn %g, %g%%)", e->tol.warn, e->tol.warnpercent);
         why_text(sb, m->warn_why, m, 0, &e->tol);
     } else {
         rep_sb_printf(sb, "  within tolerance (tol fail %g, %g%%)", e->tol.fail, e->tol.failpercent);
@@ -213,8 +242,9 @@ char *rep_report_text(const rep_report *r, int quiet)
     if (!quiet) {
         rep_sb_printf(&sb, "replay: run %s\n", r->run_dir ? r->run_dir : "(none)");
         if (r->golden_dir)
-            rep_sb_printf(&sb, "        golden %s (tolerances %s)\n", r->golden_dir,
-                          r->tol_path ? r->tol_path : "built-in");
+            rep_sb_printf(&sb, "        golden %s (tolerances %s%s%s)\n", r->golden_dir,
+                          r->tol_path ? r->tol_path : "built-in", r->flags_text ? ", default entry overridden by " : "",
+                          r->flags_text ? r->flags_text : "");
         else
             rep_sb_printf(&sb, "        no golden: integrity and non-finite values only\n");
         char *note = rep_renderer_note(r);
@@ -222,6 +252,8 @@ char *rep_report_text(const rep_report *r, int quiet)
             rep_sb_printf(&sb, "        %s\n", note);
         free(note);
         rep_sb_printf(&sb, "        %d frames, %d buffers per frame\n", r->frames, r->buffers_per_frame);
+        if (r->scope_text)
+            rep_sb_printf(&sb, "        compared: %s only\n", r->scope_text);
         if (r->golden_dir && r->exit != REP_UNREADABLE) {
             if (r->digest_frame >= 0)
                 rep_sb_printf(&sb, "        first digest difference (manifests): frame %d %s (%s)\n", r->digest_frame,
@@ -230,6 +262,9 @@ char *rep_report_text(const rep_report *r, int quiet)
                 rep_sb_printf(&sb, "        manifests: every digest matches the golden's\n");
         }
     }
+    /* provenance first: why the pixels may differ, before how they do */
+    if (r->prov && (!quiet || r->prov->fail))
+        rep_prov_text(&sb, r->prov);
     const rep_entry **order = rep_xcalloc(r->count, sizeof *order);
     size_t n = 0;
     for (size_t i = 0; i < r->count; i++)
@@ -246,6 +281,8 @@ char *rep_report_text(const rep_report *r, int quiet)
     }
     if (r->stab && (!quiet || r->stab->failed))
         rep_stab_text(&sb, r);
+    if (r->prov && (!quiet || r->prov->timing_failed))
+        rep_timing_text(&sb, r->prov);
     size_t cnt[REP_V_COUNT] = {0};
     for (size_t i = 0; i < r->count; i++)
         cnt[r->entries[i].verdict]++;
@@ -255,6 +292,12 @@ char *rep_report_text(const rep_report *r, int quiet)
     if (r->stab && r->stab->failed)
         rep_sb_printf(&sb, "stability: %d buffer%s over %s limits, ", r->stab->failed, r->stab->failed == 1 ? "" : "s",
                       r->stab->failed == 1 ? "its" : "their");
+    if (r->prov && (r->prov->warn || r->prov->fail))
+        rep_sb_printf(&sb, "provenance: %d difference%s %s; buffers: ", r->prov->warn + r->prov->fail,
+                      r->prov->warn + r->prov->fail == 1 ? "" : "s", r->prov->fail ? "failing" : "warning");
+    if (r->prov && r->prov->timing_failed)
+        rep_sb_printf(&sb, "timing: %d pass%s over --timing-fail, ", r->prov->timing_failed,
+                      r->prov->timing_failed == 1 ? "" : "es");
     if (r->golden_dir)
         rep_sb_printf(&sb, "%zu failed, %zu warned, %zu within tolerance, %zu bit-exact (%zu buffers, %d frames)\n",
                       cnt[REP_V_FAIL], cnt[REP_V_WARN], cnt[REP_V_WITHIN], cnt[REP_V_BITEXACT], r->count, r->frames);
@@ -376,6 +419,8 @@ char *rep_report_json(const rep_report *r)
     add_str(root, "run", r->run_dir);
     add_str(root, "golden", r->golden_dir);
     add_str(root, "tolerances", r->golden_dir ? (r->tol_path ? r->tol_path : "built-in") : NULL);
+    add_str(root, "tolerance_flags", r->flags_text);
+    add_str(root, "scope", r->scope_text);
     if (r->golden_dir && (r->run_renderer || r->golden_renderer)) {
         cJSON *rd = cJSON_AddObjectToObject(root, "renderer");
         add_str(rd, "run", r->run_renderer);
@@ -435,6 +480,18 @@ char *rep_report_json(const rep_report *r)
             add_str(b, "run_shape", e->run_shape);
             add_str(b, "golden_shape", e->golden_shape);
         }
+        if (e->photon_set) {
+            cJSON *ps = cJSON_AddObjectToObject(b, "photon_set");
+            cJSON_AddNumberToObject(ps, "run", (double)e->pd.run);
+            cJSON_AddNumberToObject(ps, "golden", (double)e->pd.golden);
+            cJSON_AddNumberToObject(ps, "added", (double)e->pd.added);
+            cJSON_AddNumberToObject(ps, "removed", (double)e->pd.removed);
+            cJSON_AddNumberToObject(ps, "changed", (double)e->pd.changed);
+            cJSON_AddNumberToObject(ps, "within", (double)e->pd.within);
+            cJSON_AddNumberToObject(ps, "paths_added", (double)e->pd.paths_added);
+            cJSON_AddNumberToObject(ps, "paths_removed", (double)e->pd.paths_removed);
+            cJSON_AddBoolToObject(ps, "aligned", !e->pd.unaligned);
+        }
         if (e->compared) {
             if (r->golden_dir)
                 cJSON_AddItemToObject(b, "tolerance", tol_json(e));
@@ -444,6 +501,13 @@ char *rep_report_json(const rep_report *r)
     }
     if (r->stab)
         cJSON_AddItemToObject(root, "stability", (cJSON *)rep_stab_json(r));
+    if (r->prov) {
+        cJSON_AddItemToObject(root, "provenance", (cJSON *)rep_prov_json(r->prov));
+        cJSON_AddItemToObject(root, "timing", (cJSON *)rep_timing_json(r->prov));
+    } else {
+        cJSON_AddNullToObject(root, "provenance");
+        cJSON_AddNullToObject(root, "timing");
+    }
     char *text = cJSON_Print(root);
     cJSON_Delete(root);
     if (!text) {

@@ -318,7 +318,8 @@ static void metrics_table(rep_sb *sb, const rep_report *r, const rep_entry *e)
         rep_sb_printf(sb, "%llu of %llu</td></tr>", (unsigned long long)m->values_differing,
                       (unsigned long long)m->values);
         row(sb, "pixels over fail");
-        rep_sb_printf(sb, "%llu (%.4g%%)", (unsigned long long)m->fail_pixels, m->fail_percent);
+        rep_sb_printf(sb, "%llu of %llu (%.4g%%)", (unsigned long long)m->fail_pixels, (unsigned long long)m->pixels,
+                      m->fail_percent);
         if (m->first_fail_x >= 0)
             rep_sb_printf(sb, ", first at (%d,%d)", m->first_fail_x, m->first_fail_y);
         rep_sb_printf(sb, "</td></tr>");
@@ -572,6 +573,64 @@ static const char JS[] =
     "f.addEventListener('click',t);"
     "f.addEventListener('keydown',function(e){if(e.key==='Enter'||e.key===' '){e.preventDefault();t();}});});";
 
+/* Provenance (every manifest difference, worst level first) and per-pass timing: before the
+ * pixels, so that a reader sees why before how. */
+static void prov_section(rep_sb *sb, const rep_prov *p)
+{
+    rep_sb_printf(sb, "<section id=\"provenance\"><h2>Provenance (%zu difference%s)</h2>\n", p->count,
+                  p->count == 1 ? "" : "s");
+    if (!p->count)
+        rep_sb_printf(sb, "<p>Same sequence, scene, settings, tool, GL and pins as the golden.</p>\n");
+    else
+        rep_sb_printf(sb, "<table class=\"all\"><thead><tr><th>level</th><th>key</th><th>golden</th><th>run</th>"
+                          "</tr></thead><tbody>\n");
+    for (int level = REP_PROV_FAIL; level >= REP_PROV_INFO; level--)
+        for (size_t i = 0; i < p->count; i++) {
+            const rep_prov_item *it = &p->items[i];
+            if (it->level != level)
+                continue;
+            rep_sb_printf(sb, "<tr class=\"%s\"><td>%s</td><td><code>", level == REP_PROV_FAIL ? "fail" : level == REP_PROV_WARN ? "warn" : "",
+                          rep_prov_level_name(level));
+            esc(sb, it->key);
+            rep_sb_printf(sb, "</code></td><td><code>");
+            esc(sb, it->golden ? it->golden : "(absent)");
+            rep_sb_printf(sb, "</code></td><td><code>");
+            esc(sb, it->run ? it->run : "(absent)");
+            rep_sb_printf(sb, "</code></td></tr>\n");
+        }
+    if (p->count)
+        rep_sb_printf(sb, "</tbody></table>\n");
+    rep_sb_printf(sb, "</section>\n");
+    if (!p->timing_count)
+        return;
+    rep_sb_printf(sb, "<section id=\"timing\"><h2>Timing: pass share of the frame (median), run vs golden</h2>\n"
+                      "<p>median frame %.1f ms, golden %.1f ms; %s</p>\n<table class=\"all\"><thead><tr><th>pass</th>"
+                      "<th>run</th><th>golden</th><th>ratio</th><th>run ms</th><th>golden ms</th></tr></thead><tbody>\n",
+                  p->run_frame_ms, p->golden_frame_ms,
+                  p->timing_fail > 0 ? "a ratio over --timing-fail fails" : "reported only (--timing-fail RATIO judges it)");
+    for (int i = 0; i < p->timing_count; i++) {
+        const rep_timing_pass *t = &p->timing[i];
+        rep_sb_printf(sb, "<tr class=\"%s\"><td>", t->failed ? "fail" : "");
+        esc(sb, t->name);
+        const double v[5] = {100 * t->run_share, 100 * t->golden_share, t->ratio, t->run_ms, t->golden_ms};
+        rep_sb_printf(sb, "</td>");
+        for (int k = 0; k < 5; k++) {
+            rep_sb_printf(sb, "<td class=\"n\">");
+            if (isfinite(v[k]) && k < 2)
+                rep_sb_printf(sb, "%.2f%%", v[k]);
+            else if (isfinite(v[k]) && k == 2)
+                rep_sb_printf(sb, "×%.2f", v[k]);
+            else if (isfinite(v[k]))
+                rep_sb_printf(sb, "%.1f", v[k]);
+            else
+                rep_sb_printf(sb, "—"); /* the pass is absent on one side */
+            rep_sb_printf(sb, "</td>");
+        }
+        rep_sb_printf(sb, "</tr>\n");
+    }
+    rep_sb_printf(sb, "</tbody></table></section>\n");
+}
+
 static void summary(rep_sb *sb, const page *pg, size_t listed)
 {
     const rep_report *r = pg->r;
@@ -632,7 +691,10 @@ static void summary(rep_sb *sb, const page *pg, size_t listed)
     } else {
         rep_sb_printf(sb, "none");
     }
-    rep_sb_printf(sb, "</dd></dl>\n<section id=\"differences\"><h2>%s (%zu, worst first)</h2>\n",
+    rep_sb_printf(sb, "</dd></dl>\n");
+    if (r->prov)
+        prov_section(sb, r->prov);
+    rep_sb_printf(sb, "<section id=\"differences\"><h2>%s (%zu, worst first)</h2>\n",
                   r->golden_dir ? "Buffers that are not bit-exact" : "Buffers that are not clean", listed);
     if (!listed)
         rep_sb_printf(sb, "<p>None.</p>\n");

@@ -99,16 +99,17 @@ void rep_thumb_map_make(const char *buffer, const eng_buffer *run, const eng_buf
     }
 }
 
-void rep_thumb_size(int w, int h, int *tw, int *th)
+/* w × h scaled down so the longest side is at most side (0: not scaled). */
+static void fit(int w, int h, int side, int *tw, int *th)
 {
     int longest = w > h ? w : h;
-    if (longest <= REP_THUMB_MAX_SIDE) {
+    if (side <= 0 || longest <= side) {
         *tw = w;
         *th = h;
         return;
     }
-    *tw = (int)((long long)w * REP_THUMB_MAX_SIDE / longest);
-    *th = (int)((long long)h * REP_THUMB_MAX_SIDE / longest);
+    *tw = (int)((long long)w * side / longest);
+    *th = (int)((long long)h * side / longest);
     if (*tw < 1)
         *tw = 1;
     if (*th < 1)
@@ -122,6 +123,11 @@ static void box(int i, int n, int s, int *a, int *b)
     *b = (int)((long long)(i + 1) * s / n);
     if (*b <= *a)
         *b = *a + 1;
+}
+
+void rep_thumb_size(int w, int h, int *tw, int *th)
+{
+    fit(w, h, REP_THUMB_MAX_SIDE, tw, th);
 }
 
 static unsigned char to_byte(double v)
@@ -144,7 +150,12 @@ static double srgb(double v)
 
 unsigned char *rep_thumb_render(const eng_buffer *b, const rep_thumb_map *m, int *tw, int *th)
 {
-    rep_thumb_size(b->width, b->height, tw, th);
+    return rep_image_render(b, m, REP_THUMB_MAX_SIDE, tw, th);
+}
+
+unsigned char *rep_image_render(const eng_buffer *b, const rep_thumb_map *m, int max_side, int *tw, int *th)
+{
+    fit(b->width, b->height, max_side, tw, th);
     unsigned char *out = rep_xcalloc((size_t)*tw * (size_t)*th, 3);
     int idx[3] = {-1, -1, -1};
     for (int i = 0; i < m->n; i++)

@@ -100,7 +100,7 @@ static eng_result parse_stability(const char *path, const char *where, const cJS
 
 /* Overrides t with the keys of one JSON block. allow_match: the block is a rule. */
 static eng_result parse_block(const char *path, const char *where, const cJSON *obj, rep_tol *t,
-                              int allow_match, eng_error *err)
+                              int allow_match, unsigned *keys_set, eng_error *err)
 {
     if (!cJSON_IsObject(obj))
         return eng_fail(err, ENG_ERR_INVALID, "%s: %s: must be an object", path, where);
@@ -129,6 +129,8 @@ static eng_result parse_block(const char *path, const char *where, const cJSON *
             return eng_fail(err, ENG_ERR_INVALID, "%s: %s: \"%s\" must be a finite number >= 0", path, where,
                             key);
         *field(t, k) = v->valuedouble;
+        if (keys_set && k < 8)
+            *keys_set |= 1u << k; /* KEYS' first eight are REP_FLAG_*'s order */
     }
     return ENG_OK;
 }
@@ -169,7 +171,7 @@ static eng_result parse_root(const char *path, const cJSON *root, rep_tolerances
             return eng_fail(err, ENG_ERR_INVALID, "%s: unknown key \"%s\"", path, v->string);
     const cJSON *def = cJSON_GetObjectItemCaseSensitive(root, "default");
     eng_result r;
-    if (def && (r = parse_block(path, "default", def, &t->def, 0, err)) != ENG_OK)
+    if (def && (r = parse_block(path, "default", def, &t->def, 0, NULL, err)) != ENG_OK)
         return r;
     const cJSON *rules = cJSON_GetObjectItemCaseSensitive(root, "buffers");
     if (!rules)
@@ -188,7 +190,7 @@ static eng_result parse_root(const char *path, const cJSON *root, rep_tolerances
         rep_tol_rule *rule = &t->rules[t->rule_count++];
         rule->match = rep_xstrdup(m->valuestring);
         rule->tol = t->def;
-        if ((r = parse_block(path, where, jr, &rule->tol, 1, err)) != ENG_OK)
+        if ((r = parse_block(path, where, jr, &rule->tol, 1, &rule->keys_set, err)) != ENG_OK)
             return r;
     }
     return ENG_OK;
@@ -285,4 +287,53 @@ char *rep_tol_default_json(void)
                        "  \"buffers\": []\n"
                        "}\n",
                        d.warn, d.fail, d.failrelative, d.failpercent, d.hardfail);
+}
+
+int rep_tol_flag_parse(rep_tol_flags *f, const char *name, const char *value)
+{
+    while (*name == '-')
+        name++;
+    size_t k = 0;
+    while (k < 8 && strcmp(KEYS[k], name) != 0)
+        k++;
+    if (k == 8)
+        return 0;
+    char *end = NULL;
+    double v = value ? strtod(value, &end) : NAN;
+    if (!value || !*value || *end || !isfinite(v) || v < 0)
+        return -1;
+    double *slot[8] = {&f->warn, &f->warnrelative, &f->warnpercent, &f->hardwarn,
+                       &f->fail, &f->failrelative, &f->failpercent, &f->hardfail};
+    *slot[k] = v;
+    f->set |= 1u << k;
+    return 1;
+}
+
+void rep_tol_apply_flags(rep_tolerances *t, const rep_tol_flags *f)
+{
+    if (!f || !f->set)
+        return;
+    const double v[8] = {f->warn, f->warnrelative, f->warnpercent, f->hardwarn,
+                         f->fail, f->failrelative, f->failpercent, f->hardfail};
+    for (size_t k = 0; k < 8; k++) {
+        if (!(f->set & (1u << k)))
+            continue;
+        *field(&t->def, k) = v[k];
+        for (int i = 0; i < t->rule_count; i++)
+            if (!(t->rules[i].keys_set & (1u << k)))
+                *field(&t->rules[i].tol, k) = v[k];
+    }
+}
+
+char *rep_tol_flags_text(const rep_tol_flags *f)
+{
+    if (!f || !f->set)
+        return NULL;
+    const double v[8] = {f->warn, f->warnrelative, f->warnpercent, f->hardwarn,
+                         f->fail, f->failrelative, f->failpercent, f->hardfail};
+    rep_sb sb = {0};
+    for (size_t k = 0; k < 8; k++)
+        if (f->set & (1u << k))
+            rep_sb_printf(&sb, "%s-%s %g", sb.len ? " " : "", KEYS[k], v[k]);
+    return sb.s;
 }

@@ -8,6 +8,8 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 BUILD_DIR=${BUILD_DIR:-build}
 BUILD_DIR=$BUILD_DIR scripts/setup.sh -DISPM_WERROR=ON
+# setup.sh installed every dependency: a test that would skip for a missing one fails instead.
+export ISPM_REQUIRE_DEPS=1
 (cd "$BUILD_DIR" && ctest --output-on-failure --timeout 900 "$@")
 
 if [ "${SANITIZE:-1}" != 0 ]; then

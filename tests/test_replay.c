@@ -307,6 +307,144 @@ START_TEST(tol_first_match_wins_and_defaults_fill)
 }
 END_TEST
 
+START_TEST(tol_flags_override_default_and_inherited_keys)
+{
+    rep_tol_flags f;
+    memset(&f, 0, sizeof f);
+    ck_assert_int_eq(rep_tol_flag_parse(&f, "-fail", "3"), 1);
+    ck_assert_int_eq(rep_tol_flag_parse(&f, "--hardwarn", "0.5"), 1);
+    ck_assert_int_eq(rep_tol_flag_parse(&f, "failpercent", "2"), 1);
+    ck_assert_int_eq(rep_tol_flag_parse(&f, "-fail", "abc"), -1);
+    ck_assert_int_eq(rep_tol_flag_parse(&f, "-fail", "-1"), -1);
+    ck_assert_int_eq(rep_tol_flag_parse(&f, "-fail", "inf"), -1);
+    ck_assert_int_eq(rep_tol_flag_parse(&f, "-golden", "1"), 0);
+    ck_assert_uint_eq(f.set, REP_FLAG_FAIL | REP_FLAG_HARDWARN | REP_FLAG_FAILPERCENT);
+    char *text = rep_tol_flags_text(&f);
+    ck_assert_str_eq(text, "-hardwarn 0.5 -fail 3 -failpercent 2");
+    free(text);
+    rep_tolerances *t = parse_tol("{\"default\": {\"fail\": 0.5, \"failpercent\": 1},"
+                                  " \"buffers\": [{\"match\": \"a*\", \"fail\": 0.2}, {\"match\": \"b*\", \"warn\": 0.1}]}",
+                                  ENG_OK);
+    rep_tol_apply_flags(t, &f);
+    rep_tol tol;
+    rep_tol_lookup(t, "zzz", &tol);
+    ck_assert_double_eq(tol.fail, 3);
+    ck_assert_double_eq(tol.failpercent, 2);
+    ck_assert_double_eq(tol.hardwarn, 0.5);
+    rep_tol_lookup(t, "a1", &tol); /* the rule's own fail stays; what it inherited is replaced */
+    ck_assert_double_eq(tol.fail, 0.2);
+    ck_assert_double_eq(tol.failpercent, 2);
+    rep_tol_lookup(t, "b1", &tol);
+    ck_assert_double_eq(tol.fail, 3);
+    ck_assert_double_eq(tol.warn, 0.1);
+    rep_tol_free(t);
+}
+END_TEST
+
+START_TEST(progress_plain_lines_with_time_left)
+{
+    FILE *f = tmpfile();
+    ck_assert_ptr_nonnull(f);
+    rep_progress p;
+    rep_progress_begin(&p, f, "ispm test", "frame", 4);
+    rep_progress_step(&p, 1, NULL);
+    rep_progress_step(&p, 2, "detail here");
+    rep_progress_end(&p);
+    rep_progress_begin(&p, NULL, "silent", "frame", 4); /* no stream: nothing, no crash */
+    rep_progress_step(&p, 1, NULL);
+    rep_progress_end(&p);
+    rewind(f);
+    char line[256];
+    ck_assert_ptr_nonnull(fgets(line, sizeof line, f));
+    ck_assert_ptr_nonnull(strstr(line, "ispm test: frame 1/4  elapsed "));
+    ck_assert_ptr_nonnull(strstr(line, " left "));
+    ck_assert_ptr_null(strchr(line, '\r')); /* not a terminal: plain lines */
+    ck_assert_ptr_nonnull(fgets(line, sizeof line, f));
+    ck_assert_ptr_nonnull(strstr(line, "frame 2/4"));
+    ck_assert_ptr_nonnull(strstr(line, "detail here\n"));
+    ck_assert_ptr_null(fgets(line, sizeof line, f));
+    fclose(f);
+}
+END_TEST
+
+/* A photon map of `paths` paths of 1 + (p % 3) photons (bounces 2, 3, ...), extra inserted
+ * before path `at` when extra >= 0; width 16. */
+static float *photon_map(int paths, int at, int extra_len, int *rows)
+{
+    int n = 0;
+    for (int p = 0; p < paths; p++)
+        n += 1 + p % 3;
+    n += at >= 0 ? extra_len : 0;
+    *rows = (n + 15) / 16;
+    float *d = calloc((size_t)*rows * 16 * 14, sizeof *d);
+    ck_assert_ptr_nonnull(d);
+    int i = 0;
+    for (int p = 0; p <= paths; p++) {
+        if (p == at)
+            for (int k = 0; k < extra_len; k++, i++) {
+                for (int c = 0; c < 13; c++)
+                    d[i * 14 + c] = 1000.0f + (float)(k * 13 + c);
+                d[i * 14 + 13] = (float)(2 + k);
+            }
+        if (p == paths)
+            break;
+        for (int k = 0; k <= p % 3; k++, i++) {
+            for (int c = 0; c < 13; c++)
+                d[i * 14 + c] = (float)(p * 7 + k) + 0.01f * (float)c;
+            d[i * 14 + 13] = (float)(2 + k);
+        }
+    }
+    return d;
+}
+
+START_TEST(photon_map_compared_as_paths)
+{
+    static const char *const ch[14] = {"position.X", "position.Y", "position.Z", "direction.X", "direction.Y",
+                                       "direction.Z", "power.R",    "power.G",    "power.B",     "normal.X",
+                                       "normal.Y",   "normal.Z",   "density",    "bounce"};
+    int gr, rr;
+    float *g = photon_map(100, -1, 0, &gr), *r = photon_map(100, 40, 3, &rr);
+    eng_buffer gb = {"photons.map", 16, gr, 14, ch, g}, rb = {"photons.map", 16, rr, 14, ch, r};
+    ck_assert(rep_is_photon_map(&gb));
+    rep_tol tol;
+    rep_tol_builtin(&tol);
+    rep_metrics m;
+    rep_photon_diff pd;
+    /* identical: bit-exact */
+    ck_assert_int_eq(rep_photon_compare(&gb, &gb, &tol, &m, &pd), REP_V_BITEXACT);
+    /* one extra path of 3 photons in the middle: 3 added, nothing else (pixel by pixel, every
+     * later photon would differ) */
+    ck_assert_int_eq(rep_photon_compare(&rb, &gb, &tol, &m, &pd), REP_V_FAIL);
+    ck_assert_uint_eq(pd.added, 3);
+    ck_assert_uint_eq(pd.removed, 0);
+    ck_assert_uint_eq(pd.changed, 0);
+    ck_assert_uint_eq(pd.paths_added, 1);
+    ck_assert_uint_eq(pd.golden, 199);
+    ck_assert_uint_eq(pd.run, 202);
+    ck_assert_uint_eq(m.fail_pixels, 3);
+    /* and the other way round: removed */
+    ck_assert_int_eq(rep_photon_compare(&gb, &rb, &tol, &m, &pd), REP_V_FAIL);
+    ck_assert_uint_eq(pd.removed, 3);
+    ck_assert_uint_eq(pd.added, 0);
+    /* one photon's power changed: one changed photon, matched by its path and bounce */
+    float *c = photon_map(100, -1, 0, &rr);
+    c[(3 + 4) * 14 + 6] += 0.5f; /* path 4's second photon (paths 0..3 hold 1+2+3+1 photons) */
+    eng_buffer cb = {"photons.map", 16, rr, 14, ch, c};
+    ck_assert_int_eq(rep_photon_compare(&cb, &gb, &tol, &m, &pd), REP_V_FAIL);
+    ck_assert_uint_eq(pd.changed, 1);
+    ck_assert_uint_eq(pd.added + pd.removed, 0);
+    ck_assert_str_eq(m.max_channel, "power.R");
+    ck_assert_double_eq_tol(m.max_abs, 0.5, 1e-6);
+    /* within tolerance when loose */
+    tol.fail = tol.hardfail = 1;
+    ck_assert_int_eq(rep_photon_compare(&cb, &gb, &tol, &m, &pd), REP_V_WARN);
+    ck_assert_uint_eq(pd.within, 1);
+    free(c);
+    free(g);
+    free(r);
+}
+END_TEST
+
 START_TEST(tol_builtin_defaults)
 {
     rep_tol d;
@@ -1208,6 +1346,139 @@ START_TEST(e2e_bless_then_replay_passes)
 }
 END_TEST
 
+/* A manifest with only what provenance reads: settings, tool, frames with two passes p and q. */
+static char *prov_manifest(const char *name, double a, int threads, const char *git, double q_ms)
+{
+    char *dir = tpath(name);
+    eng_error err = {{0}};
+    ck_assert_int_eq(rep_mkdirs(dir, &err), ENG_OK);
+    char *text = rep_xprintf("{\"tool\": {\"version\": \"0.1.0\", \"git\": \"%s\"},"
+                             " \"settings\": {\"a\": %g, \"threads\": %d},"
+                             " \"frames\": [{\"passes\": [{\"name\": \"p\", \"ms\": 1}, {\"name\": \"q\", \"ms\": %g}]},"
+                             "  {\"passes\": [{\"name\": \"p\", \"ms\": 2}, {\"name\": \"q\", \"ms\": %g}]},"
+                             "  {\"passes\": [{\"name\": \"p\", \"ms\": 1}, {\"name\": \"q\", \"ms\": %g}]}]}",
+                             git, a, threads, q_ms, 2 * q_ms, q_ms);
+    char *mp = rep_path_join(dir, "manifest.json");
+    ck_assert_int_eq(rep_write_atomic(mp, text, strlen(text), &err), ENG_OK);
+    free(mp);
+    free(text);
+    return dir;
+}
+
+static const rep_prov_item *prov_find(const rep_prov *p, const char *key)
+{
+    for (size_t i = 0; i < p->count; i++)
+        if (strcmp(p->items[i].key, key) == 0)
+            return &p->items[i];
+    return NULL;
+}
+
+START_TEST(prov_settings_warn_git_and_threads_inform)
+{
+    char *run = prov_manifest("prun", 1, 2, "aaa", 3), *gold = prov_manifest("pgold", 2, 4, "bbb", 1);
+    rep_prov *p = NULL;
+    eng_error err = {{0}};
+    ck_assert_msg(rep_prov_compare(run, gold, 0, 0, &p, &err) == ENG_OK, "%s", err.msg);
+    ck_assert_uint_eq(p->count, 3);
+    const rep_prov_item *it = prov_find(p, "settings.a");
+    ck_assert_ptr_nonnull(it);
+    ck_assert_int_eq(it->level, REP_PROV_WARN);
+    ck_assert_str_eq(it->run, "1");
+    ck_assert_str_eq(it->golden, "2");
+    ck_assert_int_eq(prov_find(p, "settings.threads")->level, REP_PROV_INFO);
+    ck_assert_int_eq(prov_find(p, "tool.git")->level, REP_PROV_INFO);
+    ck_assert_int_eq(p->warn, 1);
+    ck_assert_int_eq(p->fail, 0);
+    /* timing: q is 3/4 of every run frame, 1/2 of every golden frame */
+    ck_assert_int_eq(p->timing_count, 2);
+    ck_assert_str_eq(p->timing[1].name, "q");
+    ck_assert_double_eq_tol(p->timing[1].run_share, 0.75, 1e-12);
+    ck_assert_double_eq_tol(p->timing[1].golden_share, 0.5, 1e-12);
+    ck_assert_double_eq_tol(p->timing[1].ratio, 1.5, 1e-12);
+    ck_assert_double_eq_tol(p->timing[0].ratio, 0.5, 1e-12);
+    ck_assert_int_eq(p->timing_failed, 0); /* reported only */
+    rep_prov_free(p);
+    /* --provenance-fail and --timing-fail */
+    ck_assert_int_eq(rep_prov_compare(run, gold, 1, 1.4, &p, &err), ENG_OK);
+    ck_assert_int_eq(prov_find(p, "settings.a")->level, REP_PROV_FAIL);
+    ck_assert_int_eq(prov_find(p, "tool.git")->level, REP_PROV_INFO);
+    ck_assert_int_eq(p->fail, 1);
+    ck_assert_int_eq(p->timing_failed, 1);
+    ck_assert_int_eq(p->timing[1].failed, 1);
+    rep_sb sb = {0};
+    rep_prov_text(&sb, p);
+    rep_timing_text(&sb, p);
+    ck_assert_ptr_nonnull(strstr(sb.s, "fail settings.a: golden 2, run 1"));
+    ck_assert_ptr_nonnull(strstr(sb.s, "over --timing-fail 1.4"));
+    free(sb.s);
+    rep_prov_free(p);
+    /* the same manifest: nothing differs */
+    ck_assert_int_eq(rep_prov_compare(run, run, 0, 0, &p, &err), ENG_OK);
+    ck_assert_uint_eq(p->count, 0);
+    ck_assert_double_eq(p->timing[0].ratio, 1);
+    rep_prov_free(p);
+    free(run);
+    free(gold);
+}
+END_TEST
+
+static char *read_text(const char *path); /* html and junit reports, below */
+
+START_TEST(e2e_bless_reviewed_refuses_without_accept)
+{
+    char *run = make_run();
+    char *golden = tpath("goldens/reviewed");
+    char *bless_md = rep_path_join(golden, "BLESS.md");
+    char *manifest = rep_path_join(golden, "manifest.json");
+    eng_error err = {{0}};
+    rep_bless_options o = {run, golden, 0, NULL};
+    rep_bless_outcome out;
+    ck_assert_msg(rep_bless_reviewed(&o, NULL, &out, &err) == ENG_OK, "%s", err.msg);
+    ck_assert_int_eq(out, REP_BLESS_NEW);
+    ck_assert(rep_is_file(bless_md));
+    char *md = read_text(bless_md);
+    ck_assert_ptr_nonnull(strstr(md, "new golden"));
+    free(md);
+    ck_assert_int_eq(rep_bless_reviewed(&o, NULL, &out, &err), ENG_OK);
+    ck_assert_int_eq(out, REP_BLESS_SAME);
+    /* one pixel moves: refused without accept, the golden untouched */
+    fx_run r;
+    fx_make(&r);
+    *fx_at(&r, 1, 1, 3, 2, 1) += 0.5f;
+    char *run2 = tpath("run2");
+    fx_write(&r, run2);
+    fx_free(&r);
+    char *before = read_text(manifest);
+    o.run_dir = run2;
+    ck_assert_int_eq(rep_bless_reviewed(&o, NULL, &out, &err), ENG_OK);
+    ck_assert_int_eq(out, REP_BLESS_REFUSED);
+    char *after = read_text(manifest);
+    ck_assert_str_eq(before, after);
+    free(after);
+    md = read_text(bless_md);
+    ck_assert_ptr_nonnull(strstr(md, "new golden")); /* still the first review */
+    free(md);
+    char *review = tpath("run2/bless/report.html");
+    ck_assert(rep_is_file(review));
+    free(review);
+    /* accepted: replaced, and the review names the buffer that moved */
+    o.accept = 1;
+    ck_assert_int_eq(rep_bless_reviewed(&o, NULL, &out, &err), ENG_OK);
+    ck_assert_int_eq(out, REP_BLESS_REPLACED);
+    md = read_text(bless_md);
+    ck_assert_ptr_nonnull(strstr(md, "direct.radiance"));
+    ck_assert_ptr_nonnull(strstr(md, "**FAIL**"));
+    free(md);
+    ck_assert_msg(replay(run2, golden, &err) == REP_OK, "%s", err.msg);
+    free(before);
+    free(run2);
+    free(manifest);
+    free(bless_md);
+    free(golden);
+    free(run);
+}
+END_TEST
+
 START_TEST(e2e_bless_keeps_tolerances)
 {
     char *golden = make_golden();
@@ -1299,9 +1570,10 @@ START_TEST(e2e_text_report_lists_worst_first)
     ck_assert_ptr_nonnull(w0);
     ck_assert_ptr_nonnull(verdict);
     ck_assert(f2 < f1 && f1 < w0 && w0 < verdict);
-    /* Nothing but the header comes before the first failure. */
+    /* Nothing but the header and the provenance line comes before the first failure. */
     const char *first = txt;
-    while (strncmp(first, "replay: run", 11) == 0 || strncmp(first, "        ", 8) == 0)
+    while (strncmp(first, "replay: run", 11) == 0 || strncmp(first, "        ", 8) == 0 ||
+           strncmp(first, "provenance: same", 16) == 0)
         first = strchr(first, '\n') + 1;
     ck_assert_ptr_eq(first, f2);
     free(txt);
@@ -1390,7 +1662,7 @@ START_TEST(report_junit_and_html_name_the_failure)
     const char *suite = strstr(xml, "<testsuite ");
     ck_assert_ptr_nonnull(suite);
     char *v = attr_of(suite, "<testsuite ", "tests");
-    ck_assert_str_eq(v, "9");
+    ck_assert_str_eq(v, "11"); /* 9 buffers, provenance and timing */
     free(v);
     v = attr_of(suite, "<testsuite ", "failures");
     ck_assert_str_eq(v, "1");
@@ -1401,10 +1673,10 @@ START_TEST(report_junit_and_html_name_the_failure)
     v = attr_of(suite, "<testsuite ", "name");
     ck_assert_str_eq(v, "ispm.fixture");
     free(v);
-    ck_assert_int_eq(count_of(xml, "<testcase "), 9);
+    ck_assert_int_eq(count_of(xml, "<testcase "), 11);
     ck_assert_int_eq(count_of(xml, "<failure "), 1);
     ck_assert_int_eq(count_of(xml, "<skipped"), 0);
-    ck_assert_int_eq(count_of(xml, "<system-out>"), 1); /* the warning */
+    ck_assert_int_eq(count_of(xml, "<system-out>"), 3); /* the warning, provenance and timing */
     /* The testcase that holds the failure is direct.radiance of frame 1. */
     const char *f = strstr(xml, "<failure ");
     const char *tc = xml;
@@ -1474,7 +1746,7 @@ START_TEST(report_green_run_stays_small)
     ck_assert_int_eq(img_files(golden), 4);
     char *xp = rep_path_join(golden, "replay/report.junit.xml");
     char *xml = read_text(xp);
-    ck_assert_int_eq(count_of(xml, "<testcase "), 9);
+    ck_assert_int_eq(count_of(xml, "<testcase "), 11); /* 9 buffers, provenance and timing */
     ck_assert_int_eq(count_of(xml, "<failure"), 0);
     free(xml);
     free(xp);
@@ -1597,6 +1869,9 @@ static Suite *replay_suite(void)
     tcase_add_test(unit, tol_builtin_defaults);
     tcase_add_test(unit, tol_rejects_bad_files);
     tcase_add_test(unit, tol_missing_file);
+    tcase_add_test(unit, tol_flags_override_default_and_inherited_keys);
+    tcase_add_test(unit, progress_plain_lines_with_time_left);
+    tcase_add_test(unit, photon_map_compared_as_paths);
     tcase_add_test(unit, cmp_identical_is_bitexact);
     tcase_add_test(unit, cmp_tiny_diff_within_or_warn);
     tcase_add_test(unit, cmp_failpercent);
@@ -1633,6 +1908,8 @@ static Suite *replay_suite(void)
     tcase_add_test(files, e2e_no_golden_integrity_only);
     tcase_add_test(files, e2e_bless_then_replay_passes);
     tcase_add_test(files, e2e_bless_keeps_tolerances);
+    tcase_add_test(files, e2e_bless_reviewed_refuses_without_accept);
+    tcase_add_test(files, prov_settings_warn_git_and_threads_inform);
     tcase_add_test(files, e2e_bless_refuses_incomplete);
     tcase_add_test(files, e2e_text_report_lists_worst_first);
     tcase_add_test(files, report_junit_and_html_name_the_failure);

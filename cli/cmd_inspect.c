@@ -1,0 +1,209 @@
+/* cmd_inspect.c — looking into a run without replaying it:
+ *   `ispm info RUN`: frames, buffers, settings, provenance and the verdict of its last replay;
+ *   `ispm export RUN --frame F --buffer NAME -o FILE.png|.exr`: one buffer of one frame as an
+ *   image, with the display mapping of the replay report's thumbnails (PNG) or as float (EXR). */
+#define _POSIX_C_SOURCE 200809L
+#include "eng.h"
+#include "rep_internal.h"
+
+#include <cjson/cJSON.h>
+#include <getopt.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+enum { INS_OK = 0, INS_RUNTIME = 1, INS_INPUT = 2 };
+
+static void info_usage(FILE *f)
+{
+    fprintf(f, "usage: ispm info RUN\n"
+               "\n"
+               "Prints what a run holds: frames, buffers (of frame 0: size and channels), settings,\n"
+               "provenance (sequence, scene, tool, GL, Embree, determinism pins) and the verdict of its\n"
+               "last replay (RUN/replay/report.json), without decoding any frame.\n"
+               "\n"
+               "exit: 0 printed; 2 bad arguments or RUN unreadable\n");
+}
+
+static void export_usage(FILE *f)
+{
+    fprintf(f, "usage: ispm export RUN --frame F --buffer NAME -o FILE.png|FILE.exr\n"
+               "\n"
+               "Writes one buffer of one frame: .exr as float (the buffer's channels), .png 8-bit with\n"
+               "the replay report's display mapping (*.display clamped, *.radiance sRGB, other buffers\n"
+               "their min..max range; NaN/Inf magenta), full size.\n"
+               "\n"
+               "  -f, --frame F     frame index\n"
+               "  -b, --buffer NAME buffer name (ispm info lists them)\n"
+               "  -o, --output FILE .png or .exr\n"
+               "\n"
+               "exit: 0 written; 1 writing failed; 2 bad arguments, unreadable run, no such frame or buffer\n");
+}
+
+static cJSON *load_json(const char *path)
+{
+    char *text = NULL;
+    size_t len = 0;
+    eng_error err;
+    if (eng_read_file(path, REP_MAX_JSON_BYTES, &text, &len, &err) != ENG_OK)
+        return NULL;
+    cJSON *j = cJSON_ParseWithLength(text, len);
+    free(text);
+    return j;
+}
+
+static void print_object(const char *title, const cJSON *o)
+{
+    if (!cJSON_IsObject(o))
+        return;
+    printf("%s:\n", title);
+    for (const cJSON *c = o->child; c; c = c->next) {
+        char *v = cJSON_PrintUnformatted(c);
+        printf("  %-22s %s\n", c->string, v ? v : "?");
+        cJSON_free(v);
+    }
+}
+
+int cmd_info(int argc, char **argv)
+{
+    static const struct option opts[] = {{"help", no_argument, NULL, 'h'}, {NULL, 0, NULL, 0}};
+    int c;
+    while ((c = getopt_long(argc, argv, "h", opts, NULL)) != -1) {
+        if (c == 'h') {
+            info_usage(stdout);
+            return INS_OK;
+        }
+        info_usage(stderr);
+        return INS_INPUT;
+    }
+    if (optind + 1 != argc) {
+        info_usage(stderr);
+        return INS_INPUT;
+    }
+    const char *dir = argv[optind];
+    rep_run *run = NULL;
+    eng_error err = {{0}};
+    if (rep_run_open(dir, &run, &err) != ENG_OK) {
+        fprintf(stderr, "ispm info: %s\n", err.msg);
+        return INS_INPUT;
+    }
+    char *origin = rep_manifest_origin(dir);
+    printf("run: %s\n  %s\n", dir, origin);
+    free(origin);
+    printf("frames: %d at %dx%d\n", run->frame_count, run->width, run->height);
+    const rep_frame_info *f0 = &run->frames[0];
+    printf("buffers (frame 0): %d\n", f0->buffer_count);
+    for (int j = 0; j < f0->buffer_count; j++) {
+        const rep_buffer_info *b = &f0->buffers[j];
+        printf("  %-36s %5dx%-5d ", b->name, b->width, b->height);
+        for (int k = 0; k < b->channel_count; k++)
+            printf("%s%s", k ? "," : "", b->channels[k]);
+        printf("\n");
+    }
+    cJSON *m = load_json(run->manifest_path);
+    print_object("settings", cJSON_GetObjectItemCaseSensitive(m, "settings"));
+    print_object("tool", cJSON_GetObjectItemCaseSensitive(m, "tool"));
+    print_object("gl", cJSON_GetObjectItemCaseSensitive(m, "gl"));
+    print_object("determinism", cJSON_GetObjectItemCaseSensitive(m, "determinism"));
+    cJSON_Delete(m);
+    char *rp = rep_path_join(dir, "replay/report.json");
+    cJSON *rep = load_json(rp);
+    const cJSON *verdict = cJSON_GetObjectItemCaseSensitive(rep, "verdict");
+    const cJSON *golden = cJSON_GetObjectItemCaseSensitive(rep, "golden");
+    if (cJSON_IsString(verdict))
+        printf("last replay: %s against %s (%s)\n", verdict->valuestring,
+               cJSON_IsString(golden) ? golden->valuestring : "no golden", rp);
+    else
+        printf("last replay: none (%s absent)\n", rp);
+    cJSON_Delete(rep);
+    free(rp);
+    rep_run_close(run);
+    return INS_OK;
+}
+
+static int ends_with(const char *s, const char *suffix)
+{
+    size_t n = strlen(s), k = strlen(suffix);
+    return n >= k && strcmp(s + n - k, suffix) == 0;
+}
+
+/* Writes buffer b to out (.png mapped for display, .exr float); returns an exit code. */
+static int export_buffer(const eng_buffer *b, const char *out)
+{
+    eng_error err = {{0}};
+    eng_result r;
+    if (ends_with(out, ".exr")) {
+        r = rep_oiio_write_parts(out, b, 1, &err);
+    } else {
+        rep_thumb_map map;
+        rep_thumb_map_make(b->name, b, NULL, &map);
+        int w, h;
+        unsigned char *rgb = rep_image_render(b, &map, 0, &w, &h);
+        r = rep_oiio_write_png(out, w, h, 3, rgb, &err);
+        free(rgb);
+    }
+    if (r != ENG_OK) {
+        fprintf(stderr, "ispm export: %s\n", err.msg);
+        return INS_RUNTIME;
+    }
+    printf("%s: %s %dx%d\n", out, b->name, b->width, b->height);
+    return INS_OK;
+}
+
+int cmd_export(int argc, char **argv)
+{
+    static const struct option opts[] = {{"frame", required_argument, NULL, 'f'}, {"buffer", required_argument, NULL, 'b'},
+                                         {"output", required_argument, NULL, 'o'}, {"help", no_argument, NULL, 'h'},
+                                         {NULL, 0, NULL, 0}};
+    const char *buffer = NULL, *out = NULL;
+    long frame = -1;
+    int c;
+    while ((c = getopt_long(argc, argv, "f:b:o:h", opts, NULL)) != -1) {
+        switch (c) {
+        case 'f': {
+            char *end;
+            frame = strtol(optarg, &end, 10);
+            if (*end || end == optarg || frame < 0) {
+                fprintf(stderr, "ispm export: --frame: '%s' is not a frame index\n", optarg);
+                return INS_INPUT;
+            }
+            break;
+        }
+        case 'b': buffer = optarg; break;
+        case 'o': out = optarg; break;
+        case 'h': export_usage(stdout); return INS_OK;
+        default: export_usage(stderr); return INS_INPUT;
+        }
+    }
+    if (optind + 1 != argc || frame < 0 || !buffer || !out) {
+        export_usage(stderr);
+        return INS_INPUT;
+    }
+    if (!ends_with(out, ".png") && !ends_with(out, ".exr")) {
+        fprintf(stderr, "ispm export: %s: the output must end in .png or .exr\n", out);
+        return INS_INPUT;
+    }
+    rep_run *run = NULL;
+    eng_error err = {{0}};
+    if (rep_run_open(argv[optind], &run, &err) != ENG_OK) {
+        fprintf(stderr, "ispm export: %s\n", err.msg);
+        return INS_INPUT;
+    }
+    int rc = INS_INPUT;
+    int j = frame < run->frame_count ? rep_frame_find(&run->frames[frame], buffer) : -1;
+    rep_part *parts = NULL;
+    if (frame >= run->frame_count)
+        fprintf(stderr, "ispm export: %s: no frame %ld (the run has %d)\n", run->manifest_path, frame, run->frame_count);
+    else if (j < 0)
+        fprintf(stderr, "ispm export: %s: frame %ld has no buffer '%s' (ispm info lists them)\n", run->manifest_path,
+                frame, buffer);
+    else if (rep_run_read_frame(run, (int)frame, &parts, &err) != ENG_OK)
+        fprintf(stderr, "ispm export: %s\n", err.msg);
+    else {
+        eng_buffer b = rep_part_buffer(&parts[j]);
+        rc = export_buffer(&b, out);
+        rep_parts_free(parts, run->frames[frame].buffer_count);
+    }
+    rep_run_close(run);
+    return rc;
+}
