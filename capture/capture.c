@@ -70,6 +70,10 @@ typedef struct cap_frame {
     uint64_t photons_emitted;
     uint64_t photons_stored[ENG_PHOTON_BOUNCES];
     uint64_t photons_truncated;
+    /* The image-space photon trace's centres and counts (trace_maps = 0: Embree trace). */
+    int trace_maps;
+    float trace_centres[ENG_MAX_TRACE_MAPS][3];
+    eng_trace_counts trace;
 } cap_frame;
 
 /* A buffer of the frame in progress: its record and its pixel copy. */
@@ -557,6 +561,10 @@ static int on_frame_end(void *user, const eng_frame_stats *stats)
     f->photons_emitted = stats->photons_emitted;
     memcpy(f->photons_stored, stats->photons_stored, sizeof f->photons_stored);
     f->photons_truncated = stats->photons_truncated;
+    f->trace_maps = stats->trace_maps < 0 ? 0
+                  : stats->trace_maps > ENG_MAX_TRACE_MAPS ? ENG_MAX_TRACE_MAPS : stats->trace_maps;
+    memcpy(f->trace_centres, stats->trace_centres, sizeof f->trace_centres);
+    f->trace = stats->trace;
     f->buffer_count = c->pending_count;
     f->buffers = cap__xcalloc((size_t)c->pending_count, sizeof *f->buffers);
     for (int i = 0; i < c->pending_count; i++) {
@@ -683,6 +691,28 @@ static cJSON *frame_json(const cap_frame *f, int index)
         jadd(ph, "truncated", cJSON_CreateNumber((double)f->photons_truncated));
         jadd(o, "photons", ph);
     }
+    if (f->trace_maps > 0) {
+        /* Multi-image photon trace (004 §4–5): map centres, and what became of its rays. */
+        cJSON *tr = jok(cJSON_CreateObject());
+        cJSON *cs = jok(cJSON_CreateArray());
+        for (int k = 0; k < f->trace_maps; k++) {
+            cJSON *c3 = jok(cJSON_CreateArray());
+            for (int i = 0; i < 3; i++)
+                jpush(c3, jfloat(f->trace_centres[k][i]));
+            jpush(cs, c3);
+        }
+        jadd(tr, "centres", cs);
+        const eng_trace_counts *t = &f->trace;
+        const char *const names[] = {"rays", "resolved", "fallback", "dropped", "compared", "agree"};
+        const uint64_t vals[] = {t->rays, t->resolved, t->fallback, t->dropped, t->compared, t->agree};
+        for (int i = 0; i < 6; i++)
+            jadd(tr, names[i], cJSON_CreateNumber((double)vals[i]));
+        cJSON *ty = jok(cJSON_CreateArray());
+        for (int i = 0; i < 4; i++)
+            jpush(ty, cJSON_CreateNumber((double)t->types[i]));
+        jadd(tr, "types", ty);
+        jadd(o, "photon_trace", tr);
+    }
     cJSON *bufs = jok(cJSON_CreateArray());
     for (int i = 0; i < f->buffer_count; i++) {
         const cap_bufrec *r = &f->buffers[i];
@@ -763,6 +793,13 @@ static cJSON *manifest_json(const cap_capture *c)
     jadd(st, "kernel_scaling", jstr(eng_scaling_name(s.kernel_scaling)));
     jadd(st, "progressive", cJSON_CreateBool(s.progressive));
     jadd(st, "boundary", jstr(eng_boundary_name(s.boundary)));
+    jadd(st, "photon_trace", jstr(eng_trace_name(s.photon_trace)));
+    if (s.photon_trace == ENG_TRACE_MULTI_IMAGE) {
+        jadd(st, "multi_image_maps", cJSON_CreateNumber(s.multi_image_maps));
+        jadd(st, "multi_image_size", cJSON_CreateNumber(s.multi_image_size));
+        jadd(st, "multi_image_miss", jstr(eng_miss_name(s.multi_image_miss)));
+        jadd(st, "multi_image_compare", cJSON_CreateBool(s.multi_image_compare));
+    }
     jadd(st, "specular", jstr(eng_specular_name(s.specular)));
     jadd(st, "specular_depth", cJSON_CreateNumber(s.specular_depth));
     jadd(root, "settings", st);
@@ -994,6 +1031,34 @@ static eng_result frame_from_json(const char *path, int index, const cJSON *o, c
         f->photons_truncated = tr ? (uint64_t)tr->valuedouble : 0;
         for (int b = 0; b < cJSON_GetArraySize(st); b++)
             f->photons_stored[b + 2] = (uint64_t)cJSON_GetArrayItem(st, b)->valuedouble;
+    }
+    const cJSON *tr = cJSON_GetObjectItemCaseSensitive(o, "photon_trace");
+    if (tr) {
+        const cJSON *cs = cJSON_GetObjectItemCaseSensitive(tr, "centres");
+        const cJSON *ty = cJSON_GetObjectItemCaseSensitive(tr, "types");
+        int nc = cJSON_IsArray(cs) ? cJSON_GetArraySize(cs) : -1;
+        if (nc < 1 || nc > ENG_MAX_TRACE_MAPS || cJSON_GetArraySize(ty) != 4)
+            return eng_fail(err, ENG_ERR_INVALID, "%s: \"photon_trace\" is not {\"centres\": [1..%d × [3]], "
+                            "\"types\": [4], ...}", path, ENG_MAX_TRACE_MAPS);
+        f->trace_maps = nc;
+        for (int k = 0; k < nc; k++) {
+            const cJSON *c3 = cJSON_GetArrayItem(cs, k);
+            if (cJSON_GetArraySize(c3) != 3)
+                return eng_fail(err, ENG_ERR_INVALID, "%s: \"photon_trace\".centres[%d] is not [x, y, z]", path, k);
+            for (int i = 0; i < 3; i++)
+                f->trace_centres[k][i] = (float)cJSON_GetArrayItem(c3, i)->valuedouble;
+        }
+        const char *const names[] = {"rays", "resolved", "fallback", "dropped", "compared", "agree"};
+        uint64_t *vals[] = {&f->trace.rays, &f->trace.resolved, &f->trace.fallback, &f->trace.dropped,
+                            &f->trace.compared, &f->trace.agree};
+        for (int i = 0; i < 6; i++) {
+            const cJSON *v = cJSON_GetObjectItemCaseSensitive(tr, names[i]);
+            if (!cJSON_IsNumber(v))
+                return eng_fail(err, ENG_ERR_INVALID, "%s: \"photon_trace\".%s is not a number", path, names[i]);
+            *vals[i] = (uint64_t)v->valuedouble;
+        }
+        for (int i = 0; i < 4; i++)
+            f->trace.types[i] = (uint64_t)cJSON_GetArrayItem(ty, i)->valuedouble;
     }
     const cJSON *bufs = cJSON_GetObjectItemCaseSensitive(o, "buffers");
     int n = cJSON_IsArray(bufs) ? cJSON_GetArraySize(bufs) : 0;

@@ -298,7 +298,8 @@ static const char *const SETTING_KEYS[] = {
     "indirect", "photon_count", "bounces", "kernel_radius", "normal_compression", "splat_subsample", "temporal",
     "temporal_alpha", "atrous_iterations", "atrous_detail", "atrous_gamma", "random", "random_map_size",
     "random_seed", "stratified_cycle", "shadow_map_size", "pcf_radius", "shadow_bias", "exposure", "threads",
-    "kernel_scaling", "progressive", "boundary", "specular", "specular_depth", NULL};
+    "kernel_scaling", "progressive", "boundary", "specular", "specular_depth", "photon_trace", "multi_image_maps",
+    "multi_image_size", "multi_image_miss", "multi_image_compare", NULL};
 
 /* The value the engine uses for a settings key, as text; 0 for a key it does not know. */
 static int setting_text(const eng_settings *s, const char *key, char *out, size_t size)
@@ -323,6 +324,14 @@ static int setting_text(const eng_settings *s, const char *key, char *out, size_
         return snprintf(out, size, "%s", s->progressive ? "true" : "false"), 1;
     if (!strcmp(key, "boundary"))
         return snprintf(out, size, "%s", eng_boundary_name(s->boundary)), 1;
+    if (!strcmp(key, "photon_trace"))
+        return snprintf(out, size, "%s", eng_trace_name(s->photon_trace)), 1;
+    if (!strcmp(key, "multi_image_miss"))
+        return snprintf(out, size, "%s", eng_miss_name(s->multi_image_miss)), 1;
+    if (!strcmp(key, "multi_image_compare"))
+        return snprintf(out, size, "%s", s->multi_image_compare ? "true" : "false"), 1;
+    INT_KEY(multi_image_maps)
+    INT_KEY(multi_image_size)
     if (!strcmp(key, "specular"))
         return snprintf(out, size, "%s", eng_specular_name(s->specular)), 1;
     INT_KEY(specular_depth)

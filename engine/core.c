@@ -178,6 +178,10 @@ void eng_settings_defaults(eng_settings *s)
     if (s->atrous_gamma == 0.0f) s->atrous_gamma = 0.05f;
     if (s->kernel_scaling == ENG_SCALING_DEFAULT) s->kernel_scaling = ENG_SCALING_PATH_DENSITY;
     if (s->boundary == ENG_BOUNDARY_DEFAULT) s->boundary = ENG_BOUNDARY_NONE;
+    if (s->photon_trace == ENG_TRACE_DEFAULT) s->photon_trace = ENG_TRACE_EMBREE;
+    if (s->multi_image_maps == 0) s->multi_image_maps = 2;
+    if (s->multi_image_size == 0) s->multi_image_size = 64;
+    if (s->multi_image_miss == ENG_MISS_DEFAULT) s->multi_image_miss = ENG_MISS_EMBREE;
     if (s->specular == ENG_SPECULAR_DEFAULT) s->specular = ENG_SPECULAR_TRACED;
     if (s->specular_depth == 0) s->specular_depth = 4;
 }
@@ -185,6 +189,26 @@ void eng_settings_defaults(eng_settings *s)
 const char *eng_boundary_name(eng_boundary m)
 {
     return m == ENG_BOUNDARY_RENORMALIZE ? "renormalize" : "none";
+}
+
+const char *eng_trace_name(eng_photon_trace m)
+{
+    switch (m) {
+    case ENG_TRACE_MULTI_IMAGE: return "multi-image";
+    case ENG_TRACE_EMBREE:
+    case ENG_TRACE_DEFAULT: return "embree";
+    }
+    return "unknown";
+}
+
+const char *eng_miss_name(eng_miss_mode m)
+{
+    switch (m) {
+    case ENG_MISS_DROP: return "drop";
+    case ENG_MISS_EMBREE:
+    case ENG_MISS_DEFAULT: return "embree";
+    }
+    return "unknown";
 }
 
 const char *eng_specular_name(eng_specular m)

@@ -240,7 +240,23 @@ typedef enum eng_specular {
     ENG_SPECULAR_OFF          /* specular surfaces show only their non-specular lobes */
 } eng_specular;
 
+/* How photon bounces after the bounce map are traced (trace_method.h, one file each). */
+typedef enum eng_photon_trace {
+    ENG_TRACE_DEFAULT = 0,   /* = embree */
+    ENG_TRACE_EMBREE,        /* CPU ray tracing with Embree (003 §3 step 2) */
+    ENG_TRACE_MULTI_IMAGE    /* image space, against cube G-buffers (004 §4–5) */
+} eng_photon_trace;
+
+/* What the multi-image trace does with a ray no map resolves (004 §5.2). */
+typedef enum eng_miss_mode {
+    ENG_MISS_DEFAULT = 0,    /* = embree */
+    ENG_MISS_EMBREE,         /* trace it with Embree instead */
+    ENG_MISS_DROP            /* end the path there (the paper's behaviour) */
+} eng_miss_mode;
+
 const char *eng_indirect_name(eng_indirect m);
+const char *eng_trace_name(eng_photon_trace m);
+const char *eng_miss_name(eng_miss_mode m);
 const char *eng_specular_name(eng_specular m);
 const char *eng_scaling_name(eng_kernel_scaling m);
 const char *eng_random_name(eng_random_mode m);
@@ -281,6 +297,13 @@ typedef struct eng_settings {
     int progressive;          /* 1: running mean of the indirect estimate while nothing moves, the
                                * kernel shrinking as in progressive photon mapping; default 0 */
     eng_boundary boundary;    /* kernel boundary correction after the method; default none */
+    /* Photon trace method (issue 16). */
+    eng_photon_trace photon_trace; /* default embree */
+    int multi_image_maps;     /* cube maps (centres) of the multi-image trace, 1..8; default 2 */
+    int multi_image_size;     /* texels per cube-map face side, 4..1024; default 64 */
+    eng_miss_mode multi_image_miss; /* rays no map resolves: embree (default) or drop */
+    int multi_image_compare;  /* 1: also trace every multi-image ray with Embree and count the
+                               * hits that agree (the bench's measure); default 0 */
     /* Specular eye paths (issue 14, specular.h). */
     eng_specular specular;    /* default traced */
     int specular_depth;       /* specular surfaces an eye path crosses, 1..16; default 4 */
@@ -357,6 +380,21 @@ typedef struct eng_pass_time {
 #define ENG_PHOTON_MAX_HITS 64
 #define ENG_PHOTON_BOUNCES (ENG_PHOTON_MAX_HITS + 2)
 
+/* Cube maps of the multi-image trace at most (ENG_TRACE_MULTI_IMAGE). */
+#define ENG_MAX_TRACE_MAPS 8
+
+/* Per frame counts of an image-space photon trace (004 §5.2), summed over its bounce rays. */
+typedef struct eng_trace_counts {
+    uint64_t rays;      /* bounce rays asked of the method */
+    uint64_t resolved;  /* found by some map (an accepted type C/D point) */
+    uint64_t fallback;  /* resolved by none, traced with Embree (multi_image_miss = embree) */
+    uint64_t dropped;   /* resolved by none, path ended (multi_image_miss = drop) */
+    uint64_t types[4];  /* per ray and map: A (no hit), B (rejected by Eq. 2), C (accepted, not
+                         * the nearest), D (the nearest accepted) */
+    uint64_t compared;  /* with multi_image_compare: rays where Embree finds a hit */
+    uint64_t agree;     /* ... and the multi-image hit is on the same draw within 1 cm */
+} eng_trace_counts;
+
 typedef struct eng_frame_stats {
     int frame;
     double time;
@@ -369,6 +407,11 @@ typedef struct eng_frame_stats {
     /* Paths the trace cut at ENG_PHOTON_MAX_HITS surface hits while they still carried power
      * (the estimate's only bias besides the kernels; should be ~0). */
     uint64_t photons_truncated;
+    /* Image-space photon trace (multi-image): its map centres this frame and its counts;
+     * trace_maps = 0 for the Embree trace. */
+    int trace_maps;
+    float trace_centres[ENG_MAX_TRACE_MAPS][3];
+    eng_trace_counts trace;
     /* The eye camera of this frame: world → clip (column-major, GL conventions) and its
      * position, so tools can project world-space data (e.g. photons) into the image. */
     float camera_view_proj[16];

@@ -386,6 +386,7 @@ typedef struct eng_trace_settings {
 } eng_trace_settings;
 
 typedef struct eng_trace_stats {
+    eng_trace_counts counts;        /* what the bounce-ray method counted (image-space methods) */
     uint64_t emitted;               /* bounce-map photons with power > 0 */
     uint64_t truncated;             /* paths still alive after ENG_PHOTON_MAX_HITS surface hits */
     uint64_t stored[ENG_PHOTON_BOUNCES];        /* photons stored at bounce index b (b = 2..) */
@@ -428,6 +429,25 @@ int rt_lamp_hit(const eng_rt *rt, const float org[3], const float dir[3], float 
 eng_result photon_trace(const eng_rt *rt, const eng_frame_scene *fs, const eng_random_maps *rm,
                         const eng_bounce_photon *in, size_t count, const eng_trace_settings *s,
                         eng_photon_map *out, eng_trace_stats *stats, eng_error *err);
+/* How photon_trace_with finds the next surface of a path (trace_method.h): the closest hit of
+ * org + t·dir, t ≥ tnear, dir unit, as rt_intersect reports it (1 and hit filled, or 0), with
+ * the method's counts added to *counts (a per-thread accumulator). Must be thread-safe and a
+ * pure function of its arguments and the method's per-frame state. */
+typedef int (*pt_intersect_fn)(const void *state, const float org[3], const float dir[3], float tnear, rt_hit *hit,
+                               eng_trace_counts *counts);
+typedef struct pt_tracer {
+    pt_intersect_fn intersect;
+    const void *state;
+} pt_tracer;
+/* The Embree tracer's intersect: state is the eng_rt; rt_intersect with tfar = ∞. */
+int pt_embree_intersect(const void *state, const float org[3], const float dir[3], float tnear, rt_hit *hit,
+                        eng_trace_counts *counts);
+
+/* photon_trace with the bounce rays traced by tr instead of Embree; stats->counts gets the
+ * sum of what tr counted. photon_trace(rt, ...) is this with the Embree tracer. */
+eng_result photon_trace_with(const pt_tracer *tr, const eng_frame_scene *fs, const eng_random_maps *rm,
+                             const eng_bounce_photon *in, size_t count, const eng_trace_settings *s,
+                             eng_photon_map *out, eng_trace_stats *stats, eng_error *err);
 /* Frees the photons and zeroes the map; accepts a zeroed map. */
 void photon_map_free(eng_photon_map *m);
 

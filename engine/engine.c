@@ -13,6 +13,7 @@
 #include "boundary.h"
 #include "shadow.h"
 #include "progressive.h"
+#include "trace_method.h"
 #include "specular.h"
 
 #include <math.h>
@@ -49,6 +50,8 @@ struct eng_engine {
     size_t radius_capacity;
     const ind_method *method; /* indirect.h: the `indirect` setting's method, NULL for none */
     void *method_state;
+    const pt_method *tracer; /* trace_method.h: the `photon_trace` setting's method */
+    void *tracer_state;
     const spec_method *spec;  /* specular.h: NULL when "off" or the scene has no specular surface */
     void *spec_state;
     /* Emission seen by the eye (only in scenes with an emissive material): per pixel from the
@@ -209,6 +212,9 @@ eng_result eng_create(const eng_desc *desc, eng_engine **out, eng_error *err)
         }
         if (r == ENG_OK)
             r = e->method->create(w, h, e->filtered, &e->method_state, err);
+        e->tracer = pt_method_of(st->photon_trace);
+        if (r == ENG_OK)
+            r = e->tracer->create(st, &e->tracer_state, err);
         if (r == ENG_OK && st->temporal)
             r = pass_temporal_create(e->width, e->height, &e->temporal, err);
         if (r == ENG_OK && st->atrous_iterations > 0)
@@ -272,6 +278,8 @@ void eng_destroy(eng_engine *e)
         pass_lightmaps_destroy(e->lightmaps);
         if (e->method && e->method_state)
             e->method->destroy(e->method_state);
+        if (e->tracer)
+            e->tracer->destroy(e->tracer_state);
         if (e->spec && e->spec_state)
             e->spec->destroy(e->spec_state);
         if (e->emissive)
@@ -717,6 +725,26 @@ static int announce_photon_map(eng_engine *e, int frame)
     return rc;
 }
 
+/* Prepares the photon-trace method for this frame (trace_method.h), timed as its pass when it
+ * names one, announces the buffers it lists and records its frame info; *tracer gets what the
+ * trace calls per ray. */
+static eng_result trace_prepare(eng_engine *e, int frame, pt_tracer *tracer, eng_error *err)
+{
+    double t0 = now_ms();
+    eng_result r = e->tracer->prepare(e->tracer_state, e->rt, &e->fs, tracer, err);
+    if (e->tracer->pass)
+        add_time(e, e->tracer->pass, now_ms() - t0);
+    if (r != ENG_OK)
+        return r;
+    e->tracer->frame_info(e->tracer_state, &e->stats);
+    eng_buffer b;
+    for (int i = 0; e->tracer->buffer(e->tracer_state, i, &b); i++)
+        if (seq_wants(e->seq, b.name) &&
+            announce(e, frame, b.name, b.width, b.height, b.channel_count, b.channels, b.data))
+            return eng_fail(err, ENG_ERR_ABORTED, "frame %d: capture failed at %s", frame, b.name);
+    return ENG_OK;
+}
+
 /* Runs the indirect method against gb (indirect.h), timed as the method's pass, and announces
  * the extra buffers it lists; *out gets its target. */
 static eng_result run_method(eng_engine *e, int frame, const glu_target *gb, const glu_target **out, eng_error *err)
@@ -1007,15 +1035,19 @@ eng_result eng_render_frame(eng_engine *e, int frame, eng_error *err)
         eng_result r = light_passes(e, frame, &rf, err);
         if (r != ENG_OK)
             return r;
+        pt_tracer tracer;
         eng_trace_settings ts = {e->settings.bounces, e->settings.threads, rf.salt, rf.stratified,
                                  {rf.offset[0], rf.offset[1], rf.offset[2], rf.offset[3]}};
         eng_trace_stats tstats;
         memset(&tstats, 0, sizeof tstats);
+        if ((r = trace_prepare(e, frame, &tracer, err)) != ENG_OK)
+            return r;
         t0 = now_ms();
-        r = photon_trace(e->rt, &e->fs, &e->rmaps, e->bounce, e->bounce_count, &ts, &e->pmap, &tstats, err);
+        r = photon_trace_with(&tracer, &e->fs, &e->rmaps, e->bounce, e->bounce_count, &ts, &e->pmap, &tstats, err);
         add_time(e, "photons", now_ms() - t0);
         if (r != ENG_OK)
             return r;
+        e->stats.trace = tstats.counts;
         if (e->pmap.count > e->radius_capacity) {
             free(e->radius);
             e->radius = eng_xmalloc(e->pmap.count * sizeof *e->radius);

@@ -25,6 +25,9 @@
  * traced it, and the path records where (thread, offset, count); the map is then compacted
  * sequentially in input order, and the statistics are summed sequentially after that.
  *
+ * Which surface a ray hits next is asked of a tracer (trace_method.h: Embree, rt.c, or the
+ * multi-image trace of 004); what happens at the surface is the same for every tracer.
+ *
  * Storage rule: a photon is stored only on surfaces with a diffuse or glossy lobe
  * (bsdf_stores_photons): the photon map feeds the final gather, which cannot use photons on
  * purely specular surfaces (mirror, glass); such surfaces only redirect the path (caustics). */
@@ -39,6 +42,7 @@
 typedef struct pt_buf {
     eng_photon *p;
     size_t n, cap;
+    eng_trace_counts counts; /* the tracer's counts on this thread (integer sums: order-free) */
 } pt_buf;
 
 static eng_photon *pt_push(pt_buf *b)
@@ -73,7 +77,7 @@ static int has_power(const float p[3])
 }
 
 /* Traces one bounce-map photon, appending its stored photons to buf; fills rec. */
-static void trace_path(const eng_rt *rt, const scn_scene *scene, const eng_random_maps *rm,
+static void trace_path(const pt_tracer *tr, const scn_scene *scene, const eng_random_maps *rm,
                        const eng_bounce_photon *bp, const eng_trace_settings *s, pt_buf *buf, pt_path *rec)
 {
     rec->at = buf->n;
@@ -102,7 +106,7 @@ static void trace_path(const eng_rt *rt, const scn_scene *scene, const eng_rando
             break;
         }
         rt_hit h;
-        if (!rt_intersect(rt, org, dir, tnear, INFINITY, &h))
+        if (!tr->intersect(tr->state, org, dir, tnear, &h, &buf->counts))
             break;
         const float wi[3] = {-dir[0], -dir[1], -dir[2]};
         /* Shading normal, unless interpolation put wi on the other side of it than the true
@@ -157,9 +161,36 @@ static void trace_path(const eng_rt *rt, const scn_scene *scene, const eng_rando
     }
 }
 
+int pt_embree_intersect(const void *state, const float org[3], const float dir[3], float tnear, rt_hit *hit,
+                        eng_trace_counts *counts)
+{
+    (void)counts;
+    return rt_intersect(state, org, dir, tnear, INFINITY, hit);
+}
+
 eng_result photon_trace(const eng_rt *rt, const eng_frame_scene *fs, const eng_random_maps *rm,
                         const eng_bounce_photon *in, size_t count, const eng_trace_settings *s,
                         eng_photon_map *out, eng_trace_stats *stats, eng_error *err)
+{
+    const pt_tracer tr = {pt_embree_intersect, rt};
+    return photon_trace_with(&tr, fs, rm, in, count, s, out, stats, err);
+}
+
+static void add_counts(eng_trace_counts *a, const eng_trace_counts *b)
+{
+    a->rays += b->rays;
+    a->resolved += b->resolved;
+    a->fallback += b->fallback;
+    a->dropped += b->dropped;
+    for (int i = 0; i < 4; i++)
+        a->types[i] += b->types[i];
+    a->compared += b->compared;
+    a->agree += b->agree;
+}
+
+eng_result photon_trace_with(const pt_tracer *tr, const eng_frame_scene *fs, const eng_random_maps *rm,
+                             const eng_bounce_photon *in, size_t count, const eng_trace_settings *s,
+                             eng_photon_map *out, eng_trace_stats *stats, eng_error *err)
 {
     if (s->max_bounces < 0 || s->max_bounces > ENG_PHOTON_MAX_HITS)
         return eng_fail(err, ENG_ERR_INVALID, "photon trace: max_bounces %d outside 0..%d", s->max_bounces,
@@ -181,7 +212,7 @@ eng_result photon_trace(const eng_rt *rt, const eng_frame_scene *fs, const eng_r
         pt_buf *mine = &bufs[t];
 #pragma omp for schedule(static)
         for (ptrdiff_t i = 0; i < (ptrdiff_t)count; i++) {
-            trace_path(rt, scene, rm, &in[i], s, mine, &paths[i]);
+            trace_path(tr, scene, rm, &in[i], s, mine, &paths[i]);
             paths[i].thread = (uint16_t)t;
         }
     }
@@ -216,12 +247,17 @@ eng_result photon_trace(const eng_rt *rt, const eng_frame_scene *fs, const eng_r
         at += paths[i].count;
     }
     out->count = total;
-    for (int t = 0; t < threads; t++)
+    eng_trace_counts counts;
+    memset(&counts, 0, sizeof counts);
+    for (int t = 0; t < threads; t++) {
+        add_counts(&counts, &bufs[t].counts);
         free(bufs[t].p);
+    }
     free(bufs);
 
     if (stats) {
         memset(stats, 0, sizeof *stats);
+        stats->counts = counts;
         for (size_t i = 0; i < count; i++) {
             if (has_power(in[i].power))
                 stats->emitted++;

@@ -153,7 +153,10 @@ static eng_result parse_settings(parser *P, const cJSON *obj, eng_settings *s)
                                        "normal_compression", "random", "random_map_size", "random_seed",
                                        "stratified_cycle",
                                        "splat_subsample", "temporal", "temporal_alpha", "atrous_iterations",
-                                       "atrous_detail", "atrous_gamma", "kernel_scaling", "progressive", "boundary", "specular", "specular_depth", NULL};
+                                       "atrous_detail", "atrous_gamma", "kernel_scaling", "progressive", "boundary",
+                                       "specular", "specular_depth",
+                                       "photon_trace", "multi_image_maps", "multi_image_size",
+                                       "multi_image_miss", "multi_image_compare", NULL};
     char v[80];
     eng_result r;
     if (!cJSON_IsObject(obj))
@@ -313,6 +316,34 @@ static eng_result parse_settings(parser *P, const cJSON *obj, eng_settings *s)
             s->boundary = ENG_BOUNDARY_RENORMALIZE;
         else
             return bad(P, "settings.boundary: %s is not one of \"none\", \"renormalize\"", show(it, v, sizeof v));
+    }
+    if ((it = cJSON_GetObjectItemCaseSensitive(obj, "photon_trace"))) {
+        if (cJSON_IsString(it) && !strcmp(it->valuestring, "embree"))
+            s->photon_trace = ENG_TRACE_EMBREE;
+        else if (cJSON_IsString(it) && !strcmp(it->valuestring, "multi-image"))
+            s->photon_trace = ENG_TRACE_MULTI_IMAGE;
+        else
+            return bad(P, "settings.photon_trace: %s is not one of \"embree\", \"multi-image\"",
+                       show(it, v, sizeof v));
+    }
+    if ((it = cJSON_GetObjectItemCaseSensitive(obj, "multi_image_maps")) &&
+        (r = get_int(P, it, "settings.multi_image_maps", 1, ENG_MAX_TRACE_MAPS, &s->multi_image_maps)))
+        return r;
+    if ((it = cJSON_GetObjectItemCaseSensitive(obj, "multi_image_size")) &&
+        (r = get_int(P, it, "settings.multi_image_size", 4, 1024, &s->multi_image_size)))
+        return r;
+    if ((it = cJSON_GetObjectItemCaseSensitive(obj, "multi_image_miss"))) {
+        if (cJSON_IsString(it) && !strcmp(it->valuestring, "embree"))
+            s->multi_image_miss = ENG_MISS_EMBREE;
+        else if (cJSON_IsString(it) && !strcmp(it->valuestring, "drop"))
+            s->multi_image_miss = ENG_MISS_DROP;
+        else
+            return bad(P, "settings.multi_image_miss: %s is not one of \"embree\", \"drop\"", show(it, v, sizeof v));
+    }
+    if ((it = cJSON_GetObjectItemCaseSensitive(obj, "multi_image_compare"))) {
+        if (!cJSON_IsBool(it))
+            return bad(P, "settings.multi_image_compare: expected true or false, got %s", show(it, v, sizeof v));
+        s->multi_image_compare = cJSON_IsTrue(it) ? 1 : 0;
     }
     if ((it = cJSON_GetObjectItemCaseSensitive(obj, "specular"))) {
         if (cJSON_IsString(it) && !strcmp(it->valuestring, "traced"))
