@@ -764,8 +764,19 @@ static cJSON *manifest_json(const cap_capture *c)
     jadd(root, "frame_count", cJSON_CreateNumber(seq->frame_count));
     /* A look-at camera (keys in the sequence) has no node name: null; the keys are covered
      * by the sequence digest. */
-    jadd(root, "camera", seq->camera_node[0] ? jfield(seq->camera_node, sizeof seq->camera_node)
-                                              : cJSON_CreateNull());
+    jadd(root, "camera", seq->camera_node[0]   ? jfield(seq->camera_node, sizeof seq->camera_node)
+                         : seq->camera_by_index ? cJSON_CreateNumber(seq->camera_node_index)
+                                                : cJSON_CreateNull());
+    /* The scene's warnings (scn_warn), only when there are any, so runs without keep their
+     * manifests as before. */
+    if (c->scene->warning_count) {
+        cJSON *wa = jok(cJSON_CreateArray());
+        for (uint32_t w = 0; w < c->scene->warning_count && w < SCN_MAX_WARNINGS; w++)
+            jpush(wa, jfield(c->scene->warnings[w], SCN_WARNING_MAX));
+        if (c->scene->warning_count > SCN_MAX_WARNINGS)
+            jpush(wa, jok(cJSON_CreateString("(more warnings not kept)")));
+        jadd(root, "warnings", wa);
+    }
 
     eng_settings s = seq->settings;
     eng_settings_defaults(&s);

@@ -1333,7 +1333,7 @@ int cmd_bench(int argc, char **argv, const char *command_line)
         eng_fail(&err, r, "%s: reference: %s", c.path, inner.msg);
     }
     if (r == ENG_OK)
-        r = scn_load_gltf(pts[0].seq->scene_path, &scene, &err);
+        r = seq_load_scene(pts[0].seq, &scene, &err);
     if (r != ENG_OK) { /* the config, sequence, scene or reference */
         fprintf(stderr, "ispm bench: %s\n", err.msg);
         rc = B_INPUT;

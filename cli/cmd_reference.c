@@ -169,12 +169,14 @@ int cmd_reference(int argc, char **argv, const char *command_line)
     int rc = REF_EXIT_OK;
     eng_result r = seq_load(seq_path, eseq, &err);
     if (r == ENG_OK)
-        r = scn_load_gltf(eseq->scene_path, &scene, &err);
+        r = seq_load_scene(eseq, &scene, &err);
     if (r != ENG_OK) {
         fprintf(stderr, "ispm reference: %s\n", err.msg);
         rc = REF_EXIT_INPUT;
         goto done;
     }
+    for (uint32_t w = 0; w < scene->warning_count && w < SCN_MAX_WARNINGS; w++)
+        fprintf(stderr, "ispm reference: warning: %s\n", scene->warnings[w]);
     int first = 0, last = eseq->frame_count - 1;
     if (frames_arg) {
         char a[32], b[32];

@@ -241,13 +241,15 @@ static int cmd_record(int argc, char **argv, const char *command_line)
     if (r == ENG_OK && threads)
         seq->settings.threads = threads;
     if (r == ENG_OK)
-        r = scn_load_gltf(seq->scene_path, &scene, &err);
+        r = seq_load_scene(seq, &scene, &err);
     if (r != ENG_OK) {
         /* Whatever went wrong reading the inputs (missing, unreadable, malformed) is bad input. */
         fprintf(stderr, "ispm record: %s\n", err.msg);
         rc = EXIT_INPUT;
         goto done;
     }
+    for (uint32_t w = 0; w < scene->warning_count && w < SCN_MAX_WARNINGS; w++)
+        fprintf(stderr, "ispm record: warning: %s\n", scene->warnings[w]);
     eng_desc ed = {.scene = scene, .sequence = seq, .gl = gl, .gl_use_device = gl_device >= 0,
                    .gl_device = gl_device};
     r = eng_create(&ed, &eng, &err);

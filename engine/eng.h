@@ -60,6 +60,8 @@ const char *eng_result_name(eng_result r);
 /* ---------------------------------------------------------------- scene */
 
 #define SCN_NAME_MAX 64
+#define SCN_MAX_WARNINGS 16
+#define SCN_WARNING_MAX 240
 
 typedef enum scn_light_type {
     SCN_LIGHT_POINT = 0,
@@ -67,15 +69,45 @@ typedef enum scn_light_type {
     SCN_LIGHT_DIRECTIONAL
 } scn_light_type;
 
+typedef enum scn_wrap { SCN_WRAP_REPEAT = 0, SCN_WRAP_CLAMP, SCN_WRAP_MIRROR } scn_wrap;
+
+/* A glTF texture as one use decodes it: RGBA floats, linear (sRGB-decoded for base colour
+ * and emissive, glTF §3.9.2), row 0 the TOP of the image (uv (0,0) is its top-left corner,
+ * glTF §3.8.4), with its sampler's wrap modes and filters. */
+typedef struct scn_texture {
+    uint32_t width, height;
+    float *texels;
+    int srgb;
+    scn_wrap wrap_s, wrap_t;
+    int mag_linear;  /* magFilter LINEAR (the default) or NEAREST */
+    int min_filter;  /* the GL enum; default LINEAR_MIPMAP_LINEAR */
+} scn_texture;
+
+/* A material's texture: which scn_texture, which TEXCOORD set, and KHR_texture_transform
+ * as uv' = (t[0] t[2] t[4]; t[1] t[3] t[5]) · (u, v, 1). */
+typedef struct scn_texref {
+    int32_t texture; /* into scn_scene.textures; -1: none */
+    int texcoord;    /* 0 or 1 */
+    float transform[6];
+} scn_texref;
+
+typedef enum scn_alpha_mode { SCN_ALPHA_OPAQUE = 0, SCN_ALPHA_MASK, SCN_ALPHA_BLEND } scn_alpha_mode;
+
 typedef struct scn_material {
     char name[SCN_NAME_MAX];
-    float base_color[4]; /* linear RGBA (baseColorFactor; textures are not supported) */
+    float base_color[4]; /* linear RGBA baseColorFactor; times base_color_tex where it has one */
     float metallic;      /* metallicFactor, default 1 per glTF */
     float roughness;     /* roughnessFactor, default 1 */
     float transmission;  /* KHR_materials_transmission transmissionFactor, default 0 */
     float ior;           /* KHR_materials_ior, default 1.5 */
     float emissive[3];   /* emissiveFactor × KHR_materials_emissive_strength (W/m²/sr) */
     int double_sided;
+    /* Textures (glTF §3.9): base colour is used by every pass (scn_base_color_at); the
+     * others are parsed and kept for the passes that will read them (emissive: the
+     * specular/emission work, issue 14). */
+    scn_texref base_color_tex, metallic_roughness_tex, normal_tex, occlusion_tex, emissive_tex;
+    scn_alpha_mode alpha_mode;
+    float alpha_cutoff; /* default 0.5 */
 } scn_material;
 
 /* One triangle list. Positions and normals in the mesh's object space, 3 floats per vertex.
@@ -87,6 +119,8 @@ typedef struct scn_primitive {
     float *normals;
     uint32_t index_count; /* multiple of 3 */
     uint32_t *indices;
+    float *texcoords[2];  /* TEXCOORD_0/1, 2 floats per vertex, or NULL */
+    float *colors;        /* COLOR_0 as linear RGBA, 4 floats per vertex, or NULL */
     int32_t material;     /* index into materials, or -1 for the glTF default material */
 } scn_primitive;
 
@@ -120,6 +154,7 @@ typedef struct scn_light {
 
 typedef struct scn_node {
     char name[SCN_NAME_MAX];
+    int32_t source; /* its index among the glTF's nodes; -1 for a node the sequence added */
     int32_t parent; /* -1 for roots */
     int32_t mesh;   /* -1 none */
     int32_t camera; /* -1 none */
@@ -164,12 +199,29 @@ typedef struct scn_scene {
     uint32_t camera_count;    scn_camera *cameras;
     uint32_t light_count;     scn_light *lights;
     uint32_t animation_count; scn_animation *animations;
+    uint32_t texture_count;   scn_texture *textures;
     char digest[40];          /* hex XXH3-128 of the .gltf file and its buffers */
+    /* What was skipped or is suspicious but not fatal (an unused orthographic camera, a
+     * POINTS primitive, an unknown optional extension, no light at all): one line each,
+     * for stderr and the manifest's "warnings". The first SCN_MAX_WARNINGS are kept;
+     * warning_count counts them all. */
+    uint32_t warning_count;
+    char warnings[SCN_MAX_WARNINGS][SCN_WARNING_MAX];
 } scn_scene;
+
+/* Adds a warning line to the scene (printf-style; kept if there is room). */
+void scn_warn(scn_scene *scene, const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 2, 3)))
+#endif
+    ;
 
 /* Loads and validates a .gltf/.glb (accessor bounds, index ranges, node cycles, NaN in
  * transforms, light types, ...). On failure *out is NULL and err names file and problem. */
 eng_result scn_load_gltf(const char *path, scn_scene **out, eng_error *err);
+/* Same, keeping the nodes of the glTF's scene scene_index (-1: the default scene, else
+ * scene 0, else every root node). */
+eng_result scn_load_gltf_scene(const char *path, int scene_index, scn_scene **out, eng_error *err);
 /* Same, from len bytes in memory (.glb if they start with the GLB magic, JSON otherwise);
  * name stands for the file in messages and in scene->path, and external buffers are looked
  * up beside it. Borrows bytes. For the fuzz targets and tests. */
@@ -185,6 +237,22 @@ void scn_evaluate(const scn_scene *scene, double t, float *world);
 void scn_sample_channel(const scn_channel *ch, double t, float *out);
 
 int32_t scn_find_node(const scn_scene *scene, const char *name); /* -1 if absent */
+
+/* A texture at (u, v), the texel or the bilinear mix of four as its magFilter says, wrapped
+ * as its sampler says, from the full-resolution level (a CPU hit has no footprint). */
+void scn_texture_sample(const scn_texture *t, float u, float v, float out[4]);
+
+/* Texture reference r sampled at barycentrics (b1, b2) of triangle tri of primitive p
+ * (interpolated texcoord, KHR_texture_transform, scn_texture_sample) into out; returns 0
+ * and (1,1,1,1) where r names no texture or p lacks its texcoord set. */
+int scn_texref_at(const scn_scene *scene, const scn_texref *r, const scn_primitive *p, uint32_t tri, float b1,
+                  float b2, float out[4]);
+
+/* The factor the material's base colour is multiplied by at barycentrics (b1, b2) of
+ * triangle tri of primitive p: its base colour texture at the interpolated, transformed
+ * texcoord times COLOR_0; (1,1,1,1) where it has neither. The same value every pass uses. */
+void scn_base_color_at(const scn_scene *scene, const scn_material *m, const scn_primitive *p, uint32_t tri,
+                       float b1, float b2, float out[4]);
 
 /* ---------------------------------------------------------------- settings & sequence */
 
@@ -313,6 +381,22 @@ void eng_settings_defaults(eng_settings *s);
 
 #define SEQ_MAX_CAPTURE 32
 #define SEQ_MAX_CAMKEYS 64
+#define SEQ_MAX_LIGHTS 8
+#define SEQ_MAX_ANIMATIONS 32
+
+/* A light the sequence adds to the scene's own ("lights"): a root node at position whose
+ * -Z axis points along direction (spot, directional), carrying this light. */
+typedef struct seq_light {
+    scn_light light;
+    float position[3];  /* default (0,0,0) */
+    float direction[3]; /* default (0,0,-1); normalised */
+} seq_light;
+
+/* One entry of "animations": a glTF animation by name (name[0] != 0) or by index. */
+typedef struct seq_animation {
+    char name[SCN_NAME_MAX];
+    int index;
+} seq_animation;
 
 typedef struct seq_camera_key {
     double time;
@@ -332,6 +416,8 @@ typedef struct seq_sequence {
     /* Camera: either a glTF camera node (camera_node[0] != 0) or explicit look-at keys,
      * linearly interpolated and clamped (camera_key_count >= 1). */
     char camera_node[SCN_NAME_MAX];
+    int camera_by_index;    /* {"node": <index>}: camera_node_index is a glTF node index */
+    int camera_node_index;
     int camera_key_count;
     seq_camera_key camera_keys[SEQ_MAX_CAMKEYS];
     float camera_up[3];     /* look-at keys only; default (0,1,0) */
@@ -342,6 +428,14 @@ typedef struct seq_sequence {
     int capture_count;
     char capture[SEQ_MAX_CAPTURE][SCN_NAME_MAX];
     char digest[40];        /* hex XXH3-128 of the sequence file bytes */
+    /* What of the glTF is played: "scene_index" (which of its scenes, when has_scene_index;
+     * else the default), "animations" (when has_animations; else all of them) and "lights"
+     * added to its own. Zero-initialised fields mean the glTF's defaults. */
+    int has_scene_index, scene_index;
+    int has_animations, animation_count;
+    seq_animation animations[SEQ_MAX_ANIMATIONS];
+    int light_count;
+    seq_light lights[SEQ_MAX_LIGHTS];
 } seq_sequence;
 
 /* Parses and validates a sequence file. Unknown keys are errors (a typo must not silently
@@ -349,6 +443,12 @@ typedef struct seq_sequence {
 eng_result seq_load(const char *path, seq_sequence *out, eng_error *err);
 /* Same, from memory; path is only used in messages and to resolve the scene path. */
 eng_result seq_parse(const char *path, const char *json, size_t len, seq_sequence *out, eng_error *err);
+
+/* Loads the sequence's scene (seq->scene_path) as the sequence chooses it: its glTF scene
+ * scene_index, only the animations it names (an unknown name or index is ENG_ERR_INVALID),
+ * its lights added as root nodes after the glTF's, and a warning when the result has no
+ * light at all (every frame would be black). The one way the tools load a sequence's scene. */
+eng_result seq_load_scene(const seq_sequence *seq, scn_scene **out, eng_error *err);
 
 /* Does the sequence ask for this buffer to be captured? */
 int seq_wants(const seq_sequence *seq, const char *buffer_name);

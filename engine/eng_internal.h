@@ -81,6 +81,7 @@ void glu_pass_draw_to(const glu_pass *p, const glu_target *t);
 
 typedef struct eng_gpu_prim {
     GLuint vao, vbo_pos, vbo_nrm, ibo;
+    GLuint vbo_uv[2], vbo_col; /* TEXCOORD_0/1 (location 2, 3), COLOR_0 (4); 0 where absent */
     GLsizei index_count;
 } eng_gpu_prim;
 
@@ -110,6 +111,7 @@ typedef struct eng_light_pose {
 typedef struct eng_frame_scene {
     const scn_scene *scene;
     const eng_gpu_prim *gpu;  /* per scene primitive */
+    const GLuint *textures;   /* per scene texture (scn_scene.textures) */
     uint32_t draw_count;
     eng_draw *draws;
     eng_view camera, prev_camera;
@@ -121,8 +123,18 @@ typedef struct eng_frame_scene {
 /* malloc that ends the process with a message when out of memory (engine.c). */
 void *eng_xmalloc(size_t size);
 
+/* Sets base_color.glsl's uniforms of prog for drawing d with material m: its base colour
+ * texture (bound to texture unit ENG_BASE_TEX_UNIT), texcoord set and transform, COLOR_0,
+ * and the MASK cutoff. */
+#define ENG_BASE_TEX_UNIT 7
+void eng_bind_material(GLuint prog, const eng_frame_scene *fs, const eng_draw *d, const scn_material *m);
+
 /* Resolved material values for a draw (the glTF default material for -1). */
 scn_material eng_material_of(const scn_scene *scene, int32_t index);
+struct rt_hit;
+/* The material at a CPU hit: eng_material_of with its base colour times hit->base_tex (the
+ * texture and COLOR_0 there), as the G-buffers see it at the same surface point. */
+scn_material eng_material_at(const scn_scene *scene, const struct rt_hit *hit);
 
 /* ---------------------------------------------------------------- passes */
 
@@ -404,6 +416,12 @@ typedef struct rt_hit {
     float geom_normal[3];
     int32_t material;
     uint32_t draw;
+    /* What the material's base colour is multiplied by here (scn_base_color_at: its
+     * texture at the hit's texcoord, COLOR_0); (1,1,1,1) without either. */
+    float base_tex[4];
+    /* What roughness and metallic are multiplied by here: the metallicRoughness texture's
+     * G and B (glTF §3.9.2); 1 without one. */
+    float roughness_tex, metallic_tex;
 } rt_hit;
 
 typedef struct eng_rt eng_rt;

@@ -33,6 +33,7 @@ struct eng_engine {
     eng_glctx *gl;
     eng_rt *rt;
     eng_gpu_prim *gpu;
+    GLuint *textures; /* per scene texture */
     pass_gbuffer *gbuffer;
     pass_shadow *shadow;
     void *shadow_state[SHADOW_METHOD_COUNT]; /* shadow.h: every shadow method's state */
@@ -102,6 +103,23 @@ scn_material eng_material_of(const scn_scene *scene, int32_t index)
     m.metallic = 1.0f;
     m.roughness = 1.0f;
     m.ior = 1.5f;
+    m.alpha_cutoff = 0.5f;
+    scn_texref *refs[5] = {&m.base_color_tex, &m.metallic_roughness_tex, &m.normal_tex, &m.occlusion_tex,
+                           &m.emissive_tex};
+    for (int i = 0; i < 5; i++) {
+        refs[i]->texture = -1;
+        refs[i]->transform[0] = refs[i]->transform[3] = 1.0f;
+    }
+    return m;
+}
+
+scn_material eng_material_at(const scn_scene *scene, const rt_hit *hit)
+{
+    scn_material m = eng_material_of(scene, hit->material);
+    for (int c = 0; c < 4; c++)
+        m.base_color[c] *= hit->base_tex[c];
+    m.roughness *= hit->roughness_tex;
+    m.metallic *= hit->metallic_tex;
     return m;
 }
 
@@ -141,12 +159,45 @@ static void upload_scene(eng_engine *e)
         glBufferData(GL_ARRAY_BUFFER, (GLsizeiptr)(p->vertex_count * 3 * sizeof(float)), p->normals, GL_STATIC_DRAW);
         glVertexAttribPointer(1, 3, GL_FLOAT, GL_FALSE, 0, NULL);
         glEnableVertexAttribArray(1);
+        /* TEXCOORD_0/1 and COLOR_0 where the primitive has them (base_color.glsl). */
+        const float *extra[3] = {p->texcoords[0], p->texcoords[1], p->colors};
+        GLuint *vbo[3] = {&g->vbo_uv[0], &g->vbo_uv[1], &g->vbo_col};
+        for (int a = 0; a < 3; a++) {
+            if (!extra[a])
+                continue;
+            int comps = a == 2 ? 4 : 2;
+            glGenBuffers(1, vbo[a]);
+            glBindBuffer(GL_ARRAY_BUFFER, *vbo[a]);
+            glBufferData(GL_ARRAY_BUFFER, (GLsizeiptr)(p->vertex_count * comps * sizeof(float)), extra[a], GL_STATIC_DRAW);
+            glVertexAttribPointer((GLuint)(2 + a), comps, GL_FLOAT, GL_FALSE, 0, NULL);
+            glEnableVertexAttribArray((GLuint)(2 + a));
+        }
         glGenBuffers(1, &g->ibo);
         glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, g->ibo);
         glBufferData(GL_ELEMENT_ARRAY_BUFFER, (GLsizeiptr)(p->index_count * sizeof(uint32_t)), p->indices, GL_STATIC_DRAW);
         g->index_count = (GLsizei)p->index_count;
         glBindVertexArray(0);
     }
+    /* Textures as the loader decoded them (linear RGBA floats, row 0 = v 0), mipmapped
+     * where their minFilter asks for it. */
+    e->textures = xcalloc(s->texture_count, sizeof *e->textures);
+    for (uint32_t i = 0; i < s->texture_count; i++) {
+        const scn_texture *t = &s->textures[i];
+        static const GLint wraps[] = {GL_REPEAT, GL_CLAMP_TO_EDGE, GL_MIRRORED_REPEAT};
+        glGenTextures(1, &e->textures[i]);
+        glBindTexture(GL_TEXTURE_2D, e->textures[i]);
+        glPixelStorei(GL_UNPACK_ALIGNMENT, 4);
+        glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA32F, (GLsizei)t->width, (GLsizei)t->height, 0, GL_RGBA, GL_FLOAT,
+                     t->texels);
+        int mip = t->min_filter >= GL_NEAREST_MIPMAP_NEAREST && t->min_filter <= GL_LINEAR_MIPMAP_LINEAR;
+        if (mip)
+            glGenerateMipmap(GL_TEXTURE_2D);
+        glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, t->min_filter);
+        glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, t->mag_linear ? GL_LINEAR : GL_NEAREST);
+        glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, wraps[t->wrap_s]);
+        glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, wraps[t->wrap_t]);
+    }
+    glBindTexture(GL_TEXTURE_2D, 0);
 }
 
 eng_result eng_create(const eng_desc *desc, eng_engine **out, eng_error *err)
@@ -168,6 +219,15 @@ eng_result eng_create(const eng_desc *desc, eng_engine **out, eng_error *err)
             eng_destroy(e);
             return eng_fail(err, ENG_ERR_INVALID, "%s: camera node \"%s\" is not a camera node of %s", q->path,
                             q->camera_node, s->path);
+        }
+    } else if (q->camera_by_index) {
+        for (uint32_t i = 0; i < s->node_count && e->camera_node < 0; i++)
+            if (s->nodes[i].source == q->camera_node_index)
+                e->camera_node = (int32_t)i;
+        if (e->camera_node < 0 || s->nodes[e->camera_node].camera < 0) {
+            eng_destroy(e);
+            return eng_fail(err, ENG_ERR_INVALID, "%s: camera node %d is not a camera node in the scene played of %s",
+                            q->path, q->camera_node_index, s->path);
         }
     }
     uint32_t nlights = 0;
@@ -260,6 +320,7 @@ eng_result eng_create(const eng_desc *desc, eng_engine **out, eng_error *err)
             ndraws += s->meshes[s->nodes[i].mesh].primitive_count;
     e->fs.scene = s;
     e->fs.gpu = e->gpu;
+    e->fs.textures = e->textures;
     e->fs.draws = xcalloc(ndraws, sizeof(eng_draw));
     e->fs.draw_count = ndraws;
     e->fs.lights = xcalloc(nlights, sizeof(eng_light_pose));
@@ -299,11 +360,15 @@ void eng_destroy(eng_engine *e)
         for (int m = 0; m < SHADOW_METHOD_COUNT; m++)
             shadow_methods[m]->destroy(e->shadow_state[m]);
         pass_gbuffer_destroy(e->gbuffer);
+        if (e->textures)
+            glDeleteTextures((GLsizei)e->scene->texture_count, e->textures);
         if (e->gpu)
             for (uint32_t i = 0; i < e->scene->primitive_count; i++) {
                 glDeleteBuffers(1, &e->gpu[i].vbo_pos);
                 glDeleteBuffers(1, &e->gpu[i].vbo_nrm);
                 glDeleteBuffers(1, &e->gpu[i].ibo);
+                glDeleteBuffers(2, e->gpu[i].vbo_uv);
+                glDeleteBuffers(1, &e->gpu[i].vbo_col);
                 glDeleteVertexArrays(1, &e->gpu[i].vao);
             }
     }
@@ -322,6 +387,7 @@ void eng_destroy(eng_engine *e)
     }
     free(e->prog_count);
     free(e->prog_radius);
+    free(e->textures);
     free(e->emission_rgba);
     free(e->emission_rgb);
     free(e->emission_id);

@@ -11,11 +11,14 @@
  * "accessor 3", "node 5", "animations[0].channels[2]") and the problem.
  *
  * What the loader decides for the engine:
- *   - meshes are TRIANGLES only; other modes, sparse accessors, orthographic cameras,
- *     rotation keys stored as normalized integers and required extensions other than
- *     lights, transmission and ior (Draco, mesh quantization, ...) are ENG_ERR_UNSUPPORTED;
- *   - textures, skins and morph targets are ignored (the base mesh at rest is kept), and so
- *     are animation channels on "weights";
+ *   - meshes are TRIANGLES only: other modes, primitives without POSITION, orthographic
+ *     cameras and unknown optional extensions are left out with a warning (scn_warn), a
+ *     required extension other than lights, transmission, ior and mesh quantization
+ *     (Draco, ...) is ENG_ERR_UNSUPPORTED; sparse accessors and KHR_mesh_quantization's
+ *     integer attributes are read (read_floats_as), sparse index accessors are not;
+ *   - textures are decoded to linear RGBA floats (make_texture; base colour and emissive
+ *     sRGB-decoded), TEXCOORD_0/1 and COLOR_0 read; skins and morph targets are ignored
+ *     (the base mesh at rest is kept), and so are animation channels on "weights";
  *   - primitives without NORMAL get flat normals, their vertices un-shared; normals are
  *     normalised;
  *   - only nodes reachable from the default scene (else scene 0, else every root) are kept,
@@ -41,6 +44,7 @@
 #define MAX_SCENE_VERTICES ((uint64_t)1 << 28)
 #define MAX_KEYS ((uint64_t)1 << 24)
 #define PI 3.14159265358979323846
+#define IOR_ZERO 1.0e4f /* what ior 0 is stored as: F0 = 0.9996 */
 
 typedef struct loader {
     const char *path;
@@ -48,6 +52,8 @@ typedef struct loader {
     scn_scene *s;
     eng_error *err;
     uint64_t total_vertices;
+    int scene_index; /* -1: the default scene */
+    int32_t *texture_source; /* per scene texture, its glTF texture (make_texture) */
 } loader;
 
 static eng_result fail(loader *L, eng_result code, const char *fmt, ...)
@@ -234,9 +240,10 @@ static eng_result check_accessors(loader *L)
 }
 
 /* The accessor `index` as used at `where`, which must be of the given type and
- * componentType (ct 0: any of the index types) and not sparse. Returns its first byte, or
- * NULL in *base for an accessor without a buffer view (all zeros). */
-static eng_result use_accessor(loader *L, int index, const char *where, int type, int ct,
+ * componentType (ct 0: any of the index types; ct -1: FLOAT, or with KHR_mesh_quantization
+ * BYTE, UNSIGNED_BYTE, SHORT or UNSIGNED_SHORT) and, unless sparse_ok, not sparse. Returns
+ * its first byte, or NULL in *base for an accessor without a buffer view (all zeros). */
+static eng_result use_accessor(loader *L, int index, const char *where, int type, int ct, int sparse_ok,
                                const gls_accessor **acc, const unsigned char **base, uint64_t *stride)
 {
     const gls_model *m = L->m;
@@ -244,17 +251,22 @@ static eng_result use_accessor(loader *L, int index, const char *where, int type
         return fail(L, ENG_ERR_INVALID, "%s: accessor %d out of range (%u accessors)", where, index,
                     m->accessor_count);
     const gls_accessor *a = &m->accessors[index];
-    if (a->sparse)
-        return fail(L, ENG_ERR_UNSUPPORTED, "%s: accessor %d is sparse (not supported)", where, index);
-    int ct_ok = ct ? a->component_type == ct
-                   : (a->component_type == GLS_COMPONENT_UNSIGNED_BYTE ||
-                      a->component_type == GLS_COMPONENT_UNSIGNED_SHORT ||
-                      a->component_type == GLS_COMPONENT_UNSIGNED_INT);
-    if (a->type != type || !ct_ok || (ct == GLS_COMPONENT_FLOAT && a->normalized))
+    if (a->sparse && !sparse_ok)
+        return fail(L, ENG_ERR_UNSUPPORTED, "%s: accessor %d is sparse (not supported here)", where, index);
+    int ict = a->component_type;
+    int ct_ok = ct > 0  ? ict == ct
+                : ct < 0 ? (ict == GLS_COMPONENT_FLOAT || ict == GLS_COMPONENT_BYTE ||
+                            ict == GLS_COMPONENT_UNSIGNED_BYTE || ict == GLS_COMPONENT_SHORT ||
+                            ict == GLS_COMPONENT_UNSIGNED_SHORT)
+                         : (ict == GLS_COMPONENT_UNSIGNED_BYTE || ict == GLS_COMPONENT_UNSIGNED_SHORT ||
+                            ict == GLS_COMPONENT_UNSIGNED_INT);
+    if (a->type != type || !ct_ok || (ict == GLS_COMPONENT_FLOAT && a->normalized))
         return fail(L, ENG_ERR_INVALID, "%s: accessor %d is %s of %s%s, must be %s of %s", where, index,
                     type_name(a->type), component_name(a->component_type),
                     a->normalized ? " (normalized)" : "", type_name(type),
-                    ct ? component_name(ct) : "UNSIGNED_BYTE/SHORT/INT");
+                    ct > 0 ? component_name(ct)
+                    : ct < 0 ? "FLOAT (or BYTE/UNSIGNED_BYTE/SHORT/UNSIGNED_SHORT, KHR_mesh_quantization)"
+                             : "UNSIGNED_BYTE/SHORT/INT");
     *acc = a;
     *base = NULL;
     *stride = 0;
@@ -266,16 +278,100 @@ static eng_result use_accessor(loader *L, int index, const char *where, int type
     return ENG_OK;
 }
 
-/* Reads a FLOAT accessor of `comps` components (3: VEC3, 4: VEC4, 1: SCALAR) into a new
- * array, refusing more than max_count elements and any non-finite value. */
-static eng_result read_floats(loader *L, int index, const char *where, uint32_t comps, uint64_t max_count,
-                              float **out, uint64_t *count)
+/* comps components of component type ct at p as floats: normalized integers map to [0, 1]
+ * or [-1, 1] as glTF §3.11 (Animation, "normalized integers") writes, plain ones keep their
+ * value (KHR_mesh_quantization). */
+static void convert(const unsigned char *p, int ct, int normalized, uint32_t comps, float *out)
 {
-    int type = comps == 1 ? GLS_TYPE_SCALAR : comps == 3 ? GLS_TYPE_VEC3 : GLS_TYPE_VEC4;
+    for (uint32_t c = 0; c < comps; c++) {
+        float f;
+        switch (ct) {
+        case GLS_COMPONENT_BYTE: {
+            int8_t x = (int8_t)p[c];
+            f = normalized ? fmaxf((float)x / 127.0f, -1.0f) : (float)x;
+            break;
+        }
+        case GLS_COMPONENT_UNSIGNED_BYTE: f = normalized ? (float)p[c] / 255.0f : (float)p[c]; break;
+        case GLS_COMPONENT_SHORT: {
+            int16_t x;
+            memcpy(&x, p + 2 * c, 2);
+            f = normalized ? fmaxf((float)x / 32767.0f, -1.0f) : (float)x;
+            break;
+        }
+        case GLS_COMPONENT_UNSIGNED_SHORT: {
+            uint16_t x;
+            memcpy(&x, p + 2 * c, 2);
+            f = normalized ? (float)x / 65535.0f : (float)x;
+            break;
+        }
+        default: memcpy(&f, p + 4 * c, 4); break;
+        }
+        out[c] = f;
+    }
+}
+
+/* A sparse accessor's substitutions (glTF §3.6.2.3) applied to v (count × comps floats):
+ * indices and values bounds-checked against their buffer views, each index below count
+ * and strictly increasing. */
+static eng_result apply_sparse(loader *L, const gls_accessor *a, int index, const char *where, uint32_t comps,
+                               float *v)
+{
+    const gls_model *m = L->m;
+    uint32_t isize = component_size(a->sparse_index_type);
+    if (a->sparse_index_type != GLS_COMPONENT_UNSIGNED_BYTE && a->sparse_index_type != GLS_COMPONENT_UNSIGNED_SHORT &&
+        a->sparse_index_type != GLS_COMPONENT_UNSIGNED_INT)
+        return fail(L, ENG_ERR_INVALID, "%s: accessor %d: sparse indices are %s, not UNSIGNED_BYTE/SHORT/INT", where,
+                    index, component_name(a->sparse_index_type));
+    if (a->sparse_count == 0 || a->sparse_count > a->count)
+        return fail(L, ENG_ERR_INVALID, "%s: accessor %d: sparse count %llu is not in 1..%llu", where, index,
+                    (unsigned long long)a->sparse_count, (unsigned long long)a->count);
+    const int views[2] = {a->sparse_index_view, a->sparse_value_view};
+    const uint64_t offsets[2] = {a->sparse_index_offset, a->sparse_value_offset};
+    const uint64_t sizes[2] = {isize, element_size(a->component_type, a->type)};
+    const unsigned char *at[2];
+    for (int k = 0; k < 2; k++) {
+        uint64_t end;
+        if (views[k] < 0 || (uint32_t)views[k] >= m->buffer_view_count)
+            return fail(L, ENG_ERR_INVALID, "%s: accessor %d: sparse %s buffer view %d out of range", where, index,
+                        k ? "values" : "indices", views[k]);
+        const gls_buffer_view *bv = &m->buffer_views[views[k]];
+        if (!mul_add_u64(sizes[k], a->sparse_count, offsets[k], &end) || end > bv->byte_length)
+            return fail(L, ENG_ERR_INVALID, "%s: accessor %d: sparse %s overrun buffer view %d", where, index,
+                        k ? "values" : "indices", views[k]);
+        at[k] = m->buffers[bv->buffer].data + bv->byte_offset + offsets[k];
+    }
+    uint64_t prev = 0;
+    for (uint64_t i = 0; i < a->sparse_count; i++) {
+        uint32_t e = 0;
+        if (isize == 1) {
+            e = at[0][i];
+        } else if (isize == 2) {
+            uint16_t x;
+            memcpy(&x, at[0] + 2 * i, 2);
+            e = x;
+        } else {
+            memcpy(&e, at[0] + 4 * i, 4);
+        }
+        if (e >= a->count || (i > 0 && e <= prev))
+            return fail(L, ENG_ERR_INVALID, "%s: accessor %d: sparse index %llu is %u (not increasing or not below %llu)",
+                        where, index, (unsigned long long)i, e, (unsigned long long)a->count);
+        prev = e;
+        convert(at[1] + i * sizes[1], a->component_type, a->normalized, comps, v + (size_t)e * comps);
+    }
+    return ENG_OK;
+}
+
+/* Reads an accessor of `comps` components (3: VEC3, 4: VEC4, 1: SCALAR) into a new float
+ * array, sparse substitutions applied, refusing more than max_count elements and any
+ * non-finite value. quantized: integer component types are accepted too (convert). */
+static eng_result read_floats_as(loader *L, int index, const char *where, uint32_t comps, int quantized,
+                                 uint64_t max_count, float **out, uint64_t *count)
+{
+    int type = comps == 1 ? GLS_TYPE_SCALAR : comps == 2 ? GLS_TYPE_VEC2 : comps == 3 ? GLS_TYPE_VEC3 : GLS_TYPE_VEC4;
     const gls_accessor *a = NULL;
     const unsigned char *base = NULL;
     uint64_t stride = 0;
-    eng_result r = use_accessor(L, index, where, type, GLS_COMPONENT_FLOAT, &a, &base, &stride);
+    eng_result r = use_accessor(L, index, where, type, quantized ? -1 : GLS_COMPONENT_FLOAT, 1, &a, &base, &stride);
     if (r)
         return r;
     if (a->count > max_count)
@@ -285,18 +381,27 @@ static eng_result read_floats(loader *L, int index, const char *where, uint32_t 
     if (!v)
         return nomem(L, where);
     if (base)
-        for (uint64_t i = 0; i < a->count; i++) {
-            memcpy(v + i * comps, base + i * stride, comps * sizeof *v);
-            for (uint32_t c = 0; c < comps; c++)
-                if (!isfinite(v[i * comps + c])) {
-                    free(v);
-                    return fail(L, ENG_ERR_INVALID, "%s: accessor %d element %llu is not finite", where,
-                                index, (unsigned long long)i);
-                }
+        for (uint64_t i = 0; i < a->count; i++)
+            convert(base + i * stride, a->component_type, a->normalized, comps, v + i * comps);
+    if (a->sparse && (r = apply_sparse(L, a, index, where, comps, v))) {
+        free(v);
+        return r;
+    }
+    for (uint64_t i = 0; i < a->count * comps; i++)
+        if (!isfinite(v[i])) {
+            free(v);
+            return fail(L, ENG_ERR_INVALID, "%s: accessor %d element %llu is not finite", where, index,
+                        (unsigned long long)(i / comps));
         }
     *out = v;
     *count = a->count;
     return ENG_OK;
+}
+
+static eng_result read_floats(loader *L, int index, const char *where, uint32_t comps, uint64_t max_count,
+                              float **out, uint64_t *count)
+{
+    return read_floats_as(L, index, where, comps, 0, max_count, out, count);
 }
 
 static eng_result read_indices(loader *L, int index, const char *where, uint32_t vertex_count,
@@ -305,7 +410,7 @@ static eng_result read_indices(loader *L, int index, const char *where, uint32_t
     const gls_accessor *a = NULL;
     const unsigned char *base = NULL;
     uint64_t stride = 0;
-    eng_result r = use_accessor(L, index, where, GLS_TYPE_SCALAR, 0, &a, &base, &stride);
+    eng_result r = use_accessor(L, index, where, GLS_TYPE_SCALAR, 0, 0, &a, &base, &stride);
     if (r)
         return r;
     if (a->count > MAX_PRIMITIVE_VERTICES)
@@ -347,6 +452,152 @@ static eng_result check_unit_range(loader *L, const char *where, const char *wha
 {
     if (!isfinite(v) || v < 0.0 || v > 1.0)
         return fail(L, ENG_ERR_INVALID, "%s: %s %g is outside [0, 1]", where, what, v);
+    return ENG_OK;
+}
+
+/* glTF §3.9.2 / KHR_texture_transform: the sRGB transfer function, inverted. */
+static float srgb_to_linear(float c)
+{
+    return c <= 0.04045f ? c / 12.92f : powf((c + 0.055f) / 1.055f, 2.4f);
+}
+
+/* The scene texture for glTF texture `index` decoded as srgb says, made on first use. */
+static eng_result make_texture(loader *L, int index, int srgb, const char *where, int32_t *out)
+{
+    const gls_model *m = L->m;
+    scn_scene *s = L->s;
+    for (uint32_t i = 0; i < s->texture_count; i++)
+        if (L->texture_source[i] == index && s->textures[i].srgb == srgb) {
+            *out = (int32_t)i;
+            return ENG_OK;
+        }
+    const gls_texture *t = &m->textures[index];
+    if (t->source < 0) {
+        scn_warn(s, "%s: texture %d has no image (an extension's source?), ignored", where, index);
+        *out = -1;
+        return ENG_OK;
+    }
+    if ((uint32_t)t->source >= m->image_count)
+        return fail(L, ENG_ERR_INVALID, "texture %d: source %d out of range (%u images)", index, t->source,
+                    m->image_count);
+    const gls_image *im = &m->images[t->source];
+    if (im->width <= 0 || im->height <= 0 || !im->rgba)
+        return fail(L, ENG_ERR_INVALID, "image %d: not decoded to RGBA (an unsupported format?)", t->source);
+    scn_texture d;
+    memset(&d, 0, sizeof d);
+    d.mag_linear = 1;
+    d.min_filter = 9987; /* LINEAR_MIPMAP_LINEAR */
+    if (t->sampler >= 0) {
+        if ((uint32_t)t->sampler >= m->tex_sampler_count)
+            return fail(L, ENG_ERR_INVALID, "texture %d: sampler %d out of range (%u samplers)", index, t->sampler,
+                        m->tex_sampler_count);
+        const gls_tex_sampler *sp = &m->tex_samplers[t->sampler];
+        const int wraps[2] = {sp->wrap_s, sp->wrap_t};
+        scn_wrap *dst[2] = {&d.wrap_s, &d.wrap_t};
+        for (int k = 0; k < 2; k++) {
+            if (wraps[k] == 10497 || wraps[k] == -1)
+                *dst[k] = SCN_WRAP_REPEAT;
+            else if (wraps[k] == 33071)
+                *dst[k] = SCN_WRAP_CLAMP;
+            else if (wraps[k] == 33648)
+                *dst[k] = SCN_WRAP_MIRROR;
+            else
+                return fail(L, ENG_ERR_INVALID, "samplers[%d]: wrap mode %d is not a glTF wrap mode", t->sampler,
+                            wraps[k]);
+        }
+        if (sp->mag_filter != -1 && sp->mag_filter != 9728 && sp->mag_filter != 9729)
+            return fail(L, ENG_ERR_INVALID, "samplers[%d]: magFilter %d is not NEAREST or LINEAR", t->sampler,
+                        sp->mag_filter);
+        d.mag_linear = sp->mag_filter != 9728;
+        if (sp->min_filter != -1 && sp->min_filter != 9728 && sp->min_filter != 9729 &&
+            (sp->min_filter < 9984 || sp->min_filter > 9987))
+            return fail(L, ENG_ERR_INVALID, "samplers[%d]: minFilter %d is not a glTF filter", t->sampler,
+                        sp->min_filter);
+        if (sp->min_filter != -1)
+            d.min_filter = sp->min_filter;
+    }
+    d.width = (uint32_t)im->width;
+    d.height = (uint32_t)im->height;
+    d.srgb = srgb;
+    size_t n = (size_t)d.width * d.height;
+    d.texels = malloc(n * 4 * sizeof *d.texels);
+    scn_texture *grown = realloc(s->textures, (s->texture_count + 1) * sizeof *grown);
+    int32_t *src = realloc(L->texture_source, (s->texture_count + 1) * sizeof *src);
+    if (grown)
+        s->textures = grown;
+    if (src)
+        L->texture_source = src;
+    if (!d.texels || !grown || !src) {
+        free(d.texels);
+        return nomem(L, "textures");
+    }
+    for (size_t i = 0; i < n * 4; i++) {
+        float c;
+        if (im->bits == 16) {
+            uint16_t x;
+            memcpy(&x, im->rgba + 2 * i, 2);
+            c = (float)x / 65535.0f;
+        } else {
+            c = (float)im->rgba[i] / 255.0f;
+        }
+        d.texels[i] = srgb && i % 4 != 3 ? srgb_to_linear(c) : c;
+    }
+    L->texture_source[s->texture_count] = index;
+    s->textures[s->texture_count] = d;
+    *out = (int32_t)s->texture_count++;
+    return ENG_OK;
+}
+
+/* A material's textureInfo: the texture (made by make_texture), its TEXCOORD set (0 or 1;
+ * another set is ignored with a warning) and its KHR_texture_transform as a 2x3 matrix
+ * T · R · S (the extension's order). */
+static eng_result load_texref(loader *L, const gls_texinfo *g, int srgb, const char *where, scn_texref *d)
+{
+    d->texture = -1;
+    d->texcoord = 0;
+    const float id[6] = {1, 0, 0, 1, 0, 0};
+    memcpy(d->transform, id, sizeof id);
+    if (g->index == -1)
+        return ENG_OK;
+    if (g->index < 0 || (uint32_t)g->index >= L->m->texture_count)
+        return fail(L, ENG_ERR_INVALID, "%s: texture %d out of range (%u textures)", where, g->index,
+                    L->m->texture_count);
+    double off[2] = {0, 0}, sc[2] = {1, 1}, rot = 0;
+    int set = g->texcoord;
+    if (g->has_transform) {
+        if ((g->offset.len && g->offset.len != 2) || (g->scale.len && g->scale.len != 2) ||
+            !all_finite(g->offset.v, g->offset.len) || !all_finite(g->scale.v, g->scale.len) ||
+            g->rotation.state == GLS_NUM_NOT_A_NUMBER || !isfinite(g->rotation.value) ||
+            g->transform_texcoord.state == GLS_NUM_NOT_A_NUMBER)
+            return fail(L, ENG_ERR_INVALID, "%s: KHR_texture_transform is not offset[2], rotation, scale[2], texCoord",
+                        where);
+        for (int k = 0; k < 2; k++) {
+            if (g->offset.len)
+                off[k] = g->offset.v[k];
+            if (g->scale.len)
+                sc[k] = g->scale.v[k];
+        }
+        rot = g->rotation.value;
+        if (g->transform_texcoord.state == GLS_NUM_PRESENT)
+            set = (int)g->transform_texcoord.value;
+    }
+    if (set != 0 && set != 1) {
+        scn_warn(L->s, "%s: TEXCOORD_%d is not supported (only 0 and 1); texture ignored", where, set);
+        return ENG_OK;
+    }
+    eng_result r = make_texture(L, g->index, srgb, where, &d->texture);
+    if (r)
+        return r;
+    /* KHR_texture_transform: uv' = T(offset) · R · S(scale) · uv, R with columns
+     * (cos, -sin) and (sin, cos) as the extension's GLSL writes it. */
+    double c = cos(rot), sn = sin(rot);
+    d->transform[0] = (float)(c * sc[0]);
+    d->transform[1] = (float)(-sn * sc[0]);
+    d->transform[2] = (float)(sn * sc[1]);
+    d->transform[3] = (float)(c * sc[1]);
+    d->transform[4] = (float)off[0];
+    d->transform[5] = (float)off[1];
+    d->texcoord = set;
     return ENG_OK;
 }
 
@@ -401,6 +652,27 @@ static eng_result load_materials(loader *L)
             }
         }
         d->double_sided = g->double_sided;
+        if ((r = load_texref(L, &g->base_color_texture, 1, where, &d->base_color_tex)) ||
+            (r = load_texref(L, &g->metallic_roughness_texture, 0, where, &d->metallic_roughness_tex)) ||
+            (r = load_texref(L, &g->normal_texture, 0, where, &d->normal_tex)) ||
+            (r = load_texref(L, &g->occlusion_texture, 0, where, &d->occlusion_tex)) ||
+            (r = load_texref(L, &g->emissive_texture, 1, where, &d->emissive_tex)))
+            return r;
+        d->alpha_mode = SCN_ALPHA_OPAQUE;
+        if (g->alpha_mode && strcmp(g->alpha_mode, "MASK") == 0)
+            d->alpha_mode = SCN_ALPHA_MASK;
+        else if (g->alpha_mode && strcmp(g->alpha_mode, "BLEND") == 0)
+            d->alpha_mode = SCN_ALPHA_BLEND;
+        else if (g->alpha_mode && g->alpha_mode[0] && strcmp(g->alpha_mode, "OPAQUE") != 0)
+            return fail(L, ENG_ERR_INVALID, "%s: alphaMode \"%s\" is not OPAQUE, MASK or BLEND", where, g->alpha_mode);
+        if (!isfinite(g->alpha_cutoff) || g->alpha_cutoff < 0.0)
+            return fail(L, ENG_ERR_INVALID, "%s: alphaCutoff %g is negative or not finite", where, g->alpha_cutoff);
+        d->alpha_cutoff = (float)g->alpha_cutoff;
+        if (d->alpha_mode == SCN_ALPHA_BLEND) { /* until blending exists (issue 14's specular eye paths) */
+            scn_warn(L->s, "%s: alphaMode BLEND is drawn as MASK at alphaCutoff 0.5", where);
+            d->alpha_mode = SCN_ALPHA_MASK;
+            d->alpha_cutoff = 0.5f;
+        }
         d->transmission = 0.0f;
         if (g->transmission.state == GLS_NUM_NOT_A_NUMBER)
             return fail(L, ENG_ERR_INVALID, "%s: KHR_materials_transmission.transmissionFactor is not a number",
@@ -414,9 +686,12 @@ static eng_result load_materials(loader *L)
         if (g->ior.state == GLS_NUM_NOT_A_NUMBER)
             return fail(L, ENG_ERR_INVALID, "%s: KHR_materials_ior.ior is not a number", where);
         if (g->ior.state == GLS_NUM_PRESENT) {
-            if (!isfinite(g->ior.value) || g->ior.value < 1.0)
-                return fail(L, ENG_ERR_INVALID, "%s: ior %g is below 1 or not finite", where, g->ior.value);
-            d->ior = (float)g->ior.value;
+            if (!isfinite(g->ior.value) || (g->ior.value < 1.0 && g->ior.value != 0.0))
+                return fail(L, ENG_ERR_INVALID, "%s: ior %g is neither 0 nor at least 1, or not finite", where,
+                            g->ior.value);
+            /* KHR_materials_ior allows 0, whose Fresnel F0 = ((ior-1)/(ior+1))^2 is 1 (a
+             * perfect mirror); a large finite ior has the same limit and no division by 0. */
+            d->ior = g->ior.value == 0.0 ? IOR_ZERO : (float)g->ior.value;
         }
     }
     return ENG_OK;
@@ -434,9 +709,12 @@ static eng_result load_cameras(loader *L)
         const gls_camera *g = &m->cameras[i];
         scn_camera *d = &s->cameras[i];
         copy_name(d->name, g->name);
-        if (strcmp(g->type, "perspective") != 0)
-            return fail(L, ENG_ERR_UNSUPPORTED, "camera %u: type \"%s\" (only perspective cameras are supported)",
-                        i, g->type);
+        if (strcmp(g->type, "perspective") != 0) {
+            /* yfov 0 marks it unusable: load_nodes detaches it from its nodes, so choosing
+             * it in a sequence is an error, while a file that merely contains it loads. */
+            scn_warn(L->s, "camera %u: type \"%s\" skipped (only perspective cameras are supported)", i, g->type);
+            continue;
+        }
         if (!isfinite(g->yfov) || g->yfov <= 0.0 || g->yfov >= PI)
             return fail(L, ENG_ERR_INVALID, "camera %u: yfov %g is outside (0, pi)", i, g->yfov);
         if (!isfinite(g->znear) || g->znear <= 0.0)
@@ -573,6 +851,23 @@ static eng_result flat_normals(loader *L, scn_primitive *p, const char *where)
         for (int k = 0; k < 3; k++)
             memcpy(nrm + ((size_t)3 * t + k) * 3, f, sizeof f);
     }
+    /* The other attributes follow the vertices they belonged to. */
+    float **attr[3] = {&p->texcoords[0], &p->texcoords[1], &p->colors};
+    const size_t comps[3] = {2, 2, 4};
+    for (int a = 0; a < 3; a++) {
+        if (!*attr[a])
+            continue;
+        float *un = malloc((size_t)n * comps[a] * sizeof *un);
+        if (!un) {
+            free(pos);
+            free(nrm);
+            return nomem(L, where);
+        }
+        for (uint32_t i = 0; i < n; i++)
+            memcpy(un + i * comps[a], *attr[a] + (size_t)p->indices[i] * comps[a], comps[a] * sizeof *un);
+        free(*attr[a]);
+        *attr[a] = un;
+    }
     for (uint32_t i = 0; i < n; i++)
         p->indices[i] = i;
     free(p->positions);
@@ -591,14 +886,22 @@ static int find_attribute(const gls_primitive *g, const char *semantic)
     return -2;
 }
 
-static eng_result load_primitive(loader *L, const gls_primitive *g, scn_primitive *d, const char *where)
+/* *skip: the primitive is valid glTF that draws nothing here (points, lines, strips, fans,
+ * no POSITION): left out with a warning, as glTF lets a client do (§3.7.2.1). */
+static eng_result load_primitive(loader *L, const gls_primitive *g, scn_primitive *d, const char *where, int *skip)
 {
+    static const char *const modes[] = {"POINTS", "LINES", "LINE_LOOP", "LINE_STRIP", "TRIANGLES",
+                                        "TRIANGLE_STRIP", "TRIANGLE_FAN"};
     const gls_model *m = L->m;
     eng_result r;
+    *skip = 0;
     if (g->mode < 0 || g->mode > 6)
         return fail(L, ENG_ERR_INVALID, "%s: mode %d is not a glTF primitive mode", where, g->mode);
-    if (g->mode != 4)
-        return fail(L, ENG_ERR_UNSUPPORTED, "%s: mode %d (only TRIANGLES, mode 4, is supported)", where, g->mode);
+    if (g->mode != 4) {
+        scn_warn(L->s, "%s: mode %s skipped (only TRIANGLES are rendered)", where, modes[g->mode]);
+        *skip = 1;
+        return ENG_OK;
+    }
     if (g->material < -1 || g->material >= (int)m->material_count)
         return fail(L, ENG_ERR_INVALID, "%s: material %d out of range (%u materials)", where, g->material,
                     m->material_count);
@@ -611,17 +914,20 @@ static eng_result load_primitive(loader *L, const gls_primitive *g, scn_primitiv
     char what[160];
     uint64_t count;
     int pos_acc = find_attribute(g, "POSITION");
-    if (pos_acc == -2)
-        return fail(L, ENG_ERR_UNSUPPORTED, "%s: no POSITION attribute", where);
+    if (pos_acc == -2) {
+        scn_warn(L->s, "%s: no POSITION attribute, skipped", where);
+        *skip = 1;
+        return ENG_OK;
+    }
     snprintf(what, sizeof what, "%s POSITION", where);
-    if ((r = read_floats(L, pos_acc, what, 3, MAX_PRIMITIVE_VERTICES, &d->positions, &count)))
+    if ((r = read_floats_as(L, pos_acc, what, 3, 1, MAX_PRIMITIVE_VERTICES, &d->positions, &count)))
         return r;
     d->vertex_count = (uint32_t)count;
 
     int nrm_acc = find_attribute(g, "NORMAL");
     if (nrm_acc != -2) {
         snprintf(what, sizeof what, "%s NORMAL", where);
-        if ((r = read_floats(L, nrm_acc, what, 3, MAX_PRIMITIVE_VERTICES, &d->normals, &count)))
+        if ((r = read_floats_as(L, nrm_acc, what, 3, 1, MAX_PRIMITIVE_VERTICES, &d->normals, &count)))
             return r;
         if (count != d->vertex_count)
             return fail(L, ENG_ERR_INVALID, "%s: %llu normals for %u positions", what, (unsigned long long)count,
@@ -634,6 +940,38 @@ static eng_result load_primitive(loader *L, const gls_primitive *g, scn_primitiv
             for (int k = 0; k < 3; k++)
                 n[k] = (float)(n[k] / len);
         }
+    }
+
+    for (int set = 0; set < 2; set++) {
+        int acc = find_attribute(g, set ? "TEXCOORD_1" : "TEXCOORD_0");
+        if (acc == -2)
+            continue;
+        snprintf(what, sizeof what, "%s TEXCOORD_%d", where, set);
+        if ((r = read_floats_as(L, acc, what, 2, 1, MAX_PRIMITIVE_VERTICES, &d->texcoords[set], &count)))
+            return r;
+        if (count != d->vertex_count)
+            return fail(L, ENG_ERR_INVALID, "%s: %llu texcoords for %u positions", what, (unsigned long long)count,
+                        d->vertex_count);
+    }
+    int col_acc = find_attribute(g, "COLOR_0");
+    if (col_acc != -2) {
+        snprintf(what, sizeof what, "%s COLOR_0", where);
+        int vec3 = m->accessors[col_acc].type == GLS_TYPE_VEC3;
+        float *c = NULL;
+        if ((r = read_floats_as(L, col_acc, what, vec3 ? 3 : 4, 1, MAX_PRIMITIVE_VERTICES, &c, &count)))
+            return r;
+        d->colors = malloc((size_t)count * 4 * sizeof *d->colors);
+        if (!d->colors) {
+            free(c);
+            return nomem(L, what);
+        }
+        for (uint64_t v = 0; v < count; v++)
+            for (int k = 0; k < 4; k++)
+                d->colors[v * 4 + k] = k < 3 || !vec3 ? c[v * (vec3 ? 3 : 4) + k] : 1.0f;
+        free(c);
+        if (count != d->vertex_count)
+            return fail(L, ENG_ERR_INVALID, "%s: %llu colours for %u positions", what, (unsigned long long)count,
+                        d->vertex_count);
     }
 
     if (g->indices >= 0) {
@@ -683,15 +1021,19 @@ static eng_result load_meshes(loader *L)
         scn_mesh *d = &s->meshes[i];
         copy_name(d->name, g->name);
         d->first_primitive = s->primitive_count;
-        d->primitive_count = g->primitive_count;
         for (uint32_t p = 0; p < g->primitive_count; p++) {
             char where[64];
+            int skip;
             snprintf(where, sizeof where, "meshes[%u].primitives[%u]", i, p);
             /* Counted before loading so scn_destroy frees a half-built primitive. */
             scn_primitive *dp = &s->primitives[s->primitive_count++];
-            eng_result r = load_primitive(L, &g->primitives[p], dp, where);
+            eng_result r = load_primitive(L, &g->primitives[p], dp, where, &skip);
             if (r)
                 return r;
+            if (skip)
+                s->primitive_count--; /* nothing was allocated */
+            else
+                d->primitive_count++;
         }
     }
     return ENG_OK;
@@ -830,6 +1172,14 @@ static eng_result load_nodes(loader *L, int32_t *remap)
         r = fail(L, ENG_ERR_INVALID, "scene %d out of range (%u scenes)", sc, m->scene_count);
         goto done;
     }
+    if (L->scene_index >= 0) {
+        if ((uint32_t)L->scene_index >= m->scene_count) {
+            r = fail(L, ENG_ERR_INVALID, "scene_index %d out of range (the file has %u scenes)", L->scene_index,
+                     m->scene_count);
+            goto done;
+        }
+        sc = L->scene_index;
+    }
     for (uint32_t k = 0; k < m->scene_count; k++)
         for (uint32_t j = 0; j < m->scenes[k].node_count; j++)
             if (m->scenes[k].nodes[j] < 0 || (uint32_t)m->scenes[k].nodes[j] >= n) {
@@ -878,6 +1228,9 @@ static eng_result load_nodes(loader *L, int32_t *remap)
     s->node_count = kept;
     for (uint32_t k = 0; k < kept; k++) {
         fill_node(&m->nodes[order[k]], &s->nodes[k]);
+        s->nodes[k].source = (int32_t)order[k];
+        if (s->nodes[k].camera >= 0 && s->cameras[s->nodes[k].camera].yfov == 0.0f)
+            s->nodes[k].camera = -1; /* an orthographic camera (load_cameras) */
         s->nodes[k].parent = parent[order[k]] == -1 ? -1 : remap[parent[order[k]]];
     }
 done:
@@ -951,10 +1304,9 @@ static eng_result load_channel(loader *L, const gls_animation *ga, uint32_t a, u
     uint32_t comps = d->path == SCN_PATH_ROTATION ? 4 : 3;
     uint64_t per_key = d->interp == SCN_INTERP_CUBICSPLINE ? 3 : 1;
     snprintf(what, sizeof what, "%s output", swhere);
-    if (d->path == SCN_PATH_ROTATION && gs->output >= 0 && (uint32_t)gs->output < m->accessor_count &&
-        m->accessors[gs->output].normalized && m->accessors[gs->output].component_type != GLS_COMPONENT_FLOAT)
-        return fail(L, ENG_ERR_UNSUPPORTED, "%s: rotation keys as normalized integers are not supported", what);
-    if ((r = read_floats(L, gs->output, what, comps, MAX_KEYS * 3, &d->values, &nout)))
+    /* Rotation keys may be normalized integers (glTF §3.11), other keys only with
+     * KHR_mesh_quantization; both read through convert. */
+    if ((r = read_floats_as(L, gs->output, what, comps, 1, MAX_KEYS * 3, &d->values, &nout)))
         return r;
     if (nout != n * per_key)
         return fail(L, ENG_ERR_INVALID, "%s: %llu values for %llu keys (needs %llu)", what,
@@ -1006,18 +1358,28 @@ static eng_result load_animations(loader *L, const int32_t *remap)
 
 /* ---------------------------------------------------------------- top level */
 
-static eng_result check_extensions(loader *L)
+static int known_extension(const char *e)
 {
     static const char *const known[] = {"KHR_lights_punctual", "KHR_materials_transmission", "KHR_materials_ior",
-                                        "KHR_materials_emissive_strength"};
-    for (uint32_t i = 0; i < L->m->extensions_required_count; i++) {
-        const char *e = L->m->extensions_required[i];
-        int ok = 0;
-        for (size_t k = 0; k < sizeof known / sizeof known[0]; k++)
-            ok |= strcmp(e, known[k]) == 0;
-        if (!ok)
-            return fail(L, ENG_ERR_UNSUPPORTED, "extensionsRequired: %s is not supported", e);
-    }
+                                        "KHR_materials_emissive_strength", "KHR_mesh_quantization",
+                                        "KHR_texture_transform"};
+    for (size_t k = 0; k < sizeof known / sizeof known[0]; k++)
+        if (strcmp(e, known[k]) == 0)
+            return 1;
+    return 0;
+}
+
+/* A required extension the loader lacks is an error naming it; an optional one is ignored
+ * with a warning (glTF §3.12: a client may then render without it). */
+static eng_result check_extensions(loader *L)
+{
+    for (uint32_t i = 0; i < L->m->extensions_required_count; i++)
+        if (!known_extension(L->m->extensions_required[i]))
+            return fail(L, ENG_ERR_UNSUPPORTED, "extensionsRequired: %s is not supported",
+                        L->m->extensions_required[i]);
+    for (uint32_t i = 0; i < L->m->extensions_used_count; i++)
+        if (!known_extension(L->m->extensions_used[i]))
+            scn_warn(L->s, "extensionsUsed: %s is not supported; ignored", L->m->extensions_used[i]);
     return ENG_OK;
 }
 
@@ -1067,7 +1429,8 @@ static eng_result build(loader *L, const char *bytes, size_t len)
 
 /* Parses and validates bytes that came from path (named in messages; external buffers are
  * looked up beside it). Borrows bytes; frees nothing of the caller's. */
-static eng_result load_bytes(const char *path, const char *bytes, size_t len, scn_scene **out, eng_error *err)
+static eng_result load_bytes(const char *path, const char *bytes, size_t len, int scene_index, scn_scene **out,
+                             eng_error *err)
 {
     eng_result r;
     gls_model *m;
@@ -1078,6 +1441,7 @@ static eng_result load_bytes(const char *path, const char *bytes, size_t len, sc
         case GLS_ERR_IO: return eng_fail(err, ENG_ERR_IO, "%s: %s", path, msg);
         case GLS_ERR_SYNTAX: return eng_fail(err, ENG_ERR_PARSE, "%s: %s", path, msg);
         case GLS_ERR_NOMEM: return eng_fail(err, ENG_ERR_NOMEM, "%s: %s", path, msg);
+        case GLS_ERR_UNSUPPORTED: return eng_fail(err, ENG_ERR_UNSUPPORTED, "%s: %s", path, msg);
         default: return eng_fail(err, ENG_ERR_INVALID, "%s: %s", path, msg);
         }
     }
@@ -1088,8 +1452,9 @@ static eng_result load_bytes(const char *path, const char *bytes, size_t len, sc
         return eng_fail(err, ENG_ERR_NOMEM, "%s: out of memory", path);
     }
     snprintf(s->path, sizeof s->path, "%s", path);
-    loader L = {path, m, s, err, 0};
+    loader L = {path, m, s, err, 0, scene_index, NULL};
     r = build(&L, bytes, len);
+    free(L.texture_source);
     gls_free(m);
     if (r) {
         scn_destroy(s);
@@ -1101,13 +1466,18 @@ static eng_result load_bytes(const char *path, const char *bytes, size_t len, sc
 
 eng_result scn_load_gltf(const char *path, scn_scene **out, eng_error *err)
 {
+    return scn_load_gltf_scene(path, -1, out, err);
+}
+
+eng_result scn_load_gltf_scene(const char *path, int scene_index, scn_scene **out, eng_error *err)
+{
     *out = NULL;
     char *bytes;
     size_t len;
     eng_result r = eng_read_file(path, GLTF_MAX_FILE, &bytes, &len, err);
     if (r)
         return r;
-    r = load_bytes(path, bytes, len, out, err);
+    r = load_bytes(path, bytes, len, scene_index, out, err);
     free(bytes);
     return r;
 }
@@ -1126,7 +1496,7 @@ eng_result scn_load_gltf_memory(const char *name, const void *bytes, size_t len,
     if (len)
         memcpy(copy, bytes, len);
     copy[len] = 0;
-    eng_result r = load_bytes(name, copy, len, out, err);
+    eng_result r = load_bytes(name, copy, len, -1, out, err);
     free(copy);
     return r;
 }
@@ -1139,7 +1509,13 @@ void scn_destroy(scn_scene *s)
         free(s->primitives[i].positions);
         free(s->primitives[i].normals);
         free(s->primitives[i].indices);
+        free(s->primitives[i].texcoords[0]);
+        free(s->primitives[i].texcoords[1]);
+        free(s->primitives[i].colors);
     }
+    for (uint32_t i = 0; i < s->texture_count; i++)
+        free(s->textures[i].texels);
+    free(s->textures);
     for (uint32_t a = 0; a < s->animation_count; a++) {
         for (uint32_t c = 0; c < s->animations[a].channel_count; c++)
             free_channel(&s->animations[a].channels[c]);

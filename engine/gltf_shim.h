@@ -40,7 +40,8 @@ typedef enum gls_status {
     GLS_ERR_IO,     /* an external buffer is missing or unreadable */
     GLS_ERR_SYNTAX, /* not JSON, not a GLB container, or no glTF asset object */
     GLS_ERR_GLTF,   /* JSON, but tinygltf rejected the glTF structure */
-    GLS_ERR_NOMEM
+    GLS_ERR_NOMEM,
+    GLS_ERR_UNSUPPORTED /* valid glTF the tool cannot read (Draco) */
 } gls_status;
 
 /* A number from an extension object, where tinygltf keeps untyped JSON values. */
@@ -75,6 +76,11 @@ typedef struct gls_accessor {
     uint64_t count;
     int normalized;
     int sparse;
+    /* sparse: sparse_count substitutions; indices (sparse_index_type) and values (the
+     * accessor's type and componentType, tightly packed) each in a buffer view at an offset. */
+    uint64_t sparse_count;
+    int sparse_index_view, sparse_index_type, sparse_value_view;
+    uint64_t sparse_index_offset, sparse_value_offset;
 } gls_accessor;
 
 typedef struct gls_attribute {
@@ -124,8 +130,35 @@ typedef struct gls_light {
     gls_number radius, angular_radius;
 } gls_light;
 
+/* A material's reference to a texture (glTF textureInfo) with its KHR_texture_transform. */
+typedef struct gls_texinfo {
+    int index;    /* -1: none */
+    int texcoord; /* TEXCOORD_n; KHR_texture_transform's texCoord overrides it when present */
+    int has_transform;
+    gls_doubles offset, scale; /* transform: [0,0] and [1,1] where absent (len 0) */
+    gls_number rotation;
+    gls_number transform_texcoord;
+} gls_texinfo;
+
+typedef struct gls_image {
+    int width, height, bits; /* bits 8 or 16 per component; 0 x 0: not decoded */
+    const unsigned char *rgba; /* width*height*4 components, top row first */
+} gls_image;
+
+typedef struct gls_texture {
+    int source, sampler; /* -1: absent */
+} gls_texture;
+
+typedef struct gls_tex_sampler {
+    int mag_filter, min_filter, wrap_s, wrap_t; /* glTF/GL enums; -1 filter: absent */
+} gls_tex_sampler;
+
 typedef struct gls_material {
     const char *name;
+    gls_texinfo base_color_texture, metallic_roughness_texture, normal_texture, occlusion_texture,
+        emissive_texture;
+    const char *alpha_mode; /* "OPAQUE", "MASK", "BLEND" */
+    double alpha_cutoff;
     gls_doubles base_color; /* tinygltf default [1,1,1,1] */
     double metallic, roughness;
     gls_doubles emissive;   /* tinygltf default [0,0,0] */
@@ -169,17 +202,22 @@ typedef struct gls_model {
     uint32_t camera_count;      const gls_camera *cameras;
     uint32_t light_count;       const gls_light *lights;
     uint32_t material_count;    const gls_material *materials;
+    uint32_t image_count;       const gls_image *images;
+    uint32_t texture_count;     const gls_texture *textures;
+    uint32_t tex_sampler_count; const gls_tex_sampler *tex_samplers;
     uint32_t animation_count;   const gls_animation *animations;
     uint32_t scene_count;       const gls_scene *scenes;
     int default_scene; /* -1: the file names none */
     uint32_t extensions_required_count;
     const char *const *extensions_required;
+    uint32_t extensions_used_count;
+    const char *const *extensions_used;
     struct gls_impl *impl;
 } gls_model;
 
 /* Parses a glTF from memory: .glb when bytes start with the GLB magic, JSON otherwise.
  * path is the file the bytes came from; external buffers are looked up in its folder only.
- * Images are never decoded. On failure *out is NULL and msg holds tinygltf's one-line
+ * Images are decoded to RGBA (8 or 16 bits) by tinygltf's stb_image loader. On failure *out is NULL and msg holds tinygltf's one-line
  * complaint. Never throws. */
 gls_status gls_load(const char *path, const void *bytes, size_t len, gls_model **out,
                     char *msg, size_t msg_size);

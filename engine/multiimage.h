@@ -21,6 +21,7 @@ typedef struct mi_map {
     float *normal;    /* 3 per texel, unit shading normal (not oriented) */
     int32_t *draw;    /* the draw hit, −1 = nothing in that direction */
     int32_t *material;/* its material index (−1 = default material) */
+    float *tex;       /* 6 per texel: the hit's base_tex[4], roughness_tex, metallic_tex (rt_hit) */
 } mi_map;
 
 /* Direction (not unit) through the centre of texel `texel` of a cube of `size`. */

@@ -78,6 +78,7 @@ const glu_target *pass_gbuffer_run(pass_gbuffer *p, const eng_frame_scene *fs)
         glUniform4f(p->u_material, m.roughness, m.metallic, m.transmission, m.ior);
         glUniform1f(p->u_material_id, (float)d->material);
         glUniform1i(p->u_double_sided, m.double_sided ? 1 : 0);
+        eng_bind_material(p->program, fs, d, &m);
         /* glTF: single-sided materials are culled from behind. */
         if (m.double_sided)
             glDisable(GL_CULL_FACE);

@@ -84,6 +84,7 @@ static void draw_scene(const pass_lightmaps *p, const eng_frame_scene *fs)
         glUniformMatrix3fv(u_nm, 1, GL_FALSE, nm);
         glUniform4fv(u_base, 1, m.base_color);
         glUniform4f(u_mat, m.roughness, m.metallic, m.transmission, m.ior);
+        eng_bind_material(p->gprog, fs, d, &m);
         const eng_gpu_prim *g = &fs->gpu[d->primitive];
         glBindVertexArray(g->vao);
         glDrawElements(GL_TRIANGLES, g->index_count, GL_UNSIGNED_INT, NULL);

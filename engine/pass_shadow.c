@@ -145,6 +145,9 @@ const shadow_map *pass_shadow_run(pass_shadow *p, const eng_frame_scene *fs, uin
         for (uint32_t i = 0; i < fs->draw_count; i++) {
             const eng_draw *d = &fs->draws[i];
             glUniformMatrix4fv(p->u_world, 1, GL_FALSE, d->world);
+            scn_material m = eng_material_of(fs->scene, d->material);
+            glUniform4fv(glGetUniformLocation(p->program, "u_base_color"), 1, m.base_color);
+            eng_bind_material(p->program, fs, d, &m);
             const eng_gpu_prim *g = &fs->gpu[d->primitive];
             glBindVertexArray(g->vao);
             glDrawElements(GL_TRIANGLES, g->index_count, GL_UNSIGNED_INT, NULL);

@@ -114,7 +114,7 @@ static void trace_path(const pt_tracer *tr, const scn_scene *scene, const eng_ra
         float n[3];
         float cg = dot3(h.geom_normal, wi), cs = dot3(h.normal, wi);
         memcpy(n, ((cg >= 0.0f) == (cs >= 0.0f)) ? h.normal : h.geom_normal, sizeof n);
-        scn_material m = eng_material_of(scene, h.material);
+        scn_material m = eng_material_at(scene, &h);
         if (bsdf_stores_photons(&m)) {
             eng_photon *ph = pt_push(buf);
             if (!ph) {

@@ -640,7 +640,7 @@ static int trace_photon(const frame_ctx *c, uint32_t g, uint32_t pass, photon_bu
         const float wi[3] = {-dir[0], -dir[1], -dir[2]};
         float n[3];
         scatter_normal(&h, wi, n);
-        scn_material m = eng_material_of(fs->scene, h.material);
+        scn_material m = eng_material_at(fs->scene, &h);
         if (k >= 1 && bsdf_stores_photons(&m)) {
             ref_photon ph;
             float side = dot3(n, wi) >= 0.0f ? 1.0f : -1.0f;
@@ -847,7 +847,7 @@ static void light_vertex(const frame_ctx *c, uint64_t key, uint32_t dim0, const 
     rt_hit h;
     if (!rt_intersect(c->rt, org, dir, 0.0f, INFINITY, &h))
         return;
-    scn_material m2 = eng_material_of(c->fs->scene, h.material);
+    scn_material m2 = eng_material_at(c->fs->scene, &h);
     if (!bsdf_stores_photons(&m2))
         return; /* a specular first surface: a caustic path, estimator 2's */
     const float *x2 = h.position, *ng2 = h.geom_normal;
@@ -946,7 +946,7 @@ static void trace_eye(const frame_ctx *c, int x, int y, uint32_t sample, double 
             for (int skip = 0; skip < REF_PRIMARY_SKIPS; skip++) {
                 if (!rt_intersect(c->rt, org, dir, tnear, tfar, &h))
                     break;
-                m = eng_material_of(scene, h.material);
+                m = eng_material_at(scene, &h);
                 if (m.double_sided || dot3(h.normal, dir) < 0.0f) {
                     hit = 1;
                     break;
@@ -970,7 +970,7 @@ static void trace_eye(const frame_ctx *c, int x, int y, uint32_t sample, double 
              * counted its light). */
             if (!rt_intersect(c->rt, org, dir, 0.0f, INFINITY, &h))
                 return;
-            m = eng_material_of(scene, h.material);
+            m = eng_material_at(scene, &h);
         }
         const float wi[3] = {-dir[0], -dir[1], -dir[2]};
         if (seen)

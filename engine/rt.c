@@ -27,6 +27,7 @@
 
 typedef struct rt_geom {
     RTCGeometry geom;
+    const scn_scene *scene;
     uint32_t primitive;
     int32_t material;
     float *normals; /* world space, 3 per vertex, unit (zero where the authored normal is) */
@@ -64,6 +65,41 @@ eng_result rt_create(const scn_scene *scene, int threads, eng_rt **out, eng_erro
     rtcSetSceneBuildQuality(rt->rtscene, RTC_BUILD_QUALITY_MEDIUM);
     *out = rt;
     return ENG_OK;
+}
+
+/* alphaMode MASK (glTF §3.9.4) for rays: a hit where the base colour's alpha (factor times
+ * texture and COLOR_0, scn_base_color_at, the value the G-buffers cut at) is below the
+ * cutoff is not a hit. Installed as intersection and occlusion filter on MASK geometry. */
+/* RTCHitN's SOA fields (Ng_x, Ng_y, Ng_z, u, v, primID, ...; rtcore_ray.h's accessors are
+ * C++ only). */
+static float hitn_float(const struct RTCHitN *h, unsigned n, unsigned field, unsigned i)
+{
+    float f;
+    memcpy(&f, (const char *)h + ((size_t)field * n + i) * 4, 4);
+    return f;
+}
+
+static unsigned hitn_uint(const struct RTCHitN *h, unsigned n, unsigned field, unsigned i)
+{
+    unsigned u;
+    memcpy(&u, (const char *)h + ((size_t)field * n + i) * 4, 4);
+    return u;
+}
+
+static void mask_filter(const struct RTCFilterFunctionNArguments *args)
+{
+    const rt_geom *g = args->geometryUserPtr;
+    const scn_material *m = &g->scene->materials[g->material];
+    const scn_primitive *p = &g->scene->primitives[g->primitive];
+    for (unsigned i = 0; i < args->N; i++) {
+        if (args->valid[i] != -1)
+            continue;
+        float c[4];
+        scn_base_color_at(g->scene, m, p, hitn_uint(args->hit, args->N, 5, i), hitn_float(args->hit, args->N, 3, i),
+                          hitn_float(args->hit, args->N, 4, i), c);
+        if (m->base_color[3] * c[3] < m->alpha_cutoff)
+            args->valid[i] = 0;
+    }
 }
 
 static int same_matrix(const float a[16], const float b[16])
@@ -130,6 +166,13 @@ void rt_update(eng_rt *rt, const eng_frame_scene *fs)
                                                     3 * sizeof(unsigned), p->index_count / 3);
             memcpy(idx, p->indices, p->index_count * sizeof(unsigned));
             rtcSetGeometryBuildQuality(g->geom, RTC_BUILD_QUALITY_REFIT);
+            g->scene = rt->scene;
+            if (g->material >= 0 && (uint32_t)g->material < rt->scene->material_count &&
+                rt->scene->materials[g->material].alpha_mode == SCN_ALPHA_MASK) {
+                rtcSetGeometryUserData(g->geom, g);
+                rtcSetGeometryIntersectFilterFunction(g->geom, mask_filter);
+                rtcSetGeometryOccludedFilterFunction(g->geom, mask_filter);
+            }
             pose(g, p, fs->draws[i].world);
             rtcAttachGeometryByID(rt->rtscene, g->geom, i);
         }
@@ -252,6 +295,20 @@ int rt_intersect(const eng_rt *rt, const float org[3], const float dir[3], float
     memcpy(hit->normal, ns, sizeof ns);
     hit->material = g->material;
     hit->draw = rh.hit.geomID;
+    hit->base_tex[0] = hit->base_tex[1] = hit->base_tex[2] = hit->base_tex[3] = 1.0f;
+    if (g->material >= 0 && (uint32_t)g->material < rt->scene->material_count)
+        scn_base_color_at(rt->scene, &rt->scene->materials[g->material], p, rh.hit.primID, u, v, hit->base_tex);
+    else if (p->colors)
+        scn_base_color_at(rt->scene, &(scn_material){.base_color_tex = {.texture = -1}}, p, rh.hit.primID, u, v,
+                          hit->base_tex);
+    hit->roughness_tex = hit->metallic_tex = 1.0f;
+    float mr[4];
+    if (g->material >= 0 && (uint32_t)g->material < rt->scene->material_count &&
+        scn_texref_at(rt->scene, &rt->scene->materials[g->material].metallic_roughness_tex, p, rh.hit.primID, u, v,
+                      mr)) {
+        hit->roughness_tex = mr[1];
+        hit->metallic_tex = mr[2];
+    }
     return 1;
 }
 

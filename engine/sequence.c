@@ -17,6 +17,10 @@
  *   settings    optional; shadow_map_size 16..8192, pcf_radius 1..8, shadow_bias > 0,
  *               exposure (stops, finite), threads 1..64; absent ones get eng_settings_defaults
  *   capture     optional; 1..SEQ_MAX_CAPTURE fnmatch globs of buffer names; absent means all
+ *   scene_index optional; which of the glTF's scenes is played (default: its default scene)
+ *   animations  optional; [name or index, ...] of the glTF animations played (default: all)
+ *   lights      optional; up to SEQ_MAX_LIGHTS lights added to the scene's own (parse_lights)
+ * camera.node may also be a glTF node index (an unnamed camera node).
  * Every key is checked: an unknown or duplicated key, a wrong type or a value out of range is
  * ENG_ERR_INVALID naming the key and the value, so a typo never falls back to a default. Zero
  * is refused for settings whose struct encoding reads 0 as "default" (shadow_bias), since
@@ -428,6 +432,9 @@ static eng_result parse_camera(parser *P, const cJSON *cam, seq_sequence *out)
     if (node) {
         if ((r = check_keys(P, cam, "camera (with \"node\")", node_keys)))
             return r;
+        out->camera_by_index = cJSON_IsNumber(node);
+        if (out->camera_by_index) /* a glTF node index: unnamed camera nodes can be chosen too */
+            return get_int(P, node, "camera.node", 0, 0x7fffffff, &out->camera_node_index);
         return get_string(P, node, "camera.node", out->camera_node, sizeof out->camera_node);
     }
     if ((r = check_keys(P, cam, "camera (with \"keys\")", look_keys)) || (r = parse_camera_keys(P, keys, out)))
@@ -484,6 +491,124 @@ static eng_result parse_camera(parser *P, const cJSON *cam, seq_sequence *out)
     return ENG_OK;
 }
 
+/* "lights": [{"type", "position", "direction", "color", "intensity", "range",
+ * "inner_cone_deg", "outer_cone_deg", "name"}], the glTF KHR_lights_punctual fields with the
+ * same defaults and limits (color (1,1,1), intensity 1, range 0 = infinite, cones 0° and 45°,
+ * 0 <= inner < outer <= 90°); spot and directional lights need a direction. */
+static eng_result parse_lights(parser *P, const cJSON *arr, seq_sequence *out)
+{
+    static const char *const keys[] = {"type", "position", "direction", "color", "intensity", "range",
+                                       "inner_cone_deg", "outer_cone_deg", "name", NULL};
+    char v[80], w[48], f[96];
+    eng_result r;
+    int n = cJSON_IsArray(arr) ? cJSON_GetArraySize(arr) : -1;
+    if (n < 1 || n > SEQ_MAX_LIGHTS)
+        return bad(P, "lights: expected an array of 1..%d lights, got %s", SEQ_MAX_LIGHTS, show(arr, v, sizeof v));
+    int i = 0;
+    for (const cJSON *o = arr->child; o; o = o->next, i++) {
+        seq_light *d = &out->lights[i];
+        scn_light *l = &d->light;
+        snprintf(w, sizeof w, "lights[%d]", i);
+        if (!cJSON_IsObject(o))
+            return bad(P, "%s: expected an object, got %s", w, show(o, v, sizeof v));
+        if ((r = check_keys(P, o, w, keys)))
+            return r;
+        const cJSON *it = cJSON_GetObjectItemCaseSensitive(o, "type");
+        if (!it)
+            return bad(P, "%s: missing required key \"type\"", w);
+        if (cJSON_IsString(it) && !strcmp(it->valuestring, "point"))
+            l->type = SCN_LIGHT_POINT;
+        else if (cJSON_IsString(it) && !strcmp(it->valuestring, "spot"))
+            l->type = SCN_LIGHT_SPOT;
+        else if (cJSON_IsString(it) && !strcmp(it->valuestring, "directional"))
+            l->type = SCN_LIGHT_DIRECTIONAL;
+        else
+            return bad(P, "%s.type: %s is not one of \"point\", \"spot\", \"directional\"", w, show(it, v, sizeof v));
+        snprintf(l->name, sizeof l->name, "sequence-light%d", i);
+        if ((it = cJSON_GetObjectItemCaseSensitive(o, "name"))) {
+            snprintf(f, sizeof f, "%s.name", w);
+            if ((r = get_string(P, it, f, l->name, sizeof l->name)))
+                return r;
+        }
+        l->color[0] = l->color[1] = l->color[2] = 1.0f;
+        l->intensity = 1.0f;
+        l->outer_cone = (float)(PI / 4.0);
+        d->direction[2] = -1.0f;
+        if ((it = cJSON_GetObjectItemCaseSensitive(o, "position"))) {
+            snprintf(f, sizeof f, "%s.position", w);
+            if ((r = get_vec3(P, it, f, d->position)))
+                return r;
+        }
+        it = cJSON_GetObjectItemCaseSensitive(o, "direction");
+        if (!it && l->type != SCN_LIGHT_POINT)
+            return bad(P, "%s: a %s light needs \"direction\"", w, l->type == SCN_LIGHT_SPOT ? "spot" : "directional");
+        if (it) {
+            snprintf(f, sizeof f, "%s.direction", w);
+            if ((r = get_vec3(P, it, f, d->direction)))
+                return r;
+            double len = sqrt((double)d->direction[0] * d->direction[0] + (double)d->direction[1] * d->direction[1] +
+                              (double)d->direction[2] * d->direction[2]);
+            if (!(len > 1e-20) || !isfinite(len))
+                return bad(P, "%s: is the zero vector", f);
+            for (int c = 0; c < 3; c++)
+                d->direction[c] = (float)(d->direction[c] / len);
+        }
+        if ((it = cJSON_GetObjectItemCaseSensitive(o, "color"))) {
+            snprintf(f, sizeof f, "%s.color", w);
+            if ((r = get_vec3(P, it, f, l->color)))
+                return r;
+            if (l->color[0] < 0.0f || l->color[1] < 0.0f || l->color[2] < 0.0f)
+                return bad(P, "%s: %s has a negative component", f, show(it, v, sizeof v));
+        }
+        static const char *const scalars[] = {"intensity", "range", "inner_cone_deg", "outer_cone_deg"};
+        double val[4] = {1.0, 0.0, 0.0, 45.0};
+        for (int k = 0; k < 4; k++) {
+            if (!(it = cJSON_GetObjectItemCaseSensitive(o, scalars[k])))
+                continue;
+            snprintf(f, sizeof f, "%s.%s", w, scalars[k]);
+            if ((r = get_number(P, it, f, &val[k])))
+                return r;
+            if (val[k] < 0.0 || val[k] > 3.0e38)
+                return bad(P, "%s: %s is negative or too large", f, show(it, v, sizeof v));
+        }
+        if (l->type == SCN_LIGHT_SPOT && !(val[2] < val[3] && val[3] <= 90.0))
+            return bad(P, "%s: cone angles inner %g°, outer %g° violate 0 <= inner < outer <= 90", w, val[2], val[3]);
+        l->intensity = (float)val[0];
+        l->range = (float)val[1];
+        if (l->type == SCN_LIGHT_SPOT) {
+            l->inner_cone = (float)(val[2] * PI / 180.0);
+            l->outer_cone = (float)(val[3] * PI / 180.0);
+        }
+    }
+    out->light_count = n;
+    return ENG_OK;
+}
+
+/* "animations": [name or index, ...]: the glTF animations played (absent: all of them). */
+static eng_result parse_animations(parser *P, const cJSON *arr, seq_sequence *out)
+{
+    char v[80], w[48];
+    eng_result r;
+    int n = cJSON_IsArray(arr) ? cJSON_GetArraySize(arr) : -1;
+    if (n < 0 || n > SEQ_MAX_ANIMATIONS)
+        return bad(P, "animations: expected an array of 0..%d animation names or indices, got %s",
+                   SEQ_MAX_ANIMATIONS, show(arr, v, sizeof v));
+    int i = 0;
+    for (const cJSON *e = arr->child; e; e = e->next, i++) {
+        snprintf(w, sizeof w, "animations[%d]", i);
+        out->animations[i].index = -1;
+        if (cJSON_IsNumber(e))
+            r = get_int(P, e, w, 0, 0x7fffffff, &out->animations[i].index);
+        else
+            r = get_string(P, e, w, out->animations[i].name, sizeof out->animations[i].name);
+        if (r)
+            return r;
+    }
+    out->animation_count = n;
+    out->has_animations = 1;
+    return ENG_OK;
+}
+
 static int valid_name(const char *s)
 {
     if (s[0] == '.')
@@ -512,7 +637,7 @@ static void default_name(const char *path, char out[SCN_NAME_MAX])
 static eng_result parse_root(parser *P, const cJSON *root, seq_sequence *out)
 {
     static const char *const keys[] = {"name", "scene", "frames", "fps", "resolution", "camera", "settings",
-                                       "capture", "still", NULL};
+                                       "capture", "still", "scene_index", "animations", "lights", NULL};
     static const char *const required[] = {"scene", "frames", "fps", "resolution", "camera"};
     char v[80];
     eng_result r;
@@ -568,6 +693,16 @@ static eng_result parse_root(parser *P, const cJSON *root, seq_sequence *out)
         return r;
 
     if ((r = parse_camera(P, cJSON_GetObjectItemCaseSensitive(root, "camera"), out)))
+        return r;
+
+    if ((it = cJSON_GetObjectItemCaseSensitive(root, "scene_index"))) {
+        if ((r = get_int(P, it, "scene_index", 0, 0x7fffffff, &out->scene_index)))
+            return r;
+        out->has_scene_index = 1;
+    }
+    if ((it = cJSON_GetObjectItemCaseSensitive(root, "animations")) && (r = parse_animations(P, it, out)))
+        return r;
+    if ((it = cJSON_GetObjectItemCaseSensitive(root, "lights")) && (r = parse_lights(P, it, out)))
         return r;
 
     if ((it = cJSON_GetObjectItemCaseSensitive(root, "settings")) && (r = parse_settings(P, it, &out->settings)))

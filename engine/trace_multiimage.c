@@ -414,8 +414,9 @@ static eng_result mi_create(const eng_settings *s, void **state, eng_error *err)
         m->normal = malloc(texels * 3 * sizeof(float));
         m->draw = malloc(texels * sizeof(int32_t));
         m->material = malloc(texels * sizeof(int32_t));
+        m->tex = malloc(texels * 6 * sizeof(float));
         st->material6[k] = malloc(texels * 6 * sizeof(float));
-        if (!m->position || !m->normal || !m->draw || !m->material || !st->material6[k]) {
+        if (!m->position || !m->normal || !m->draw || !m->material || !m->tex || !st->material6[k]) {
             *state = st;
             return eng_fail(err, ENG_ERR_NOMEM, "multi-image trace: out of memory for %d maps of %d²×6 texels",
                             st->maps, st->size);
@@ -556,6 +557,8 @@ static void render_map(mi_state *st, int k, const eng_rt *rt, const eng_frame_sc
             memset(m->normal + 3 * i, 0, 3 * sizeof(float));
             m->draw[i] = -1;
             m->material[i] = -1;
+            for (int c = 0; c < 6; c++)
+                m->tex[6 * i + c] = 1.0f;
             for (int c = 0; c < 4; c++)
                 mo[c] = 0.0f;
             mo[4] = mo[5] = -1.0f;
@@ -565,6 +568,12 @@ static void render_map(mi_state *st, int k, const eng_rt *rt, const eng_frame_sc
         memcpy(m->normal + 3 * i, h.normal, 3 * sizeof(float));
         m->draw[i] = (int32_t)h.draw;
         m->material[i] = h.material;
+        /* The texel's texture factors (texture and COLOR_0 at the cast ray's hit): a map
+         * stores the material as the surface shows it there, as a G-buffer would. */
+        float *tx = m->tex + 6 * i;
+        memcpy(tx, h.base_tex, 4 * sizeof(float));
+        tx[4] = h.roughness_tex;
+        tx[5] = h.metallic_tex;
         scn_material mt = eng_material_of(fs->scene, h.material);
         mo[0] = mt.roughness;
         mo[1] = mt.metallic;
@@ -617,6 +626,9 @@ static int mi_intersect(const void *state, const float org[3], const float dir[3
         memcpy(hit->geom_normal, m->normal + 3 * t, sizeof hit->geom_normal);
         hit->material = m->material[t];
         hit->draw = (uint32_t)m->draw[t];
+        memcpy(hit->base_tex, m->tex + 6 * t, 4 * sizeof(float));
+        hit->roughness_tex = m->tex[6 * t + 4];
+        hit->metallic_tex = m->tex[6 * t + 5];
         counts->resolved++;
         if (ehit && eh.draw == hit->draw) {
             float q[3] = {eh.position[0] - hit->position[0], eh.position[1] - hit->position[1],
@@ -712,6 +724,7 @@ static void mi_destroy(void *state)
         free(st->map[k].normal);
         free(st->map[k].draw);
         free(st->map[k].material);
+        free(st->map[k].tex);
         free(st->material6[k]);
     }
     free(st->worlds);

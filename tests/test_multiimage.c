@@ -114,6 +114,7 @@ static void synthetic_map(mi_map *m, int size, int occluder)
     m->normal = malloc(n * 3 * sizeof(float));
     m->draw = malloc(n * sizeof(int32_t));
     m->material = malloc(n * sizeof(int32_t));
+    m->tex = NULL; /* texture factors: only the tracer reads them, not the intersection */
     for (size_t t = 0; t < n; t++) {
         int face = (int)(t / ((size_t)size * size));
         float d[3], axis[3];

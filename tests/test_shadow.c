@@ -147,7 +147,7 @@ START_TEST(lamp_hits)
     /* A wall (two triangles) at x = 1 and a 0.5 m lamp at the origin. */
     float pos[12] = {1, -5, -5, 1, 5, -5, 1, 5, 5, 1, -5, 5}, nrm[12] = {-1, 0, 0, -1, 0, 0, -1, 0, 0, -1, 0, 0};
     uint32_t idx[6] = {0, 1, 2, 0, 2, 3};
-    scn_primitive prim = {4, pos, nrm, 6, idx, -1};
+    scn_primitive prim = {.vertex_count = 4, .positions = pos, .normals = nrm, .index_count = 6, .indices = idx, .material = -1};
     scn_scene scene;
     memset(&scene, 0, sizeof scene);
     scene.primitive_count = 1;

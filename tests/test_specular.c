@@ -136,7 +136,8 @@ static void two_planes_init(two_planes *t, scn_material floor, scn_material ceil
         }
         const uint32_t q[6] = {0, 1, 2, 0, 2, 3};
         memcpy(t->idx[p], q, sizeof q);
-        t->prim[p] = (scn_primitive){4, t->pos[p], t->nrm[p], 6, t->idx[p], p};
+        t->prim[p] = (scn_primitive){.vertex_count = 4, .positions = t->pos[p], .normals = t->nrm[p], .index_count = 6,
+                                     .indices = t->idx[p], .material = p};
         t->draws[p].primitive = (uint32_t)p;
         t->draws[p].material = p;
         const float id[16] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};

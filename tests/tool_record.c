@@ -24,7 +24,7 @@ int main(int argc, char **argv)
     int rc = 0;
     if (!seq)
         return 1;
-    if (seq_load(argv[1], seq, &err) != ENG_OK || scn_load_gltf(seq->scene_path, &scene, &err) != ENG_OK) {
+    if (seq_load(argv[1], seq, &err) != ENG_OK || seq_load_scene(seq, &scene, &err) != ENG_OK) {
         fprintf(stderr, "ispm_test_record: %s\n", err.msg);
         free(seq);
         return 2;

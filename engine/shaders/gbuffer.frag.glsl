@@ -4,7 +4,7 @@
 //   1 world normal, unit; flipped toward the viewer for double-sided materials; w = the
 //     surface point's eye depth in the previous frame (not captured; the temporal filter's
 //     disocclusion test, 002_… Eq. 7.1 against the previous depth)
-//   2 albedo (baseColorFactor, linear)
+//   2 albedo (baseColorFactor times texture and COLOR_0, linear; base_color.glsl)
 //   3 roughness, metallic, transmission, ior
 //   4 eye depth (metres along the view axis), material id, motion x, motion y
 // Motion is in pixels from this pixel to where the same surface point was in the previous
@@ -15,6 +15,10 @@ in vec4 v_clip;
 in vec4 v_prev_clip;
 in float v_eye_depth;
 in float v_prev_eye_depth;
+in vec2 v_uv0;
+in vec2 v_uv1;
+in vec4 v_color;
+#pragma ispm_include "base_color.glsl"
 
 uniform vec3 u_eye;
 uniform vec4 u_base_color;
@@ -39,7 +43,8 @@ void main()
     vec2 motion = (prev_ndc - ndc) * 0.5 * u_viewport * vec2(1.0, -1.0);
     o_position = vec4(v_position, 1.0);
     o_normal = vec4(n, v_prev_eye_depth);
-    o_albedo = vec4(u_base_color.rgb, u_base_color.a);
-    o_material = u_material;
+    vec4 albedo = base_color(u_base_color);
+    o_albedo = vec4(albedo.rgb, albedo.a);
+    o_material = material_params(u_material);
     o_misc = vec4(v_eye_depth, u_material_id, motion);
 }

@@ -5,6 +5,10 @@
 // metallic, transmission, ior.
 in vec3 v_position;
 in vec3 v_normal;
+in vec2 v_uv0;
+in vec2 v_uv1;
+in vec4 v_color;
+#pragma ispm_include "base_color.glsl"
 
 uniform vec4 u_base_color;
 uniform vec4 u_material;
@@ -18,6 +22,6 @@ void main()
 {
     o_position = vec4(v_position, 1.0);
     o_normal = vec4(normalize(v_normal), 0.0);
-    o_albedo = vec4(u_base_color.rgb, 1.0);
-    o_material = u_material;
+    o_albedo = vec4(base_color(u_base_color).rgb, 1.0);
+    o_material = material_params(u_material);
 }

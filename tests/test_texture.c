@@ -1,0 +1,299 @@
+/* test_texture.c — Check suite for base colour textures (issue 17): the loader's decoding
+ * (sRGB, samplers), scn_base_color_at on the CPU, the eye G-buffer's albedo of a textured
+ * checkerboard (exact texel values, in the right place), and a texture seen only through
+ * photons, whose colour must bleed onto a white floor. Every glTF is written by the test. */
+#define _POSIX_C_SOURCE 200809L
+#include "eng.h"
+
+#include <check.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+
+#define WORK ISPM_BINARY_DIR "/test_texture.work"
+
+/* 2x2 RGBA PNGs: a checker (top row red, green; bottom row blue, grey 128) and plain red. */
+#define CHECKER_PNG "data:image/png;base64,iVBORw0KGgoAAAANSUhEUgAAAAIAAAACCAYAAABytg0kAAAAFUlEQVR4nGP4z8DwHwyB9P+Ghob/AEVRCHp8uJy8AAAAAElFTkSuQmCC"
+#define RED_PNG "data:image/png;base64,iVBORw0KGgoAAAANSUhEUgAAAAIAAAACCAYAAABytg0kAAAAEUlEQVR4nGP4z8DwH4QZYAwAR8oH+WdZbrcAAAAASUVORK5CYII="
+/* Opaque white top row, transparent white bottom row. */
+#define MASK_PNG "data:image/png;base64,iVBORw0KGgoAAAANSUhEUgAAAAIAAAACCAYAAABytg0kAAAADklEQVR4nGP4DwUMMAwAiYgN82n6rJMAAAAASUVORK5CYII="
+/* A 2 m quad at y = 0 facing up: positions (-1,0,-1) (1,0,-1) (1,0,1) (-1,0,1), normals up,
+ * TEXCOORD_0 (0,0) (1,0) (1,1) (0,1), indices 0 2 1 0 3 2: 140 bytes. */
+#define QUAD_BIN "data:application/octet-stream;base64,AACAvwAAAAAAAIC/AACAPwAAAAAAAIC/AACAPwAAAAAAAIA/AACAvwAAAAAAAIA/AAAAAAAAgD8AAAAAAAAAAAAAgD8AAAAAAAAAAAAAgD8AAAAAAAAAAAAAgD8AAAAAAAAAAAAAAAAAAIA/AAAAAAAAgD8AAIA/AAAAAAAAgD8AAAIAAQAAAAMAAgA="
+
+static const char *const QUAD_PARTS =
+    "\"meshes\":[{\"primitives\":[{\"attributes\":{\"POSITION\":0,\"NORMAL\":1,\"TEXCOORD_0\":2},\"indices\":3,"
+    "\"material\":0}]},{\"primitives\":[{\"attributes\":{\"POSITION\":0,\"NORMAL\":1,\"TEXCOORD_0\":2},"
+    "\"indices\":3,\"material\":1}]}],"
+    "\"accessors\":[{\"bufferView\":0,\"componentType\":5126,\"count\":4,\"type\":\"VEC3\"},"
+    "{\"bufferView\":1,\"componentType\":5126,\"count\":4,\"type\":\"VEC3\"},"
+    "{\"bufferView\":2,\"componentType\":5126,\"count\":4,\"type\":\"VEC2\"},"
+    "{\"bufferView\":3,\"componentType\":5123,\"count\":6,\"type\":\"SCALAR\"}],"
+    "\"bufferViews\":[{\"buffer\":0,\"byteLength\":48},{\"buffer\":0,\"byteOffset\":48,\"byteLength\":48},"
+    "{\"buffer\":0,\"byteOffset\":96,\"byteLength\":32},{\"buffer\":0,\"byteOffset\":128,\"byteLength\":12}],"
+    "\"buffers\":[{\"byteLength\":140,\"uri\":\"" QUAD_BIN "\"}],"
+    "\"samplers\":[{\"magFilter\":9728,\"minFilter\":9728,\"wrapS\":33071,\"wrapT\":33071}],"
+    "\"textures\":[{\"source\":0,\"sampler\":0}],";
+
+/* The checkerboard floor alone (material 0 textured: base colour, and the same image as its
+ * metallicRoughness texture, metallicFactor 0.5; material 1 white, unused). */
+static void write_checker(const char *path)
+{
+    FILE *f = fopen(path, "w");
+    ck_assert_ptr_nonnull(f);
+    fprintf(f,
+            "{\"asset\":{\"version\":\"2.0\"},\"scenes\":[{\"nodes\":[0]}],\"nodes\":[{\"mesh\":0}],%s"
+            "\"images\":[{\"uri\":\"%s\"}],"
+            "\"materials\":[{\"pbrMetallicRoughness\":{\"baseColorTexture\":{\"index\":0},"
+            "\"metallicRoughnessTexture\":{\"index\":0},\"metallicFactor\":0.5}},"
+            "{\"pbrMetallicRoughness\":{\"metallicFactor\":0}}]}",
+            QUAD_PARTS, CHECKER_PNG);
+    ck_assert_int_eq(fclose(f), 0);
+}
+
+static float srgb(int c)
+{
+    float x = (float)c / 255.0f;
+    return x <= 0.04045f ? x / 12.92f : powf((x + 0.055f) / 1.055f, 2.4f);
+}
+
+/* The checker's texels, linear, in image order (top-left, top-right, bottom-left, bottom-right). */
+static void checker_texels(float want[4][4])
+{
+    const int c[4][3] = {{255, 0, 0}, {0, 255, 0}, {0, 0, 255}, {128, 128, 128}};
+    for (int i = 0; i < 4; i++) {
+        for (int k = 0; k < 3; k++)
+            want[i][k] = srgb(c[i][k]);
+        want[i][3] = 1.0f;
+    }
+}
+
+START_TEST(decode_and_sample_cpu)
+{
+    mkdir(WORK, 0777);
+    write_checker(WORK "/checker.gltf");
+    scn_scene *s = NULL;
+    eng_error err;
+    ck_assert_msg(scn_load_gltf(WORK "/checker.gltf", &s, &err) == ENG_OK, "%s", err.msg);
+    ck_assert_uint_eq(s->texture_count, 2); /* the image decoded as sRGB and as linear */
+    ck_assert(!s->textures[1].srgb);
+    ck_assert_float_eq(s->textures[1].texels[4 * 3], 128.0f / 255.0f);
+    const scn_texture *t = &s->textures[0];
+    ck_assert_uint_eq(t->width, 2);
+    ck_assert(t->srgb && !t->mag_linear && t->wrap_s == SCN_WRAP_CLAMP);
+    float want[4][4];
+    checker_texels(want);
+    for (int i = 0; i < 4; i++)
+        for (int k = 0; k < 4; k++)
+            ck_assert_float_eq(t->texels[i * 4 + k], want[i][k]);
+    ck_assert_float_eq_tol(want[3][0], 0.2158605f, 1e-6f); /* sRGB 128 */
+    /* Triangle 0 is vertices 0 2 1: 0.2·v0 + 0.1·v2 + 0.7·v1 has uv (0.8, 0.1), the top-right texel. */
+    float out[4];
+    const scn_material *m = &s->materials[0];
+    scn_base_color_at(s, m, &s->primitives[0], 0, 0.1f, 0.7f, out);
+    for (int k = 0; k < 4; k++)
+        ck_assert_float_eq(out[k], want[1][k]);
+    /* Triangle 1 (0 3 2) near vertex 3, uv (0, 1): bottom-left. */
+    scn_base_color_at(s, m, &s->primitives[0], 1, 0.9f, 0.05f, out);
+    for (int k = 0; k < 4; k++)
+        ck_assert_float_eq(out[k], want[2][k]);
+    /* LINEAR at the centre of the image is the mean of the four texels. */
+    scn_texture lin = *t;
+    lin.mag_linear = 1;
+    scn_texture_sample(&lin, 0.5f, 0.5f, out);
+    ck_assert_float_eq_tol(out[0], (want[0][0] + want[3][0]) / 4.0f, 1e-6f);
+    /* REPEAT wraps u 1.25 to 0.25; MIRROR reflects it to 0.75. */
+    lin.mag_linear = 0;
+    lin.wrap_s = SCN_WRAP_REPEAT;
+    scn_texture_sample(&lin, 1.25f, 0.25f, out);
+    ck_assert_float_eq(out[0], want[0][0]);
+    lin.wrap_s = SCN_WRAP_MIRROR;
+    scn_texture_sample(&lin, 1.25f, 0.25f, out);
+    ck_assert_float_eq(out[1], want[1][1]);
+    scn_destroy(s);
+}
+END_TEST
+
+/* ---------------------------------------------------------------- engine */
+
+typedef struct grab {
+    const char *name;
+    float *data;
+    int width, height, channels;
+} grab;
+
+static int grab_buffer(void *user, int frame, const eng_buffer *b)
+{
+    (void)frame;
+    grab *g = user;
+    for (; g->name; g++)
+        if (!strcmp(b->name, g->name)) {
+            size_t n = (size_t)b->width * b->height * b->channel_count;
+            free(g->data);
+            g->data = malloc(n * sizeof *g->data);
+            memcpy(g->data, b->data, n * sizeof *g->data);
+            g->width = b->width;
+            g->height = b->height;
+            g->channels = b->channel_count;
+        }
+    return 0;
+}
+
+/* Loads the sequence json's scene, renders frame 0 into g; returns the engine when keep
+ * (the caller destroys it and *scene), else destroys both. */
+static eng_engine *render_one(const char *json, grab *g, int keep, scn_scene **scene)
+{
+    seq_sequence q;
+    scn_scene *s = NULL;
+    eng_engine *e = NULL;
+    eng_error err;
+    ck_assert_msg(seq_parse(WORK "/seq.json", json, strlen(json), &q, &err) == ENG_OK, "%s", err.msg);
+    ck_assert_msg(seq_load_scene(&q, &s, &err) == ENG_OK, "%s", err.msg);
+    eng_desc d = {.scene = s, .sequence = &q};
+    ck_assert_msg(eng_create(&d, &e, &err) == ENG_OK, "%s", err.msg);
+    eng_listener l = {g, NULL, grab_buffer, NULL};
+    ck_assert_int_eq(eng_add_listener(e, &l), ENG_OK);
+    ck_assert_msg(eng_render_frame(e, 0, &err) == ENG_OK, "%s", err.msg);
+    if (keep) {
+        *scene = s;
+        return e;
+    }
+    eng_destroy(e);
+    scn_destroy(s);
+    return NULL;
+}
+
+/* Looking straight down with -Z up in the image: the image's top-left quadrant is the
+ * texture's top-left texel, and every pixel's albedo is exactly one of the four texels. */
+START_TEST(gbuffer_albedo_checker)
+{
+    mkdir(WORK, 0777);
+    write_checker(WORK "/checker.gltf");
+    grab g[] = {{"gbuffer.albedo", NULL, 0, 0, 0}, {"gbuffer.material", NULL, 0, 0, 0}, {NULL, NULL, 0, 0, 0}};
+    render_one("{\"scene\": \"checker.gltf\", \"frames\": 1, \"fps\": 1, \"resolution\": [32, 32],"
+               " \"camera\": {\"keys\": [{\"time\": 0, \"position\": [0, 3, 0], \"target\": [0, 0, 0]}],"
+               " \"up\": [0, 0, -1], \"yfov_deg\": 30}, \"lights\": [{\"type\": \"point\", \"position\": [0, 2, 0]}],"
+               " \"settings\": {\"shadow_map_size\": 64, \"photon_count\": 64, \"threads\": 2},"
+               " \"capture\": [\"gbuffer.albedo\", \"gbuffer.material\"]}",
+               g, 0, NULL);
+    ck_assert_ptr_nonnull(g[0].data);
+    float want[4][4];
+    checker_texels(want);
+    int seen[4] = {0};
+    for (int y = 0; y < 32; y++)
+        for (int x = 0; x < 32; x++) {
+            const float *p = g[0].data + ((size_t)y * 32 + x) * g[0].channels;
+            int q = (y >= 16) * 2 + (x >= 16);
+            for (int k = 0; k < 3; k++)
+                ck_assert_msg(p[k] == want[q][k], "pixel (%d,%d) channel %d: %.9g, want %.9g", x, y, k, p[k], want[q][k]);
+            /* roughness = 1 × G, metallic = 0.5 × B of the linear texel */
+            static const int green[4] = {0, 255, 0, 128}, blue[4] = {0, 0, 255, 128};
+            const float *mat = g[1].data + ((size_t)y * 32 + x) * g[1].channels;
+            ck_assert_float_eq(mat[0], (float)green[q] / 255.0f);
+            ck_assert_float_eq(mat[1], 0.5f * ((float)blue[q] / 255.0f));
+            seen[q]++;
+        }
+    for (int q = 0; q < 4; q++)
+        ck_assert_int_eq(seen[q], 256);
+    free(g[0].data);
+    free(g[1].data);
+}
+END_TEST
+
+/* A red-textured wall (white factor) beside a white floor, out of the camera's view: the
+ * floor's indirect light is red, which it could only be through the texture. */
+START_TEST(photons_carry_texture_colour)
+{
+    mkdir(WORK, 0777);
+    FILE *f = fopen(WORK "/bleed.gltf", "w");
+    ck_assert_ptr_nonnull(f);
+    fprintf(f,
+            "{\"asset\":{\"version\":\"2.0\"},\"scenes\":[{\"nodes\":[0,1]}],"
+            "\"nodes\":[{\"mesh\":1},{\"mesh\":0,\"translation\":[-1,1,0],"
+            "\"rotation\":[0,0,-0.70710678,0.70710678]}],%s"
+            "\"images\":[{\"uri\":\"%s\"}],"
+            "\"materials\":[{\"pbrMetallicRoughness\":{\"baseColorTexture\":{\"index\":0},\"metallicFactor\":0},"
+            "\"doubleSided\":true},{\"pbrMetallicRoughness\":{\"metallicFactor\":0}}]}",
+            QUAD_PARTS, RED_PNG);
+    ck_assert_int_eq(fclose(f), 0);
+    grab g[] = {{"indirect.radiance", NULL, 0, 0, 0}, {NULL, NULL, 0, 0, 0}};
+    render_one("{\"scene\": \"bleed.gltf\", \"frames\": 1, \"fps\": 1, \"resolution\": [32, 32],"
+               " \"camera\": {\"keys\": [{\"time\": 0, \"position\": [0, 3, 0], \"target\": [0, 0, 0]}],"
+               " \"up\": [0, 0, -1], \"yfov_deg\": 30},"
+               " \"lights\": [{\"type\": \"point\", \"position\": [0, 1.5, 0], \"intensity\": 5}],"
+               " \"settings\": {\"shadow_map_size\": 128, \"photon_count\": 8192, \"threads\": 2,"
+               " \"kernel_radius\": 0.3}, \"capture\": [\"indirect.radiance\"]}",
+               g, 0, NULL);
+    ck_assert_ptr_nonnull(g[0].data);
+    double sum[3] = {0, 0, 0};
+    for (int i = 0; i < 32 * 32; i++)
+        for (int k = 0; k < 3; k++)
+            sum[k] += g[0].data[(size_t)i * g[0].channels + k];
+    ck_assert_msg(sum[0] > 0.0 && sum[0] > 20.0 * sum[1] && sum[0] > 20.0 * sum[2],
+                  "indirect light on the floor: R %g G %g B %g, want red", sum[0], sum[1], sum[2]);
+    free(g[0].data);
+}
+END_TEST
+
+/* alphaMode MASK: a floor whose texture is opaque where z < 0 and transparent where z > 0
+ * is cut in the G-buffer (background there) and for Embree's rays alike. */
+START_TEST(alpha_mask_everywhere)
+{
+    mkdir(WORK, 0777);
+    FILE *f = fopen(WORK "/mask.gltf", "w");
+    ck_assert_ptr_nonnull(f);
+    fprintf(f,
+            "{\"asset\":{\"version\":\"2.0\"},\"scenes\":[{\"nodes\":[0]}],\"nodes\":[{\"mesh\":0}],%s"
+            "\"images\":[{\"uri\":\"%s\"}],"
+            "\"materials\":[{\"pbrMetallicRoughness\":{\"baseColorTexture\":{\"index\":0},\"metallicFactor\":0},"
+            "\"alphaMode\":\"MASK\",\"doubleSided\":true},{}]}",
+            QUAD_PARTS, MASK_PNG);
+    ck_assert_int_eq(fclose(f), 0);
+    static const char json[] =
+        "{\"scene\": \"mask.gltf\", \"frames\": 1, \"fps\": 1, \"resolution\": [32, 32],"
+        " \"camera\": {\"keys\": [{\"time\": 0, \"position\": [0, 3, 0], \"target\": [0, 0, 0]}],"
+        " \"up\": [0, 0, -1], \"yfov_deg\": 30}, \"lights\": [{\"type\": \"point\", \"position\": [0, 2, 0]}],"
+        " \"settings\": {\"shadow_map_size\": 64, \"photon_count\": 64, \"threads\": 2},"
+        " \"capture\": [\"gbuffer.material\"]}";
+    grab g[] = {{"gbuffer.material", NULL, 0, 0, 0}, {NULL, NULL, 0, 0, 0}};
+    scn_scene *s = NULL;
+    eng_engine *e = render_one(json, g, 1, &s);
+    ck_assert_int_eq(s->materials[0].alpha_mode, SCN_ALPHA_MASK);
+    ck_assert_ptr_nonnull(g[0].data);
+    for (int y = 0; y < 32; y++)
+        for (int x = 0; x < 32; x++) {
+            float id = g[0].data[((size_t)y * 32 + x) * g[0].channels + 4]; /* material id, -1: background */
+            ck_assert_msg(id == (y < 16 ? 0.0f : -1.0f), "pixel (%d,%d): material id %g", x, y, id);
+        }
+    const float a0[3] = {0.3f, 1, -0.5f}, b0[3] = {0.3f, -1, -0.5f}, a1[3] = {0.3f, 1, 0.5f}, b1[3] = {0.3f, -1, 0.5f};
+    ck_assert_int_eq(eng_occluded(e, a0, b0), 1);
+    ck_assert_int_eq(eng_occluded(e, a1, b1), 0);
+    free(g[0].data);
+    eng_destroy(e);
+    scn_destroy(s);
+}
+END_TEST
+
+static Suite *texture_suite(void)
+{
+    Suite *s = suite_create("texture");
+    TCase *tc = tcase_create("texture");
+    tcase_add_test(tc, decode_and_sample_cpu);
+    tcase_add_test(tc, gbuffer_albedo_checker);
+    tcase_add_test(tc, photons_carry_texture_colour);
+    tcase_add_test(tc, alpha_mask_everywhere);
+    tcase_set_timeout(tc, 120);
+    suite_add_tcase(s, tc);
+    return s;
+}
+
+int main(void)
+{
+    SRunner *sr = srunner_create(texture_suite());
+    srunner_run_all(sr, CK_NORMAL);
+    int failed = srunner_ntests_failed(sr);
+    srunner_free(sr);
+    return failed ? EXIT_FAILURE : EXIT_SUCCESS;
+}
