@@ -13,8 +13,9 @@
  * What the loader decides for the engine:
  *   - meshes are TRIANGLES only: other modes, primitives without POSITION, orthographic
  *     cameras and unknown optional extensions are left out with a warning (scn_warn), a
- *     required extension other than lights, transmission, ior and mesh quantization
- *     (Draco, ...) is ENG_ERR_UNSUPPORTED; sparse accessors and KHR_mesh_quantization's
+ *     required extension other than lights, transmission, ior, emissive strength, texture
+ *     transform, mesh quantization and Draco is ENG_ERR_UNSUPPORTED (Draco primitives arrive
+ *     decoded from the shim, as ordinary accessors); sparse accessors and KHR_mesh_quantization's
  *     integer attributes are read (read_floats_as), sparse index accessors are not;
  *   - textures are decoded to linear RGBA floats (make_texture; base colour and emissive
  *     sRGB-decoded), TEXCOORD_0/1 and COLOR_0 read; skins and morph targets are ignored
@@ -1362,7 +1363,7 @@ static int known_extension(const char *e)
 {
     static const char *const known[] = {"KHR_lights_punctual", "KHR_materials_transmission", "KHR_materials_ior",
                                         "KHR_materials_emissive_strength", "KHR_mesh_quantization",
-                                        "KHR_texture_transform"};
+                                        "KHR_texture_transform", "KHR_draco_mesh_compression"};
     for (size_t k = 0; k < sizeof known / sizeof known[0]; k++)
         if (strcmp(e, known[k]) == 0)
             return 1;

@@ -16,11 +16,19 @@
  *     (it has no error codes); the texts are those of tinygltf 2.7 and nlohmann-json 3.
  *     Only nlohmann's parse_error is syntax: its out_of_range (a number such as 1e999 that
  *     no double holds) is well-formed JSON with a wrong value, so structure;
+ *   - KHR_draco_mesh_compression: tinygltf 2.7 (Debian, no Draco) refuses a Draco primitive's
+ *     indices accessor, which has no bufferView. draco_prepare points that accessor at the
+ *     Draco bufferView in a copy of the JSON (GLB re-packed around it) so that tinygltf parses
+ *     the rest; draco_decode then undoes it, decodes each Draco primitive with draco::Decoder
+ *     and appends the decoded arrays as a new buffer, with one buffer view per accessor, in the
+ *     accessor's own componentType and type. gltf_load.c then reads them like any accessor;
  *   - every exception stops here.
  * The gls_impl owns the tinygltf::Model and the C arrays that point into it. */
 #include "gltf_shim.h"
 
 #include <tiny_gltf.h>
+#include <draco/compression/decode.h>
+#include <nlohmann/json.hpp>
 
 #include <sys/stat.h>
 
@@ -31,6 +39,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <map>
 #include <memory>
 #include <new>
 #include <string>
@@ -456,6 +465,315 @@ void build_view(gls_impl &g)
 
 const char DRACO[] = "KHR_draco_mesh_compression";
 
+/* ---- KHR_draco_mesh_compression */
+
+using json = nlohmann::json;
+
+uint32_t le32(const unsigned char *p)
+{
+    return static_cast<uint32_t>(p[0]) | static_cast<uint32_t>(p[1]) << 8 | static_cast<uint32_t>(p[2]) << 16 |
+           static_cast<uint32_t>(p[3]) << 24;
+}
+
+void put_le32(std::vector<unsigned char> &out, uint32_t v)
+{
+    for (int k = 0; k < 4; k++)
+        out.push_back(static_cast<unsigned char>(v >> (8 * k)));
+}
+
+struct draco_error {
+    std::string text;
+};
+
+[[noreturn]] void draco_fail(const std::string &where, const std::string &what)
+{
+    throw draco_error{where + ": " + DRACO + ": " + what};
+}
+
+/* "mesh 2 ("name") primitive 0", as messages name a primitive. */
+std::string primitive_where(size_t mi, size_t pi, const std::string &name)
+{
+    std::string where = "mesh " + std::to_string(mi);
+    if (!name.empty())
+        where += " (\"" + name.substr(0, 80) + "\")";
+    return where + " primitive " + std::to_string(pi);
+}
+
+/* In the JSON j, every Draco primitive's indices accessor that lacks a bufferView gets the
+ * primitive's Draco bufferView (tinygltf 2.7 refuses an indices accessor without one; the
+ * accessor's own data is never read). Returns the accessors so patched. A Draco extension
+ * without an existing bufferView throws draco_error here (tinygltf would only complain about
+ * the accessor); anything else malformed is left for tinygltf and draco_decode to report. */
+std::vector<int> patch_indices(json &j)
+{
+    std::vector<int> patched;
+    if (!j.is_object() || !j.contains("meshes") || !j["meshes"].is_array() || !j.contains("accessors") ||
+        !j["accessors"].is_array())
+        return patched;
+    json &acc = j["accessors"];
+    const size_t views = j.contains("bufferViews") && j["bufferViews"].is_array() ? j["bufferViews"].size() : 0;
+    for (size_t mi = 0; mi < j["meshes"].size(); mi++) {
+        json &mesh = j["meshes"][mi];
+        if (!mesh.is_object() || !mesh.contains("primitives") || !mesh["primitives"].is_array())
+            continue;
+        for (size_t pi = 0; pi < mesh["primitives"].size(); pi++) {
+            json &p = mesh["primitives"][pi];
+            if (!p.is_object() || !p.contains("extensions") || !p["extensions"].is_object() ||
+                !p["extensions"].contains(DRACO))
+                continue;
+            const json &ext = p["extensions"][DRACO];
+            const std::string name = mesh.contains("name") && mesh["name"].is_string() ? mesh["name"].get<std::string>() : "";
+            if (!ext.is_object() || !ext.contains("bufferView") || !ext["bufferView"].is_number_unsigned())
+                draco_fail(primitive_where(mi, pi, name), "no bufferView (a non-negative integer)");
+            if (ext["bufferView"].get<uint64_t>() >= views)
+                draco_fail(primitive_where(mi, pi, name),
+                           "bufferView " + std::to_string(ext["bufferView"].get<uint64_t>()) + " does not exist");
+            if (!p.contains("indices") || !p["indices"].is_number_unsigned())
+                continue;
+            uint64_t i = p["indices"].get<uint64_t>();
+            if (i >= acc.size() || !acc[i].is_object() || acc[i].contains("bufferView"))
+                continue;
+            acc[i]["bufferView"] = ext["bufferView"];
+            patched.push_back(static_cast<int>(i));
+        }
+    }
+    return patched;
+}
+
+/* The bytes tinygltf should parse: a JSON glTF or a GLB whose JSON chunk went through
+ * patch_indices. Returns false (and leaves *out empty) where nothing needed patching or the
+ * input is too malformed to patch; tinygltf then reads the original bytes. */
+bool draco_prepare(const unsigned char *b, size_t len, std::vector<unsigned char> *out, std::vector<int> *patched)
+{
+    const bool glb = len >= 4 && std::memcmp(b, "glTF", 4) == 0;
+    size_t json_at = 0, json_len = len;
+    if (glb) {
+        if (len < 20 || le32(b + 16) != 0x4E4F534Au || le32(b + 12) > len - 20)
+            return false;
+        json_at = 20;
+        json_len = le32(b + 12);
+    }
+    json j = json::parse(b + json_at, b + json_at + json_len, nullptr, false);
+    if (j.is_discarded())
+        return false;
+    *patched = patch_indices(j);
+    if (patched->empty())
+        return false;
+    std::string text;
+    try {
+        text = j.dump();
+    } catch (const json::exception &) { /* a string that is not UTF-8: leave it to tinygltf */
+        patched->clear();
+        return false;
+    }
+    if (!glb) {
+        out->assign(text.begin(), text.end());
+        return true;
+    }
+    while (text.size() % 4)
+        text += ' ';
+    const size_t rest = json_at + json_len; /* the BIN chunk, if any, as it was */
+    const size_t total = 20 + text.size() + (len - rest);
+    if (total > UINT32_MAX) {
+        patched->clear();
+        return false;
+    }
+    out->assign(b, b + 12);
+    out->resize(8);
+    put_le32(*out, static_cast<uint32_t>(total));
+    put_le32(*out, static_cast<uint32_t>(text.size()));
+    put_le32(*out, 0x4E4F534Au);
+    out->insert(out->end(), text.begin(), text.end());
+    out->insert(out->end(), b + rest, b + len);
+    return true;
+}
+
+int component_count(int type)
+{
+    switch (type) {
+    case TINYGLTF_TYPE_SCALAR: return 1;
+    case TINYGLTF_TYPE_VEC2: return 2;
+    case TINYGLTF_TYPE_VEC3: return 3;
+    case TINYGLTF_TYPE_VEC4: return 4;
+    default: return 0;
+    }
+}
+
+template <typename T> void append_value(std::vector<unsigned char> &out, T v)
+{
+    unsigned char raw[sizeof(T)];
+    std::memcpy(raw, &v, sizeof v);
+    out.insert(out.end(), raw, raw + sizeof raw);
+}
+
+template <typename T>
+bool append_attribute(std::vector<unsigned char> &out, const draco::PointAttribute &a, uint32_t points, int n)
+{
+    T v[4];
+    for (uint32_t i = 0; i < points; i++) {
+        if (!a.ConvertValue<T>(a.mapped_index(draco::PointIndex(i)), static_cast<int8_t>(n), v))
+            return false;
+        for (int k = 0; k < n; k++)
+            append_value(out, v[k]);
+    }
+    return true;
+}
+
+
+/* Writes accessor a's decoded values (attribute att, one per point) at the end of out. */
+void decode_attribute(const std::string &where, const std::string &semantic, const tinygltf::Accessor &a,
+                      int index, const draco::PointAttribute &att, uint32_t points, std::vector<unsigned char> &out)
+{
+    const std::string acc = "accessor " + std::to_string(index) + " (" + semantic + ")";
+    const int n = component_count(a.type);
+    if (n == 0 || n != att.num_components())
+        draco_fail(where, acc + " has " + std::to_string(n) + " components per element, the Draco attribute " +
+                              std::to_string(att.num_components()));
+    if (a.count != points)
+        draco_fail(where, acc + " has count " + std::to_string(a.count) + ", the Draco data " +
+                              std::to_string(points) + " points");
+    bool ok;
+    switch (a.componentType) {
+    case TINYGLTF_COMPONENT_TYPE_FLOAT: ok = append_attribute<float>(out, att, points, n); break;
+    case TINYGLTF_COMPONENT_TYPE_BYTE: ok = append_attribute<int8_t>(out, att, points, n); break;
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE: ok = append_attribute<uint8_t>(out, att, points, n); break;
+    case TINYGLTF_COMPONENT_TYPE_SHORT: ok = append_attribute<int16_t>(out, att, points, n); break;
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT: ok = append_attribute<uint16_t>(out, att, points, n); break;
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT: ok = append_attribute<uint32_t>(out, att, points, n); break;
+    default: ok = false;
+    }
+    if (!ok)
+        draco_fail(where, acc + ": the Draco attribute does not convert to componentType " +
+                              std::to_string(a.componentType));
+}
+
+/* The faces as indices in the indices accessor's componentType. */
+void decode_indices(const std::string &where, const tinygltf::Accessor &a, int index, const draco::Mesh &mesh,
+                    std::vector<unsigned char> &out)
+{
+    const std::string acc = "accessor " + std::to_string(index) + " (indices)";
+    const uint64_t want = 3 * static_cast<uint64_t>(mesh.num_faces());
+    if (a.type != TINYGLTF_TYPE_SCALAR)
+        draco_fail(where, acc + " is not SCALAR");
+    if (a.count != want)
+        draco_fail(where, acc + " has count " + std::to_string(a.count) + ", the Draco data " +
+                              std::to_string(mesh.num_faces()) + " triangles (" + std::to_string(want) + " indices)");
+    const uint32_t limit = a.componentType == TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE    ? 0xFFu
+                           : a.componentType == TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT ? 0xFFFFu
+                           : a.componentType == TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT   ? 0xFFFFFFFFu
+                                                                                       : 0;
+    if (limit == 0)
+        draco_fail(where, acc + " is not UNSIGNED_BYTE, UNSIGNED_SHORT or UNSIGNED_INT");
+    for (draco::FaceIndex f(0); f < mesh.num_faces(); ++f)
+        for (int k = 0; k < 3; k++) {
+            const uint32_t v = mesh.face(f)[k].value();
+            if (v >= mesh.num_points() || v > limit)
+                draco_fail(where, "decoded index " + std::to_string(v) + " does not fit " + acc);
+            if (limit == 0xFFu)
+                append_value(out, static_cast<uint8_t>(v));
+            else if (limit == 0xFFFFu)
+                append_value(out, static_cast<uint16_t>(v));
+            else
+                append_value(out, v);
+        }
+}
+
+/* Decodes one Draco primitive into a new buffer (one view per accessor) and points its
+ * accessors there. Throws draco_error naming the mesh and primitive. */
+void decode_primitive(tinygltf::Model &m, size_t mi, size_t pi)
+{
+    const tinygltf::Primitive &p = m.meshes[mi].primitives[pi];
+    const std::string where = primitive_where(mi, pi, m.meshes[mi].name);
+    const tinygltf::Value &ext = p.extensions.at(DRACO);
+    if (!ext.IsObject() || !ext.Has("bufferView") || !ext.Get("bufferView").IsInt())
+        draco_fail(where, "no integer bufferView");
+    const int bv = ext.Get("bufferView").GetNumberAsInt();
+    if (bv < 0 || static_cast<size_t>(bv) >= m.bufferViews.size())
+        draco_fail(where, "bufferView " + std::to_string(bv) + " does not exist");
+    const tinygltf::BufferView &view = m.bufferViews[static_cast<size_t>(bv)];
+    if (view.buffer < 0 || static_cast<size_t>(view.buffer) >= m.buffers.size() ||
+        view.byteOffset > m.buffers[static_cast<size_t>(view.buffer)].data.size() ||
+        view.byteLength > m.buffers[static_cast<size_t>(view.buffer)].data.size() - view.byteOffset)
+        draco_fail(where, "bufferView " + std::to_string(bv) + " lies outside its buffer");
+    if (!ext.Has("attributes") || !ext.Get("attributes").IsObject())
+        draco_fail(where, "no attributes object");
+    if (p.indices < 0 || static_cast<size_t>(p.indices) >= m.accessors.size())
+        draco_fail(where, "the primitive has no indices accessor");
+
+    draco::DecoderBuffer in;
+    in.Init(reinterpret_cast<const char *>(m.buffers[static_cast<size_t>(view.buffer)].data.data() + view.byteOffset),
+            view.byteLength);
+    draco::Decoder decoder;
+    auto decoded = decoder.DecodeMeshFromBuffer(&in);
+    if (!decoded.ok())
+        draco_fail(where, "bufferView " + std::to_string(bv) + " does not decode (" +
+                              decoded.status().error_msg_string() + ")");
+    std::unique_ptr<draco::Mesh> mesh = std::move(decoded).value();
+    if (!mesh)
+        draco_fail(where, "bufferView " + std::to_string(bv) + " decodes to no mesh");
+
+    /* The accessors to fill: the indices, then each attribute the extension maps. */
+    std::vector<std::pair<int, std::vector<unsigned char>>> data;
+    data.emplace_back(p.indices, std::vector<unsigned char>());
+    decode_indices(where, m.accessors[static_cast<size_t>(p.indices)], p.indices, *mesh, data.back().second);
+    const tinygltf::Value &attrs = ext.Get("attributes");
+    for (const std::string &semantic : attrs.Keys()) {
+        auto it = p.attributes.find(semantic);
+        if (it == p.attributes.end())
+            continue; /* compressed but not used by the primitive */
+        const tinygltf::Value &id = attrs.Get(semantic);
+        if (!id.IsInt() || id.GetNumberAsInt() < 0)
+            draco_fail(where, "attribute " + semantic + " has no non-negative integer id");
+        const draco::PointAttribute *att = mesh->GetAttributeByUniqueId(static_cast<uint32_t>(id.GetNumberAsInt()));
+        if (!att)
+            draco_fail(where, "attribute " + semantic + ": id " + std::to_string(id.GetNumberAsInt()) +
+                                  " does not exist in the Draco data (" + std::to_string(mesh->num_attributes()) +
+                                  " attributes)");
+        if (it->second < 0 || static_cast<size_t>(it->second) >= m.accessors.size())
+            draco_fail(where, "attribute " + semantic + ": accessor " + std::to_string(it->second) + " does not exist");
+        data.emplace_back(it->second, std::vector<unsigned char>());
+        decode_attribute(where, semantic, m.accessors[static_cast<size_t>(it->second)], it->second, *att,
+                         mesh->num_points(), data.back().second);
+    }
+    /* An attribute the extension does not compress keeps its own data, but must agree. */
+    for (const auto &kv : p.attributes)
+        if (!attrs.Has(kv.first) && kv.second >= 0 && static_cast<size_t>(kv.second) < m.accessors.size() &&
+            m.accessors[static_cast<size_t>(kv.second)].count != mesh->num_points())
+            draco_fail(where, "accessor " + std::to_string(kv.second) + " (" + kv.first + ", not compressed) has count " +
+                                  std::to_string(m.accessors[static_cast<size_t>(kv.second)].count) +
+                                  ", the Draco data " + std::to_string(mesh->num_points()) + " points");
+
+    tinygltf::Buffer buffer;
+    for (auto &d : data) {
+        while (buffer.data.size() % 4)
+            buffer.data.push_back(0);
+        tinygltf::BufferView v;
+        v.buffer = static_cast<int>(m.buffers.size());
+        v.byteOffset = buffer.data.size();
+        v.byteLength = d.second.size();
+        buffer.data.insert(buffer.data.end(), d.second.begin(), d.second.end());
+        tinygltf::Accessor &a = m.accessors[static_cast<size_t>(d.first)];
+        a.bufferView = static_cast<int>(m.bufferViews.size());
+        a.byteOffset = 0;
+        m.bufferViews.push_back(v);
+    }
+    m.buffers.push_back(std::move(buffer));
+}
+
+/* Undoes draco_prepare's patch, then decodes every TRIANGLES primitive with the extension
+ * (another mode is left to gltf_load.c, which skips it). */
+void draco_decode(tinygltf::Model &m, const std::vector<int> &patched)
+{
+    for (int i : patched)
+        if (static_cast<size_t>(i) < m.accessors.size())
+            m.accessors[static_cast<size_t>(i)].bufferView = -1;
+    for (size_t mi = 0; mi < m.meshes.size(); mi++)
+        for (size_t pi = 0; pi < m.meshes[mi].primitives.size(); pi++) {
+            const tinygltf::Primitive &p = m.meshes[mi].primitives[pi];
+            if (p.extensions.count(DRACO) && (p.mode == TINYGLTF_MODE_TRIANGLES || p.mode == -1))
+                decode_primitive(m, mi, pi);
+        }
+}
 gls_status load(const char *path, const void *bytes, size_t len, gls_model **out, char *msg,
                 size_t msg_size)
 {
@@ -486,11 +804,27 @@ gls_status load(const char *path, const void *bytes, size_t len, gls_model **out
 
     std::string err, warn;
     const unsigned char *b = static_cast<const unsigned char *>(bytes);
+    std::vector<unsigned char> patched_bytes;
+    std::vector<int> patched;
+    try {
+        if (std::search(b, b + len, std::begin(DRACO), std::end(DRACO) - 1) != b + len &&
+            draco_prepare(b, len, &patched_bytes, &patched)) {
+            if (patched_bytes.size() > UINT_MAX) {
+                set_msg(msg, msg_size, "file too large for tinygltf");
+                return GLS_ERR_GLTF;
+            }
+            b = patched_bytes.data();
+            len = patched_bytes.size();
+        }
+    } catch (const draco_error &e) {
+        set_msg(msg, msg_size, e.text);
+        return GLS_ERR_GLTF;
+    }
     bool ok;
     if (len >= 4 && std::memcmp(b, "glTF", 4) == 0)
         ok = loader.LoadBinaryFromMemory(&g->model, &err, &warn, b, static_cast<unsigned>(len), folder);
     else
-        ok = loader.LoadASCIIFromString(&g->model, &err, &warn, static_cast<const char *>(bytes),
+        ok = loader.LoadASCIIFromString(&g->model, &err, &warn, reinterpret_cast<const char *>(b),
                                         static_cast<unsigned>(len), folder);
     /* A refused URI is the error, also where tinygltf only warned (an image it could skip):
      * a file the glTF names must be there. */
@@ -502,15 +836,15 @@ gls_status load(const char *path, const void *bytes, size_t len, gls_model **out
         set_msg(msg, msg_size, "a buffer's data URI does not decode (bad base64, or not byteLength bytes)");
         return GLS_ERR_GLTF;
     }
-    /* tinygltf has no Draco decoder: it stumbles over the accessors a Draco primitive leaves
-     * without data, with a message about buffer views. Name the extension instead. */
-    if (!ok && std::search(b, b + len, std::begin(DRACO), std::end(DRACO) - 1) != b + len) {
-        set_msg(msg, msg_size, "KHR_draco_mesh_compression is not supported (" + err + ")");
-        return GLS_ERR_UNSUPPORTED;
-    }
     if (!ok) {
         set_msg(msg, msg_size, err);
         return classify(err);
+    }
+    try {
+        draco_decode(g->model, patched);
+    } catch (const draco_error &e) {
+        set_msg(msg, msg_size, e.text);
+        return GLS_ERR_GLTF;
     }
     build_view(*g);
     *out = &g.release()->view;

@@ -41,7 +41,7 @@ typedef enum gls_status {
     GLS_ERR_SYNTAX, /* not JSON, not a GLB container, or no glTF asset object */
     GLS_ERR_GLTF,   /* JSON, but tinygltf rejected the glTF structure */
     GLS_ERR_NOMEM,
-    GLS_ERR_UNSUPPORTED /* valid glTF the tool cannot read (Draco) */
+    GLS_ERR_UNSUPPORTED /* valid glTF the tool cannot read */
 } gls_status;
 
 /* A number from an extension object, where tinygltf keeps untyped JSON values. */
