@@ -306,7 +306,7 @@ void pass_resolve_destroy(pass_resolve *p);
 typedef struct pass_composite pass_composite;
 eng_result pass_composite_create(int width, int height, pass_composite **out, eng_error *err);
 const glu_target *pass_composite_run(pass_composite *p, GLuint direct_tex, GLuint indirect_tex,
-                                     GLuint specular_tex, GLuint emission_tex, const eng_settings *s);
+                                     GLuint specular_tex, GLuint emission_tex, GLuint translucent_tex, const eng_settings *s);
 void pass_composite_destroy(pass_composite *p);
 
 /* ---------------------------------------------------------------- GL context (glctx.c) */
@@ -428,6 +428,11 @@ typedef struct eng_rt eng_rt;
 /* Closest hit of the ray org + t·dir, t in [tnear, tfar], dir unit, against the scene as
  * last posed by rt_update. Returns 1 and fills hit, or 0 (hit untouched). Thread-safe. */
 int rt_intersect(const eng_rt *rt, const float org[3], const float dir[3], float tnear, float tfar, rt_hit *hit);
+/* alphaMode BLEND geometry (rt.c, pass_translucent.c) is not seen by rt_intersect and
+ * rt_occluded; rt_intersect_blend sees only it (lamps ignored), as rt_intersect does. */
+int rt_intersect_blend(const eng_rt *rt, const float org[3], const float dir[3], float tnear, float tfar, rt_hit *hit);
+int rt_has_blend(const eng_rt *rt); /* posed at least once with a BLEND draw */
+int rt_is_blend(const scn_scene *scene, int32_t material); /* material index → alphaMode BLEND */
 /* The lamps of lights with a size (rt.c): the light index of the nearest lamp the ray enters
  * at t in (tmin, tmax), other than light skip (−1: none skipped), with *t; −1 when none. A
  * ray that starts inside a lamp ignores it. rt_intersect returns 0 where a lamp comes first. */
@@ -491,6 +496,12 @@ int ref_light_at(const eng_light_pose *l, const float p[3], float wl[3], float *
  * matrices, draws, lights, camera, Embree scene) without rendering anything, and returns the
  * posed scene and the Embree scene (owned by the engine; valid until the next call or
  * eng_render_frame). For CPU renderers that must see what the passes see (reference.c). */
+/* Camera ray through (px, py) in pixels from the top-left corner of a width×height image: the
+ * inverse of the view-projection (GL: NDC y up, so row 0 is NDC y = +1), from the near to the
+ * far plane (*tnear, *tfar along the unit dir), so it sees what the rasteriser sees
+ * (reference.c; pass_translucent.c). */
+void eng_camera_ray(const double inv_view_proj[16], const float eye[3], int width, int height, double px, double py,
+                    float org[3], float dir[3], float *tnear, float *tfar);
 void eng_pose(eng_engine *e, int frame, const eng_frame_scene **fs, const eng_rt **rt);
 const eng_settings *eng_settings_of(const eng_engine *e);
 void eng_image_size(const eng_engine *e, int *width, int *height);

@@ -1,7 +1,8 @@
 /* engine.c — the frame loop (DESIGN.md "Data flow"; ISPM 003_… §3 pipeline). For frame i
  * at t = i / fps: animate the scene (and the previous frame's pose, for motion vectors),
  * update the Embree scene, then per light the shadow map, the eye G-buffer, direct light,
- * and the composite. After each pass it reads the pass's targets back and announces them
+ * (indirect, specular and emission where on), the translucent (alphaMode BLEND) layer where the
+ * scene has one, and the composite, which lays that layer over the opaque sum. After each pass it reads the pass's targets back and announces them
  * as named buffers to the listeners (capture is one); it never touches files. Per-pass wall
  * time is measured with glFinish at pass boundaries and reported in eng_frame_stats; the
  * read-back for announcing is timed separately as "readback" so pass times stay honest.
@@ -15,6 +16,7 @@
 #include "progressive.h"
 #include "trace_method.h"
 #include "specular.h"
+#include "translucent.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -55,6 +57,7 @@ struct eng_engine {
     void *tracer_state;
     const spec_method *spec;  /* specular.h: NULL when "off" or the scene has no specular surface */
     void *spec_state;
+    pass_translucent *translucent; /* translucent.h: only in scenes with an alphaMode BLEND draw */
     /* Emission seen by the eye (only in scenes with an emissive material): per pixel from the
      * G-buffer's material id, uploaded for the composite. */
     int emissive;
@@ -292,6 +295,8 @@ eng_result eng_create(const eng_desc *desc, eng_engine **out, eng_error *err)
     e->spec = spec_scene_has_specular(s) ? spec_method_of(e->settings.specular) : NULL;
     if (r == ENG_OK && e->spec)
         r = e->spec->create(e->width, e->height, &e->spec_state, err);
+    if (r == ENG_OK && tl_scene_has_blend(s))
+        r = pass_translucent_create(e->width, e->height, &e->translucent, err);
     for (uint32_t i = 0; i < s->material_count; i++)
         if (s->materials[i].emissive[0] > 0.0f || s->materials[i].emissive[1] > 0.0f ||
             s->materials[i].emissive[2] > 0.0f)
@@ -343,6 +348,7 @@ void eng_destroy(eng_engine *e)
             e->tracer->destroy(e->tracer_state);
         if (e->spec && e->spec_state)
             e->spec->destroy(e->spec_state);
+        pass_translucent_destroy(e->translucent);
         if (e->emissive)
             ind_cpu_target_destroy(&e->emission);
         for (int l = 0; l < 3; l++) {
@@ -915,6 +921,25 @@ static eng_result specular_pass(eng_engine *e, int frame, const glu_target *gb, 
     return ENG_OK;
 }
 
+/* The translucent surfaces (translucent.h), announced as translucent.radiance (premultiplied
+ * RGBA); *tex gets the texture the composite lays over the opaque result. */
+static eng_result translucent_pass(eng_engine *e, int frame, const glu_target *gb, GLuint *tex, eng_error *err)
+{
+    static const char *const CH_RGBA[] = {"R", "G", "B", "A"};
+    const float *rgba;
+    double t0 = now_ms();
+    eng_result r = pass_translucent_run(e->translucent, &e->fs, e->rt, gb, e->method ? &e->pmap : NULL, e->radius,
+                                        &e->settings, &rgba, tex, err);
+    glFinish();
+    add_time(e, "translucent", now_ms() - t0);
+    if (r != ENG_OK)
+        return r;
+    if (seq_wants(e->seq, "translucent.radiance") &&
+        announce(e, frame, "translucent.radiance", gb->width, gb->height, 4, CH_RGBA, rgba))
+        return eng_fail(err, ENG_ERR_ABORTED, "frame %d: capture failed at translucent.radiance", frame);
+    return ENG_OK;
+}
+
 /* The emitted radiance of the surface each pixel shows (the emissiveFactor × strength of its
  * G-buffer material id), announced as gbuffer.emission; *tex gets the texture the composite
  * adds. Emitters are seen, not light sources: they send no photons and no shadow rays. */
@@ -1212,7 +1237,7 @@ eng_result eng_render_frame(eng_engine *e, int frame, eng_error *err)
     }
 
     /* Specular eye paths (003 §3 step 5), only in scenes with a mirror or glass. */
-    GLuint specular_tex = 0, emission_tex = 0;
+    GLuint specular_tex = 0, emission_tex = 0, translucent_tex = 0;
     if (e->spec) {
         eng_result r = specular_pass(e, frame, gb, &specular_tex, err);
         if (r != ENG_OK)
@@ -1223,11 +1248,18 @@ eng_result eng_render_frame(eng_engine *e, int frame, eng_error *err)
         if (r != ENG_OK)
             return r;
     }
+    /* Translucent surfaces, back to front over the opaque result (003 §3 step 5). */
+    if (e->translucent) {
+        eng_result r = translucent_pass(e, frame, gb, &translucent_tex, err);
+        if (r != ENG_OK)
+            return r;
+    }
 
     /* Composite and display transform. */
     t0 = now_ms();
     const glu_target *comp =
-        pass_composite_run(e->composite, direct->color[0], indirect_tex, specular_tex, emission_tex, &e->settings);
+        pass_composite_run(e->composite, direct->color[0], indirect_tex, specular_tex, emission_tex,
+                           translucent_tex, &e->settings);
     glFinish();
     add_time(e, "composite", now_ms() - t0);
     if (read_and_announce(e, frame, "composite.radiance", comp, 0, 0, 3, p012, CH_RGB) ||

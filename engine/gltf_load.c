@@ -669,11 +669,6 @@ static eng_result load_materials(loader *L)
         if (!isfinite(g->alpha_cutoff) || g->alpha_cutoff < 0.0)
             return fail(L, ENG_ERR_INVALID, "%s: alphaCutoff %g is negative or not finite", where, g->alpha_cutoff);
         d->alpha_cutoff = (float)g->alpha_cutoff;
-        if (d->alpha_mode == SCN_ALPHA_BLEND) { /* until blending exists (issue 14's specular eye paths) */
-            scn_warn(L->s, "%s: alphaMode BLEND is drawn as MASK at alphaCutoff 0.5", where);
-            d->alpha_mode = SCN_ALPHA_MASK;
-            d->alpha_cutoff = 0.5f;
-        }
         d->transmission = 0.0f;
         if (g->transmission.state == GLS_NUM_NOT_A_NUMBER)
             return fail(L, ENG_ERR_INVALID, "%s: KHR_materials_transmission.transmissionFactor is not a number",

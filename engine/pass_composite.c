@@ -1,6 +1,7 @@
 /* pass_composite.c — the last pass (ISPM 003_… §3: "composite direct and indirect"): linear
  * radiance = direct + indirect + specular (what the eye sees through mirrors and glass,
- * specular.h) + emission (gbuffer.emission), and a display-referred copy (exposure, clamp, sRGB). The
+ * specular.h) + emission (gbuffer.emission), then the translucent surfaces laid over it
+ * (translucent.radiance, premultiplied: rgb + (1 − a)·opaque; pass_translucent.c), and a display-referred copy (exposure, clamp, sRGB). The
  * indirect input is 0 until the photon passes exist; the pass is written for both. */
 #include "eng_internal.h"
 
@@ -27,12 +28,14 @@ eng_result pass_composite_create(int width, int height, pass_composite **out, en
     glUniform1i(glGetUniformLocation(g, "u_indirect"), 1);
     glUniform1i(glGetUniformLocation(g, "u_specular"), 2);
     glUniform1i(glGetUniformLocation(g, "u_emission"), 3);
+    glUniform1i(glGetUniformLocation(g, "u_translucent"), 4);
     *out = p;
     return ENG_OK;
 }
 
 const glu_target *pass_composite_run(pass_composite *p, GLuint direct_tex, GLuint indirect_tex,
-                                     GLuint specular_tex, GLuint emission_tex, const eng_settings *s)
+                                     GLuint specular_tex, GLuint emission_tex, GLuint translucent_tex,
+                                     const eng_settings *s)
 {
     GLuint g = p->pass.program;
     glUseProgram(g);
@@ -47,6 +50,9 @@ const glu_target *pass_composite_run(pass_composite *p, GLuint direct_tex, GLuin
     glActiveTexture(GL_TEXTURE3);
     glBindTexture(GL_TEXTURE_2D, emission_tex);
     glUniform1i(glGetUniformLocation(g, "u_has_emission"), emission_tex ? 1 : 0);
+    glActiveTexture(GL_TEXTURE4);
+    glBindTexture(GL_TEXTURE_2D, translucent_tex);
+    glUniform1i(glGetUniformLocation(g, "u_has_translucent"), translucent_tex ? 1 : 0);
     glActiveTexture(GL_TEXTURE0);
     glUniform1f(glGetUniformLocation(g, "u_exposure"), s->exposure);
     glu_pass_draw(&p->pass);

@@ -69,6 +69,8 @@ const glu_target *pass_gbuffer_run(pass_gbuffer *p, const eng_frame_scene *fs)
     for (uint32_t i = 0; i < fs->draw_count; i++) {
         const eng_draw *d = &fs->draws[i];
         scn_material m = eng_material_of(fs->scene, d->material);
+        if (m.alpha_mode == SCN_ALPHA_BLEND)
+            continue; /* translucent: drawn by pass_translucent.c */
         float nm[9];
         m4_normal_matrix(nm, d->world);
         glUniformMatrix4fv(p->u_world, 1, GL_FALSE, d->world);

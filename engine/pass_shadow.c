@@ -146,6 +146,8 @@ const shadow_map *pass_shadow_run(pass_shadow *p, const eng_frame_scene *fs, uin
             const eng_draw *d = &fs->draws[i];
             glUniformMatrix4fv(p->u_world, 1, GL_FALSE, d->world);
             scn_material m = eng_material_of(fs->scene, d->material);
+            if (m.alpha_mode == SCN_ALPHA_BLEND)
+                continue; /* translucent: pass_translucent.c */
             glUniform4fv(glGetUniformLocation(p->program, "u_base_color"), 1, m.base_color);
             eng_bind_material(p->program, fs, d, &m);
             const eng_gpu_prim *g = &fs->gpu[d->primitive];

@@ -899,17 +899,22 @@ static void light_vertex(const frame_ctx *c, uint64_t key, uint32_t dim0, const 
 static void camera_ray(const frame_ctx *c, double px, double py, float org[3], float dir[3], float *tnear,
                        float *tfar)
 {
-    double ndc[2] = {2.0 * px / c->width - 1.0, 1.0 - 2.0 * py / c->height};
+    eng_camera_ray(c->inv_view_proj, c->fs->camera.eye, c->width, c->height, px, py, org, dir, tnear, tfar);
+}
+
+void eng_camera_ray(const double inv_view_proj[16], const float eye[3], int width, int height, double px, double py,
+                    float org[3], float dir[3], float *tnear, float *tfar)
+{
+    double ndc[2] = {2.0 * px / width - 1.0, 1.0 - 2.0 * py / height};
     double pts[2][3];
     for (int k = 0; k < 2; k++) {
         double v[4] = {ndc[0], ndc[1], k ? 1.0 : -1.0, 1.0}, o[4];
         for (int r = 0; r < 4; r++)
-            o[r] = c->inv_view_proj[r] * v[0] + c->inv_view_proj[4 + r] * v[1] + c->inv_view_proj[8 + r] * v[2] +
-                   c->inv_view_proj[12 + r] * v[3];
+            o[r] = inv_view_proj[r] * v[0] + inv_view_proj[4 + r] * v[1] + inv_view_proj[8 + r] * v[2] +
+                   inv_view_proj[12 + r] * v[3];
         for (int i = 0; i < 3; i++)
             pts[k][i] = o[i] / o[3];
     }
-    const float *eye = c->fs->camera.eye;
     double d[3], dn = 0.0, tn = 0.0, tf = 0.0;
     for (int i = 0; i < 3; i++) {
         d[i] = pts[1][i] - pts[0][i];
@@ -926,17 +931,45 @@ static void camera_ray(const frame_ctx *c, double px, double py, float org[3], f
     *tfar = (float)tf;
 }
 
+/* alphaMode BLEND (issue 14; pass_translucent.c): the primary ray meets the translucent
+ * surfaces between tnear and tend (the opaque hit) front to back; at each, the path stops on it
+ * with probability alpha (base colour factor × texture alpha) and continues straight through
+ * with probability 1 − alpha, so a surface covers alpha of what lies behind it, as the
+ * engine's back-to-front "over" compositing does. A single-sided surface seen from behind is
+ * culled, as the rasteriser culls it. Returns 1 with *h, *m the surface stopped on. */
+#define REF_BLEND_DIM0 0x30000000u
+#define REF_BLEND_LAYERS 16
+static int blend_layer(const frame_ctx *c, uint64_t key, const float org[3], const float dir[3], float tnear,
+                       float tend, rt_hit *h, scn_material *m)
+{
+    rt_hit b;
+    for (uint32_t k = 0; k < REF_BLEND_LAYERS && rt_intersect_blend(c->rt, org, dir, tnear, tend, &b); k++) {
+        scn_material mb = eng_material_at(c->fs->scene, &b);
+        tnear = b.t + bsdf_offset_eps(b.position);
+        if (!mb.double_sided && dot3(b.normal, dir) >= 0.0f)
+            continue;
+        if (rnd(key, REF_BLEND_DIM0 + k) < clamp01(mb.base_color[3])) {
+            *h = b;
+            *m = mb;
+            return 1;
+        }
+    }
+    return 0;
+}
+
 /* One sample of pixel (x, y): adds the direct and indirect radiance it estimates. */
 static void trace_eye(const frame_ctx *c, int x, int y, uint32_t sample, double *direct, double *indirect)
 {
     uint64_t key = path_key(STREAM_EYE, (uint32_t)y * (uint32_t)c->width + (uint32_t)x, sample, c->frame, c->seed);
     float org[3], dir[3], tnear, tfar;
     camera_ray(c, x + (double)rnd(key, 0), y + (double)rnd(key, 1), org, dir, &tnear, &tfar);
+    const float tnear0 = tnear; /* the near plane: translucent surfaces in front of a culled back face count */
     float thr[3] = {1.0f, 1.0f, 1.0f}, eta = 1.0f;
     const scn_scene *scene = c->fs->scene;
     float prev[3] = {0.0f, 0.0f, 0.0f}, prev_pdf = 0.0f; /* the last D vertex, if the path left it by a D lobe */
     int prev_ok = 0;
     int seen = 1; /* every vertex so far scattered by a delta lobe: emission reaches the eye */
+    int translucent = 0; /* the primary vertex is on an alphaMode BLEND surface */
     for (int depth = 0; depth < c->max_depth; depth++) {
         rt_hit h;
         scn_material m;
@@ -953,6 +986,8 @@ static void trace_eye(const frame_ctx *c, int x, int y, uint32_t sample, double 
                 }
                 tnear = h.t + bsdf_offset_eps(h.position);
             }
+            translucent = blend_layer(c, key, org, dir, tnear0, hit ? h.t : tfar, &h, &m);
+            hit = hit || translucent;
             /* A lamp in front: the camera sees its emission (path L E, direct light). */
             float tl;
             int lamp = hit ? -1 : rt_lamp_hit(c->rt, org, dir, tnear, tfar, -1, &tl);
@@ -988,13 +1023,13 @@ static void trace_eye(const frame_ctx *c, int x, int y, uint32_t sample, double 
             double *dst = depth == 0 ? direct : indirect;
             for (int i = 0; i < 3; i++)
                 dst[i] += (double)(thr[i] * l[i]);
-            if (c->grid) {
+            if (c->grid && !translucent) {
                 gather(c, &m, h.position, ns, wi, l);
                 for (int i = 0; i < 3; i++)
                     indirect[i] += (double)(thr[i] * l[i]);
             }
             /* Paths one surface longer than this vertex: only if 1a could make them too. */
-            if (!last) {
+            if (!last && !translucent) {
                 light_vertex(c, key, dim + DIMS_PER_BOUNCE, &m, h.position, h.geom_normal, ns, wi, l);
                 for (int i = 0; i < 3; i++)
                     indirect[i] += (double)(thr[i] * l[i]);
@@ -1006,8 +1041,9 @@ static void trace_eye(const frame_ctx *c, int x, int y, uint32_t sample, double 
         scatter_numbers(key, dim, u, cosdir);
         bsdf_sample rs = {u, cosdir};
         bsdf_lobe lobe = bsdf_scatter(&m, n, wi, &eta, &rs, wo, w, &density);
-        if (lobe == BSDF_ABSORBED)
-            return;
+        if (lobe == BSDF_ABSORBED || (translucent && lobe != BSDF_MIRROR && lobe != BSDF_REFLECT && lobe != BSDF_REFRACT))
+            return; /* a translucent surface's light: direct, mirror and refracted only */
+        translucent = 0;
         prev_ok = d_vertex && (lobe == BSDF_DIFFUSE || lobe == BSDF_GLOSSY);
         seen = seen && (lobe == BSDF_MIRROR || lobe == BSDF_REFLECT || lobe == BSDF_REFRACT);
         if (prev_ok) {

@@ -13,6 +13,11 @@
  * surface hits nothing (rt_intersect returns 0: the photon or path is absorbed), except a ray
  * that starts inside it (light vertices and photons leaving their own light's centre).
  *
+ * alphaMode BLEND (issue 14, pass_translucent.c): BLEND geometry is not in the scene that
+ * rt_intersect and rt_occluded see (photons, shadow rays and the specular eye paths pass
+ * through translucent surfaces as if they were not there); it is in a second Embree scene that
+ * only rt_intersect_blend sees.
+ *
  * Determinism: the device is made with a pinned ISA (isa=sse2) and thread count, recorded in
  * the manifest, so ray results do not follow the host's SIMD width. */
 #include "eng_internal.h"
@@ -39,6 +44,7 @@ struct eng_rt {
     const scn_scene *scene;
     RTCDevice device;
     RTCScene rtscene;
+    RTCScene blend_scene; /* alphaMode BLEND geometry only (pass_translucent.c); NULL without any */
     uint32_t geom_count;
     rt_geom *geoms;
     uint32_t lamp_count;
@@ -174,9 +180,19 @@ void rt_update(eng_rt *rt, const eng_frame_scene *fs)
                 rtcSetGeometryOccludedFilterFunction(g->geom, mask_filter);
             }
             pose(g, p, fs->draws[i].world);
-            rtcAttachGeometryByID(rt->rtscene, g->geom, i);
+            if (rt_is_blend(rt->scene, g->material)) {
+                if (!rt->blend_scene) {
+                    rt->blend_scene = rtcNewScene(rt->device);
+                    rtcSetSceneBuildQuality(rt->blend_scene, RTC_BUILD_QUALITY_MEDIUM);
+                }
+                rtcAttachGeometryByID(rt->blend_scene, g->geom, i);
+            } else {
+                rtcAttachGeometryByID(rt->rtscene, g->geom, i);
+            }
         }
         rtcCommitScene(rt->rtscene);
+        if (rt->blend_scene)
+            rtcCommitScene(rt->blend_scene);
         return;
     }
     int changed = 0;
@@ -187,8 +203,22 @@ void rt_update(eng_rt *rt, const eng_frame_scene *fs)
             changed = 1;
         }
     }
-    if (changed)
+    if (changed) {
         rtcCommitScene(rt->rtscene);
+        if (rt->blend_scene)
+            rtcCommitScene(rt->blend_scene);
+    }
+}
+
+int rt_is_blend(const scn_scene *scene, int32_t material)
+{
+    return material >= 0 && (uint32_t)material < scene->material_count &&
+           scene->materials[material].alpha_mode == SCN_ALPHA_BLEND;
+}
+
+int rt_has_blend(const eng_rt *rt)
+{
+    return rt->blend_scene != NULL;
 }
 
 int rt_occluded(const eng_rt *rt, const float a[3], const float b[3])
@@ -252,7 +282,8 @@ int rt_lamp_hit(const eng_rt *rt, const float org[3], const float dir[3], float 
     return best;
 }
 
-int rt_intersect(const eng_rt *rt, const float org[3], const float dir[3], float tnear, float tfar, rt_hit *hit)
+static int intersect_in(const eng_rt *rt, RTCScene scene, int lamps, const float org[3], const float dir[3],
+                        float tnear, float tfar, rt_hit *hit)
 {
     struct RTCIntersectContext ctx;
     rtcInitIntersectContext(&ctx);
@@ -269,10 +300,10 @@ int rt_intersect(const eng_rt *rt, const float org[3], const float dir[3], float
     rh.ray.mask = 0xFFFFFFFFu;
     rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
     rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
-    rtcIntersect1(rt->rtscene, &ctx, &rh);
+    rtcIntersect1(scene, &ctx, &rh);
     int found = rh.hit.geomID != RTC_INVALID_GEOMETRY_ID && rh.hit.geomID < rt->geom_count;
     float tl;
-    if (rt->lamp_count && rt_lamp_hit(rt, org, dir, tnear, found ? rh.ray.tfar : tfar, -1, &tl) >= 0)
+    if (lamps && rt->lamp_count && rt_lamp_hit(rt, org, dir, tnear, found ? rh.ray.tfar : tfar, -1, &tl) >= 0)
         return 0; /* absorbed by a lamp */
     if (!found)
         return 0;
@@ -312,6 +343,16 @@ int rt_intersect(const eng_rt *rt, const float org[3], const float dir[3], float
     return 1;
 }
 
+int rt_intersect(const eng_rt *rt, const float org[3], const float dir[3], float tnear, float tfar, rt_hit *hit)
+{
+    return intersect_in(rt, rt->rtscene, 1, org, dir, tnear, tfar, hit);
+}
+
+int rt_intersect_blend(const eng_rt *rt, const float org[3], const float dir[3], float tnear, float tfar, rt_hit *hit)
+{
+    return rt->blend_scene ? intersect_in(rt, rt->blend_scene, 0, org, dir, tnear, tfar, hit) : 0;
+}
+
 void rt_destroy(eng_rt *rt)
 {
     if (!rt)
@@ -324,6 +365,8 @@ void rt_destroy(eng_rt *rt)
     free(rt->geoms);
     if (rt->rtscene)
         rtcReleaseScene(rt->rtscene);
+    if (rt->blend_scene)
+        rtcReleaseScene(rt->blend_scene);
     if (rt->device)
         rtcReleaseDevice(rt->device);
     free(rt);

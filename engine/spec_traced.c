@@ -160,7 +160,7 @@ void spec_tracer_destroy(spec_tracer *t)
 /* Light leaving the non-specular lobes of m at hit h toward `from` (the previous vertex):
  * direct light by shadow rays and the photon gather. ns: the shading normal turned toward wi. */
 static void shade(const spec_tracer *t, const rt_hit *h, const scn_material *m, const float ns[3], const float wi[3],
-                  const float from[3], spec_scratch *sc, float out[3])
+                  const float from[3], int gather, spec_scratch *sc, float out[3])
 {
     const float mat[4] = {m->roughness, m->metallic, m->transmission, m->ior};
     gk_pixel px;
@@ -194,7 +194,7 @@ static void shade(const spec_tracer *t, const rt_hit *h, const scn_material *m, 
         for (int c = 0; c < 3; c++)
             out[c] += f[c] * e[c] * cosl;
     }
-    if (t->map) {
+    if (gather && t->map) {
         float acc[4] = {0.0f, 0.0f, 0.0f, 0.0f};
         kd_gather_point(&t->tree, t->map, t->r_xy, t->radius, t->compression, &px, &sc->list, &sc->cap, acc, NULL);
         for (int c = 0; c < 3; c++)
@@ -262,7 +262,7 @@ static void trace_tree(const spec_tracer *t, spec_ray *stack, int top, uint32_t 
         if (bsdf_stores_photons(&hm)) {
             float s = dot3(hn, hwi) >= 0.0f ? 1.0f : -1.0f;
             float ns[3] = {s * hn[0], s * hn[1], s * hn[2]}, l[3];
-            shade(t, &h, &hm, ns, hwi, r.org, sc, l);
+            shade(t, &h, &hm, ns, hwi, r.org, 1, sc, l);
             for (int c = 0; c < 3; c++) {
                 radiance[c] += r.thr[c] * l[c];
                 throughput[c] += r.thr[c];
@@ -294,6 +294,35 @@ void spec_tracer_pixel(const spec_tracer *t, const float p[3], const float n[3],
     const float one[3] = {1.0f, 1.0f, 1.0f};
     int top = push_branches(stack, 0, b, spec_split(m, n, wi, 1.0f, b), p, n, one, 1);
     trace_tree(t, stack, top, UINT32_MAX, sc, radiance, depth, throughput);
+}
+
+void spec_tracer_translucent(const spec_tracer *t, const rt_hit *h, const scn_material *m, const float eye[3],
+                             spec_scratch *sc, float radiance[3])
+{
+    float wi[3] = {eye[0] - h->position[0], eye[1] - h->position[1], eye[2] - h->position[2]};
+    float len = sqrtf(dot3(wi, wi));
+    radiance[0] = radiance[1] = radiance[2] = 0.0f;
+    if (!(len > 0.0f))
+        return;
+    for (int c = 0; c < 3; c++)
+        wi[c] /= len;
+    const float *hn = (dot3(h->geom_normal, wi) >= 0.0f) == (dot3(h->normal, wi) >= 0.0f) ? h->normal : h->geom_normal;
+    float s = dot3(hn, wi) >= 0.0f ? 1.0f : -1.0f;
+    float ns[3] = {s * hn[0], s * hn[1], s * hn[2]};
+    if (bsdf_stores_photons(m))
+        shade(t, h, m, ns, wi, eye, 0, sc, radiance); /* direct light only: no photons on a translucent surface */
+    for (int c = 0; c < 3; c++)
+        radiance[c] += m->emissive[c];
+    if (spec_is_specular(m)) {
+        spec_ray stack[2 * SPEC_MAX_DEPTH + 2];
+        spec_branch b[2];
+        const float one[3] = {1.0f, 1.0f, 1.0f};
+        float depth = 0.0f, thr[3] = {0.0f, 0.0f, 0.0f}, l[3] = {0.0f, 0.0f, 0.0f};
+        int top = push_branches(stack, 0, b, spec_split(m, hn, wi, 1.0f, b), h->position, h->geom_normal, one, 1);
+        trace_tree(t, stack, top, UINT32_MAX, sc, l, &depth, thr);
+        for (int c = 0; c < 3; c++)
+            radiance[c] += l[c];
+    }
 }
 
 void spec_tracer_ray(const spec_tracer *t, const float org[3], const float dir[3], uint32_t skip_draw,

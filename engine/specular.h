@@ -100,6 +100,12 @@ void spec_tracer_destroy(spec_tracer *t); /* accepts NULL */
 /* Radiance arriving at org from unit direction −dir, found the way spec_tracer_pixel finds it
  * (the ray counts as having crossed one specular surface), passing through the draw
  * skip_draw until it meets another surface (UINT32_MAX: none). For the envmap method. */
+/* What a translucent (alphaMode BLEND) surface at hit h with material m sends toward the eye
+ * (pass_translucent.c; 003 §3 step 5: direct, mirror and refracted light only): direct light
+ * through its non-specular lobes (shadow rays, no photon gather), its emission, and what its
+ * delta lobes reflect and refract (as spec_tracer_pixel, photons gathered where they end). */
+void spec_tracer_translucent(const spec_tracer *t, const rt_hit *h, const scn_material *m, const float eye[3],
+                             spec_scratch *sc, float radiance[3]);
 void spec_tracer_ray(const spec_tracer *t, const float org[3], const float dir[3], uint32_t skip_draw,
                      spec_scratch *sc, float radiance[3]);
 

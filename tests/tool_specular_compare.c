@@ -6,7 +6,9 @@
  * mean ratio = Σ test / Σ reference over those pixels; block p90 = the 90th percentile of the
  * relative error of 8×8-block means (rep_metric_bias with every other pixel zeroed); black =
  * those pixels where the run shows nothing (all channels 0) but the reference shows more than
- * 5% of the pixels' mean. usage: ispm_test_specular RUN REFERENCE_RUN [BUFFER] */
+ * 5% of the pixels' mean. With MASK_PART MASK_CHANNEL the pixels are those where that channel of
+ * the run is > 0 instead (translucent.radiance A: the alphaMode BLEND pane).
+ * usage: ispm_test_specular RUN REFERENCE_RUN [BUFFER [MASK_PART MASK_CHANNEL]] */
 #define _POSIX_C_SOURCE 200809L
 #include <stdio.h>
 #include <stdlib.h>
@@ -56,13 +58,14 @@ static float *read_part(const char *dir, const char *name, const char *channel, 
 
 int main(int argc, char **argv)
 {
-    if (argc != 3 && argc != 4) {
-        fprintf(stderr, "usage: %s RUN REFERENCE_RUN [BUFFER]\n", argv[0]);
+    if (argc != 3 && argc != 4 && argc != 6) {
+        fprintf(stderr, "usage: %s RUN REFERENCE_RUN [BUFFER [MASK_PART MASK_CHANNEL]]\n", argv[0]);
         return 2;
     }
     int w, h, rw, rh, mw, mh;
-    float *test = read_part(argv[1], argc == 4 ? argv[3] : "composite.radiance", NULL, &w, &h);
-    float *trans = read_part(argv[1], "gbuffer.material", "transmission", &mw, &mh);
+    float *test = read_part(argv[1], argc >= 4 ? argv[3] : "composite.radiance", NULL, &w, &h);
+    float *trans = read_part(argv[1], argc == 6 ? argv[4] : "gbuffer.material", argc == 6 ? argv[5] : "transmission",
+                             &mw, &mh);
     float *ref = read_part(argv[2], "reference.full", NULL, &rw, &rh);
     if (rw != w || rh != h || mw != w || mh != h) {
         fprintf(stderr, "%s and %s differ in size\n", argv[1], argv[2]);

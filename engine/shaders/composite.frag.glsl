@@ -1,7 +1,7 @@
 #version 450 core
 // Composite: final linear radiance = direct + indirect (ISPM §3 last step) + specular (eye
 // paths continued through mirrors and glass, engine/specular.h) + emission of the visible
-// surface (gbuffer.emission), and the display
+// surface (gbuffer.emission), the translucent surfaces over it, and the display
 // transform: exposure in stops, clamp to [0,1], sRGB encoding (IEC 61966-2-1).
 uniform sampler2D u_direct;
 uniform sampler2D u_indirect;
@@ -10,6 +10,8 @@ uniform sampler2D u_specular;
 uniform int u_has_specular;
 uniform sampler2D u_emission;
 uniform int u_has_emission;
+uniform sampler2D u_translucent; // premultiplied RGBA of the alphaMode BLEND surfaces (pass_translucent.c)
+uniform int u_has_translucent;
 uniform float u_exposure;
 
 layout(location = 0) out vec4 o_radiance;
@@ -32,6 +34,10 @@ void main()
         l += texelFetch(u_specular, px, 0).rgb;
     if (u_has_emission == 1)
         l += texelFetch(u_emission, px, 0).rgb;
+    if (u_has_translucent == 1) { // back-to-front "over" of the translucent layers
+        vec4 t = texelFetch(u_translucent, px, 0);
+        l = t.rgb + (1.0 - t.a) * l;
+    }
     o_radiance = vec4(l, 1.0);
     o_display = vec4(srgb_encode(clamp(l * exp2(u_exposure), 0.0, 1.0)), 1.0);
 }

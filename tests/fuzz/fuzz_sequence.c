@@ -4,7 +4,7 @@
  * scene path, it never opens it, so the target reads no file. On every input the contract is
  * checked: a failure leaves a one-line non-empty message; a success satisfies the invariants
  * eng.h promises (frame_count >= 1, fps > 0 and finite, width and height in 1..16384, camera
- * keys and capture patterns within their arrays), and seq_wants is exercised on a few buffer
+ * keys and capture patterns within their arrays, a camera by node name, node index or keys), and seq_wants is exercised on a few buffer
  * names so the stored glob patterns are known to be NUL-terminated and usable. */
 #define _POSIX_C_SOURCE 200809L
 #include "eng.h"
@@ -31,7 +31,8 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     if (seq.frame_count < 1 || !(seq.fps > 0) || !isfinite(seq.fps) || seq.width < 1 || seq.width > 16384 ||
         seq.height < 1 || seq.height > 16384 || seq.capture_count < 0 || seq.capture_count > SEQ_MAX_CAPTURE ||
         seq.camera_key_count < 0 || seq.camera_key_count > SEQ_MAX_CAMKEYS ||
-        (!seq.camera_node[0] && seq.camera_key_count < 1))
+        (!seq.camera_node[0] && !seq.camera_by_index && seq.camera_key_count < 1) ||
+        (seq.camera_by_index && seq.camera_node_index < 0))
         abort();
     static const char *const names[] = {"gbuffer.depth", "shadow.light0.face3", "final.display", ""};
     for (size_t i = 0; i < sizeof names / sizeof names[0]; i++)
