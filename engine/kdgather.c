@@ -191,8 +191,11 @@ static int cmp_u32(const void *a, const void *b)
     return (x > y) - (x < y);
 }
 
-void kd_gather_point(const kd_tree *tree, const eng_photon_map *map, const float *r_xy, float radius,
-                     float compression, const gk_pixel *px, uint32_t **list, size_t *cap, float acc[4], float *glossy)
+/* One surface point's gather: the per-pixel body of gather() below, inlined there (it is the
+ * speed baseline), and exported as kd_gather_point for the traced specular pass. */
+static inline void gather_point(const kd_tree *tree, const eng_photon_map *map, const float *r_xy, float radius,
+                                float compression, const gk_pixel *px, uint32_t **list, size_t *cap, float acc[4],
+                                float *glossy)
 {
     const float *p = px->s;
     size_t n = 0, kept = 0;
@@ -212,6 +215,12 @@ void kd_gather_point(const kd_tree *tree, const eng_photon_map *map, const float
     /* shaders/splat.frag.glsl's main() summed over the photons in index order. */
     for (size_t k = 0; k < n; k++)
         gk_add(px, &map->photons[l[k]], r_xy[l[k]], compression, acc, glossy);
+}
+
+void kd_gather_point(const kd_tree *tree, const eng_photon_map *map, const float *r_xy, float radius,
+                     float compression, const gk_pixel *px, uint32_t **list, size_t *cap, float acc[4], float *glossy)
+{
+    gather_point(tree, map, r_xy, radius, compression, px, list, cap, acc, glossy);
 }
 
 static eng_result gather(const eng_photon_map *map, const float *radii, int w, int h, const float *position,
@@ -252,8 +261,8 @@ static eng_result gather(const eng_photon_map *map, const float *radii, int w, i
                     continue;
                 gk_pixel px;
                 gk_pixel_init(&px, p, normal + 3 * i, albedo + 3 * i, material + 4 * i, eye);
-                kd_gather_point(&tree, map, r_xy, radius, compression, &px, &list, &cap, out + 4 * i,
-                                glossy ? glossy + 4 * i : NULL);
+                gather_point(&tree, map, r_xy, radius, compression, &px, &list, &cap, out + 4 * i,
+                             glossy ? glossy + 4 * i : NULL);
             }
         }
         free(list);
