@@ -193,7 +193,7 @@ static int cmp_u32(const void *a, const void *b)
 
 /* One surface point's gather: the per-pixel body of gather() below, inlined there (it is the
  * speed baseline), and exported as kd_gather_point for the traced specular pass. */
-static inline void gather_point(const kd_tree *tree, const eng_photon_map *map, const float *r_xy, float radius,
+static GK_ALWAYS_INLINE void gather_point(const kd_tree *tree, const eng_photon_map *map, const float *r_xy, float radius,
                                 float compression, const gk_pixel *px, uint32_t **list, size_t *cap, float acc[4],
                                 float *glossy)
 {
