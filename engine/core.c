@@ -228,6 +228,7 @@ const char *eng_scaling_name(eng_kernel_scaling m)
     case ENG_SCALING_RAY_LENGTH: return "ray-length";
     case ENG_SCALING_TILE_DENSITY: return "tile-density";
     case ENG_SCALING_BANDWIDTH: return "bandwidth";
+    case ENG_SCALING_ANISOTROPIC: return "anisotropic";
     case ENG_SCALING_PATH_DENSITY:
     case ENG_SCALING_DEFAULT: return "path-density";
     }

@@ -291,7 +291,9 @@ typedef enum eng_kernel_scaling {
     ENG_SCALING_PATH_DENSITY, /* kernel_radius · clamp((1000 ρp)^(−1/4), 1/4, 2) (splat_radius) */
     ENG_SCALING_RAY_LENGTH,   /* 002 Eq. 6.1: the incoming ray's length over a scene-sized l_max */
     ENG_SCALING_TILE_DENSITY, /* 002 Eq. 6.2: the photon density of the screen tile it lands in */
-    ENG_SCALING_BANDWIDTH     /* 004 §6: variable bandwidth C = C0/√p, p = cos θ / d² */
+    ENG_SCALING_BANDWIDTH,    /* 004 §6: variable bandwidth C = C0/√p, p = cos θ / d² */
+    ENG_SCALING_ANISOTROPIC   /* 002 Eq. 6.3–6.5: path-density's r_xy, the ellipsoid stretched along
+                               * ω_i's projection on the kernel plane by min(1/cos θ, s_max) */
 } eng_kernel_scaling;
 
 /* The kernel's boundary correction (engine/boundary.h). */

@@ -218,10 +218,12 @@ void pass_lightmaps_destroy(pass_lightmaps *p);
 typedef struct pass_splat pass_splat;
 /* irradiance = 0: one attachment, RGB outgoing radiance (splat.frag.glsl). irradiance = 1:
  * for the reconstruction filters, two attachments: 0 irradiance RGB + count, 1 the glossy
- * radiance (splat_irradiance.frag.glsl). width×height must be the G-buffer's it runs against. */
+ * radiance (splat_irradiance.frag.glsl). width×height must be the G-buffer's it runs against.
+ * aniso: NULL, or the anisotropic kernel's 4 floats per photon (indirect.h, ind_input). */
 eng_result pass_splat_create(int width, int height, int irradiance, pass_splat **out, eng_error *err);
 const glu_target *pass_splat_run(pass_splat *p, const eng_frame_scene *fs, const glu_target *gbuf,
-                                 const eng_photon_map *map, const float *radius, const eng_settings *s);
+                                 const eng_photon_map *map, const float *radius,
+                                 const float *aniso, const eng_settings *s);
 void pass_splat_destroy(pass_splat *p);
 /* ISPM §5.1 Eq. 2–3 on the CPU, the same kernel shaders/splat.frag.glsl evaluates: d = s − x
  * (surface point minus photon), n_p the photon's surface normal. Returns κ in 1/m²; 0 outside

@@ -51,6 +51,8 @@ struct eng_engine {
     eng_photon_map pmap;
     float *radius; /* per photon r_xy (indirect.h) */
     size_t radius_capacity;
+    float *aniso;     /* per photon 4 floats under "kernel_scaling": "anisotropic" (indirect.h) */
+    int aniso_on;     /* aniso holds this frame's photons */
     const ind_method *method; /* indirect.h: the `indirect` setting's method, NULL for none */
     void *method_state;
     const pt_method *tracer; /* trace_method.h: the `photon_trace` setting's method */
@@ -384,6 +386,7 @@ void eng_destroy(eng_engine *e)
     photon_map_free(&e->pmap);
     free(e->bounce);
     free(e->radius);
+    free(e->aniso);
     prog_destroy(e->prog);
     bnd_pass_destroy(e->bnd);
     ind_gbuffer_free(&e->prog_gb);
@@ -821,7 +824,7 @@ static eng_result trace_prepare(eng_engine *e, int frame, pt_tracer *tracer, eng
  * the extra buffers it lists; *out gets its target. */
 static eng_result run_method(eng_engine *e, int frame, const glu_target *gb, const glu_target **out, eng_error *err)
 {
-    ind_input in = {&e->fs, gb, &e->pmap, e->radius, &e->settings};
+    ind_input in = {&e->fs, gb, &e->pmap, e->radius, &e->settings, e->aniso_on ? e->aniso : NULL};
     ind_output o;
     memset(&o, 0, sizeof o);
     double t0 = now_ms();
@@ -847,7 +850,7 @@ static eng_result boundary_run(eng_engine *e, int frame, const glu_target *gb, c
     if (!e->bnd)
         return ENG_OK;
     double t0 = now_ms();
-    ind_input in = {&e->fs, gb, &e->pmap, e->radius, &e->settings};
+    ind_input in = {&e->fs, gb, &e->pmap, e->radius, &e->settings, NULL};
     const float *wt = bnd_pass_run(e->bnd, gb, sp, &in);
     glFinish();
     add_time(e, "boundary", now_ms() - t0);
@@ -1142,11 +1145,16 @@ eng_result eng_render_frame(eng_engine *e, int frame, eng_error *err)
         if (e->pmap.count > e->radius_capacity) {
             free(e->radius);
             e->radius = eng_xmalloc(e->pmap.count * sizeof *e->radius);
+            free(e->aniso);
+            e->aniso = e->settings.kernel_scaling == ENG_SCALING_ANISOTROPIC
+                           ? eng_xmalloc(e->pmap.count * 4 * sizeof *e->aniso)
+                           : NULL;
             e->radius_capacity = e->pmap.count;
         }
         /* Progressive photon mapping's radius scale (progressive.h): one per frame. */
         e->radius_scale = e->prog ? prog_begin(e->prog, &e->fs) : 1.0f;
         ind_photon_radii(&e->pmap, &e->settings, &e->fs, e->width, e->height, e->radius_scale, e->radius);
+        e->aniso_on = e->aniso && ind_photon_aniso(&e->pmap, &e->settings, e->aniso);
         e->stats.photons_emitted = tstats.emitted;
         memcpy(e->stats.photons_stored, tstats.stored, sizeof e->stats.photons_stored);
         e->stats.photons_truncated = tstats.truncated;

@@ -13,14 +13,12 @@
 
 #include "eng_internal.h"
 
-/* gk_add is the inner loop of the k-d gather (the speed baseline) and of the tile gather.
- * Since kdgather.c has two callers of it (the gather and kd_gather_point), GCC stopped
- * inlining it there: a call per photon cost the gather +0.9 % instructions (callgrind) and
- * 1.5-4 % time against 9941c82. Forced inline restores the old code. */
+/* The per-photon adds are inlined into the gathers' loops whatever the compiler's size
+ * heuristics (a call per photon costs the k-d gather, the speed baseline, ~5 %). */
 #if defined(__GNUC__)
-#define GK_ALWAYS_INLINE inline __attribute__((always_inline))
+#define GK_INLINE inline __attribute__((always_inline))
 #else
-#define GK_ALWAYS_INLINE inline
+#define GK_INLINE inline
 #endif
 
 /* shaders/ggx.glsl, in the same float operations. */
@@ -92,16 +90,63 @@ static inline void gk_glossy(const gk_pixel *px, const float w_i[3], float cos_i
     }
 }
 
-/* Adds photon ph (kernel radius rxy) to the pixel. Radiance mode (glossy == NULL): acc RGB
- * += f Φ κ. Irradiance mode: acc RGB += Φ κ and glossy RGB += f_glossy Φ κ. acc[3] counts
- * the photons that passed every test. */
-static GK_ALWAYS_INLINE void gk_add(const gk_pixel *px, const eng_photon *ph, float rxy, float compression, float acc[4],
-                          float *glossy)
+/* The anisotropic kernel of 002_… §6.1.2 ("Adjusting the kernel's shape", Eq. 6.3–6.5): the
+ * ellipsoid keeps its short axis r_z along the photon's surface normal n_p and its axis r_xy
+ * along t̂, and is stretched along û, ω_i projected onto the kernel plane, by
+ * s_u = min(1 / (n_p·ω_i), s_max) (Eq. 6.3), the growth of a ray cone's footprint at grazing
+ * incidence. Per photon four floats: the stretch vector a = √(1 − 1/s_u) û and s_u. The
+ * kernel is the isotropic one (gk_kappa) at the point d' = d − (d·a) a, which divides d's û
+ * component by s_u and leaves d·n_p alone (û ⟂ n_p): Eq. 6.5's tri-axial ellipsoid
+ * (semi-axes s_u r_xy, r_xy, r_z) maps to the isotropic one, and κ is divided by s_u, the
+ * Jacobian, so it still integrates to 1 over the photon's plane (Eq. 6.6's area A = π s_u r²).
+ * At normal incidence s_u = 1 and it is gk_kappa exactly. The ellipsoid lies inside the
+ * sphere of radius s_u r_xy: a method's culling uses that reach. */
+#define GK_STRETCH_MAX 4.0f /* s_max of Eq. 6.3 (the thesis leaves it a constant) */
+
+static inline void gk_aniso_of(const eng_photon *ph, float out[4])
+{
+    float c = gk_dot3(ph->direction, ph->normal);
+    float su = c * GK_STRETCH_MAX > 1.0f ? 1.0f / c : GK_STRETCH_MAX;
+    float u[3];
+    for (int k = 0; k < 3; k++)
+        u[k] = ph->direction[k] - c * ph->normal[k];
+    float ul = sqrtf(gk_dot3(u, u));
+    if (!(su > 1.0f) || !(ul > 0.0f)) {
+        out[0] = out[1] = out[2] = 0.0f;
+        out[3] = 1.0f;
+        return;
+    }
+    float m = sqrtf(1.0f - 1.0f / su) / ul;
+    for (int k = 0; k < 3; k++)
+        out[k] = u[k] * m;
+    out[3] = su;
+}
+
+/* κ of the anisotropic kernel (aniso: gk_aniso_of's four floats), negative outside it. */
+static inline float gk_kappa_aniso(const eng_photon *ph, const float s[3], float rxy, const float aniso[4],
+                                   float compression)
+{
+    const float su = aniso[3];
+    if (su == 1.0f)
+        return gk_kappa(ph, s, rxy, compression);
+    const float PI_F = (float)ENG_PI;
+    float rz = rxy * compression;
+    float d[3] = {s[0] - ph->position[0], s[1] - ph->position[1], s[2] - ph->position[2]};
+    float da = gk_dot3(d, aniso);
+    float e[3] = {d[0] - da * aniso[0], d[1] - da * aniso[1], d[2] - da * aniso[2]};
+    float len = sqrtf(gk_dot3(e, e));
+    float t = len > 0.0f ? len / rxy * (1.0f + fabsf(gk_dot3(e, ph->normal)) / len * (rxy - rz) / rz) : 0.0f;
+    if (t >= 1.0f)
+        return -1.0f;
+    return 2.0f / (PI_F * rxy * rxy * su) * (1.0f - t * t);
+}
+
+/* Adds photon ph with kernel value kappa (>= 0) to the pixel. Radiance mode (glossy ==
+ * NULL): acc RGB += f Φ κ. Irradiance mode: acc RGB += Φ κ and glossy RGB += f_glossy Φ κ.
+ * acc[3] counts the photons that passed every test. */
+static GK_INLINE void gk_add_kappa(const gk_pixel *px, const eng_photon *ph, float kappa, float acc[4], float *glossy)
 {
     const float PI_F = (float)ENG_PI;
-    float kappa = gk_kappa(ph, px->s, rxy, compression);
-    if (kappa < 0.0f)
-        return;
     float cos_i = gk_dot3(ph->direction, px->nrm);
     if (cos_i <= 0.0f)
         return;
@@ -132,6 +177,26 @@ static GK_ALWAYS_INLINE void gk_add(const gk_pixel *px, const eng_photon *ph, fl
     for (int c = 0; c < 3; c++)
         acc[c] += f[c] * ph->power[c] * kappa;
     acc[3] += 1.0f;
+}
+
+/* Adds photon ph (kernel radius rxy) to the pixel: gk_add_kappa with the isotropic κ. */
+static GK_INLINE void gk_add(const gk_pixel *px, const eng_photon *ph, float rxy, float compression, float acc[4],
+                          float *glossy)
+{
+    float kappa = gk_kappa(ph, px->s, rxy, compression);
+    if (kappa < 0.0f)
+        return;
+    gk_add_kappa(px, ph, kappa, acc, glossy);
+}
+
+/* The same with the anisotropic κ (gk_kappa_aniso). */
+static GK_INLINE void gk_add_aniso(const gk_pixel *px, const eng_photon *ph, float rxy, const float aniso[4],
+                                float compression, float acc[4], float *glossy)
+{
+    float kappa = gk_kappa_aniso(ph, px->s, rxy, aniso, compression);
+    if (kappa < 0.0f)
+        return;
+    gk_add_kappa(px, ph, kappa, acc, glossy);
 }
 
 #endif

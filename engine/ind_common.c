@@ -1,6 +1,7 @@
 /* ind_common.c — the table of indirect-light methods (indirect.h) and what the CPU methods
  * share: the eye G-buffer read back, and an output target they upload into. */
 #include "indirect.h"
+#include "gather_kernel.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -133,6 +134,7 @@ void ind_photon_radii(const eng_photon_map *map, const eng_settings *s, const en
         }
         break;
     }
+    case ENG_SCALING_ANISOTROPIC: /* path-density's size; the shape is ind_photon_aniso's */
     case ENG_SCALING_PATH_DENSITY:
     case ENG_SCALING_DEFAULT:
         for (size_t i = 0; i < n; i++)
@@ -143,6 +145,30 @@ void ind_photon_radii(const eng_photon_map *map, const eng_settings *s, const en
     if (scale != 1.0f)
         for (size_t i = 0; i < n; i++)
             radius[i] *= scale;
+}
+
+int ind_photon_aniso(const eng_photon_map *map, const eng_settings *s, float *aniso)
+{
+    if (s->kernel_scaling != ENG_SCALING_ANISOTROPIC)
+        return 0;
+    for (size_t i = 0; i < map->count; i++)
+        gk_aniso_of(&map->photons[i], aniso + 4 * i);
+    return 1;
+}
+
+const float *ind_reach(const ind_input *in, float **buf, size_t *cap)
+{
+    const size_t n = in->map->count;
+    if (!in->aniso)
+        return in->radius;
+    if (n > *cap) {
+        free(*buf);
+        *buf = eng_xmalloc(n * sizeof **buf);
+        *cap = n;
+    }
+    for (size_t i = 0; i < n; i++)
+        (*buf)[i] = in->radius[i] * in->aniso[4 * i + 3];
+    return *buf;
 }
 
 eng_result ind_cpu_target_create(ind_cpu_target *t, int width, int height, int irradiance, eng_error *err)

@@ -36,14 +36,16 @@
 #include <stdlib.h>
 #include <string.h>
 
-/* Per-instance attributes, 16 floats (the photon volumes' layout, pass_splat.c). */
+/* Per-instance attributes, 16 floats (the photon volumes' layout, pass_splat.c); stretch: the
+ * anisotropic kernel's s_u (1: isotropic; quad_kernel.glsl). */
 typedef struct quad_instance {
-    float position[3], normal[3], power[3], direction[3], radius[2], pad[2];
+    float position[3], normal[3], power[3], direction[3], radius[2], stretch, pad;
 } quad_instance;
 
 typedef struct quads_state {
     glu_target target;
-    GLuint program, vao, vbo_quad, vbo_inst;
+    GLuint program, program_aniso, vao, vbo_quad, vbo_inst; /* program_aniso: PHOTON_ANISO, on first use */
+    int irradiance;
     size_t inst_capacity;
     quad_instance *inst; /* inst_capacity instances, CPU side */
 } quads_state;
@@ -60,8 +62,26 @@ static void quads_destroy(void *state)
     glDeleteBuffers(2, bufs);
     if (q->program)
         glDeleteProgram(q->program);
+    if (q->program_aniso)
+        glDeleteProgram(q->program_aniso);
     free(q->inst);
     free(q);
+}
+
+/* The quads program (PHOTON_ANISO with aniso) into *prog, samplers set. */
+static eng_result quads_program(int irradiance, int aniso, GLuint *prog, eng_error *err)
+{
+    eng_result r = glu_program_defines("quads.vert.glsl", irradiance ? "quads_irradiance.frag.glsl" : "quads.frag.glsl",
+                                       aniso ? "#define PHOTON_ANISO\n" : NULL, prog, err);
+    if (r != ENG_OK)
+        return r;
+    glUseProgram(*prog);
+    glUniform1i(glGetUniformLocation(*prog, "u_position"), 0);
+    glUniform1i(glGetUniformLocation(*prog, "u_normal"), 1);
+    glUniform1i(glGetUniformLocation(*prog, "u_albedo"), 2);
+    glUniform1i(glGetUniformLocation(*prog, "u_material"), 3);
+    glUseProgram(0);
+    return ENG_OK;
 }
 
 static eng_result quads_create(int width, int height, int irradiance, void **state, eng_error *err)
@@ -70,8 +90,8 @@ static eng_result quads_create(int width, int height, int irradiance, void **sta
     quads_state *q = calloc(1, sizeof *q);
     if (!q)
         return eng_fail(err, ENG_ERR_NOMEM, "quads: out of memory");
-    eng_result r = glu_program("quads.vert.glsl", irradiance ? "quads_irradiance.frag.glsl" : "quads.frag.glsl",
-                               &q->program, err);
+    q->irradiance = irradiance;
+    eng_result r = quads_program(irradiance, 0, &q->program, err);
     if (r == ENG_OK)
         r = glu_target_create(&q->target, irradiance ? 2 : 1, width, height, 0, err);
     if (r != ENG_OK) {
@@ -91,27 +111,21 @@ static eng_result quads_create(int width, int height, int irradiance, void **sta
     glGenBuffers(1, &q->vbo_inst);
     glBindBuffer(GL_ARRAY_BUFFER, q->vbo_inst);
     const GLsizei stride = sizeof(quad_instance);
-    const size_t offs[5] = {offsetof(quad_instance, position), offsetof(quad_instance, normal),
-                            offsetof(quad_instance, power), offsetof(quad_instance, direction),
-                            offsetof(quad_instance, radius)};
-    for (int a = 0; a < 5; a++) {
-        glVertexAttribPointer(1 + a, a == 4 ? 2 : 3, GL_FLOAT, GL_FALSE, stride, (const void *)offs[a]);
+    const size_t offs[6] = {offsetof(quad_instance, position), offsetof(quad_instance, normal),
+                            offsetof(quad_instance, power),    offsetof(quad_instance, direction),
+                            offsetof(quad_instance, radius),   offsetof(quad_instance, stretch)};
+    for (int a = 0; a < 6; a++) {
+        glVertexAttribPointer(1 + a, a == 5 ? 1 : a == 4 ? 2 : 3, GL_FLOAT, GL_FALSE, stride, (const void *)offs[a]);
         glVertexAttribDivisor(1 + a, 1);
         glEnableVertexAttribArray(1 + a);
     }
     glBindVertexArray(0);
-    glUseProgram(q->program);
-    glUniform1i(glGetUniformLocation(q->program, "u_position"), 0);
-    glUniform1i(glGetUniformLocation(q->program, "u_normal"), 1);
-    glUniform1i(glGetUniformLocation(q->program, "u_albedo"), 2);
-    glUniform1i(glGetUniformLocation(q->program, "u_material"), 3);
     *state = q;
     return ENG_OK;
 }
 
 static eng_result quads_run(void *state, const ind_input *in, ind_output *out, eng_error *err)
 {
-    (void)err;
     quads_state *q = state;
     const eng_photon_map *map = in->map;
     const eng_settings *s = in->s;
@@ -144,14 +158,21 @@ static eng_result quads_run(void *state, const ind_input *in, ind_output *out, e
             memcpy(d->direction, ph->direction, sizeof d->direction);
             d->radius[0] = in->radius[i];
             d->radius[1] = d->radius[0] * s->normal_compression;
-            d->pad[0] = d->pad[1] = 0.0f;
+            d->stretch = in->aniso ? in->aniso[4 * i + 3] : 1.0f;
+            d->pad = 0.0f;
         }
         glBindBuffer(GL_ARRAY_BUFFER, q->vbo_inst);
         glBufferSubData(GL_ARRAY_BUFFER, 0, (GLsizeiptr)(map->count * sizeof *inst), inst);
 
-        glUseProgram(q->program);
-        glUniformMatrix4fv(glGetUniformLocation(q->program, "u_view_proj"), 1, GL_FALSE, in->fs->camera.view_proj);
-        glUniform3fv(glGetUniformLocation(q->program, "u_eye"), 1, in->fs->camera.eye);
+        if (in->aniso && !q->program_aniso) {
+            eng_result r = quads_program(q->irradiance, 1, &q->program_aniso, err);
+            if (r != ENG_OK)
+                return r;
+        }
+        const GLuint prog = in->aniso ? q->program_aniso : q->program;
+        glUseProgram(prog);
+        glUniformMatrix4fv(glGetUniformLocation(prog, "u_view_proj"), 1, GL_FALSE, in->fs->camera.view_proj);
+        glUniform3fv(glGetUniformLocation(prog, "u_eye"), 1, in->fs->camera.eye);
         for (int i = 0; i < 4; i++) {
             glActiveTexture(GL_TEXTURE0 + i);
             glBindTexture(GL_TEXTURE_2D, in->gbuf->color[i]);

@@ -13,7 +13,7 @@ static eng_result scatter_create(int width, int height, int irradiance, void **s
 static eng_result scatter_run(void *state, const ind_input *in, ind_output *out, eng_error *err)
 {
     (void)err;
-    out->target = pass_splat_run(state, in->fs, in->gbuf, in->map, in->radius, in->s);
+    out->target = pass_splat_run(state, in->fs, in->gbuf, in->map, in->radius, in->aniso, in->s);
     out->extra_count = 0;
     return ENG_OK;
 }

@@ -44,6 +44,8 @@ typedef struct tg_state {
     ind_gbuffer gb;
     float *out, *glossy;
     gk_pixel *px; /* per pixel, for the scalar path (metallic pixels) */
+    float *reach; /* per photon s_u·r_xy under the anisotropic kernel (the lists' radius) */
+    size_t reach_capacity;
     tl_lists tl;  /* G-buffer planes, tile boxes and lists (tilelists.h) */
 } tg_state;
 
@@ -57,6 +59,7 @@ static void tg_destroy(void *state)
     free(t->out);
     free(t->glossy);
     free(t->px);
+    free(t->reach);
     tl_destroy(&t->tl);
     free(t);
 }
@@ -178,14 +181,37 @@ __attribute__((target("avx"))) static void photon_avx(const tg_state *t, const e
 }
 #endif
 
+/* Photon ph of the anisotropic kernel (gather_kernel.h, s_u > 1) over its rectangle in the
+ * tile, one pixel at a time: the k-d gather's test on d² against (s_u r)²·1.001 and
+ * gk_add_aniso, the same bits. */
+static void photon_aniso(const tg_state *t, const eng_photon *ph, float r, const float *aniso, float compression,
+                         const float *loc, float *acc, int x0, int y0, const tl_entry *e)
+{
+    const float ra = r * aniso[3], r2 = ra * ra * 1.001f;
+    for (int y = e->ya; y <= e->yb; y++)
+        for (int x = e->xa; x <= e->xb; x++) {
+            const int l = y * ROW + x;
+            float dx = loc[P_SX * LANES + l] - ph->position[0], dy = loc[P_SY * LANES + l] - ph->position[1],
+                  dz = loc[P_SZ * LANES + l] - ph->position[2];
+            if (!(dx * dx + dy * dy + dz * dz <= r2))
+                continue;
+            const size_t p = (size_t)(y0 + y) * (size_t)t->width + (size_t)(x0 + x);
+            float *a = acc + l;
+            float v[4] = {a[0], a[LANES], a[2 * LANES], a[3 * LANES]};
+            gk_add_aniso(&t->px[p], ph, r, aniso, compression, v, t->glossy ? t->glossy + 4 * p : NULL);
+            for (int c = 0; c < 4; c++)
+                a[c * LANES] = v[c];
+        }
+}
+
 /* One tile: its photons in list order, each over the pixels of its rectangle inside the tile.
  * Per pixel the k-d gather's distance test (d² <= r²·1.001), then gather_kernel.h's kernel
  * and BSDF: with AVX where the processor has it (photon_avx, the same bits), else one pixel
  * at a time. The tile's planes
  * are copied to a local block first (it fits in L1); accumulates locally and writes only the
  * tile's own pixels at the end. */
-static void eval_tile(tg_state *t, const eng_photon_map *map, const float *radius, float compression, int x0, int y0,
-                      const tl_entry *list, uint32_t count)
+static void eval_tile(tg_state *t, const eng_photon_map *map, const float *radius, const float *aniso,
+                      float compression, int x0, int y0, const tl_entry *list, uint32_t count)
 {
     const int w = t->width, h = t->height;
     const size_t npix = (size_t)w * (size_t)h;
@@ -210,6 +236,10 @@ static void eval_tile(tg_state *t, const eng_photon_map *map, const float *radiu
         const eng_photon *ph = &map->photons[i];
         const float r = radius[i], r2 = r * r * 1.001f;
         const int ya = list[e].ya, yb = list[e].yb, xa = list[e].xa, xb = list[e].xb;
+        if (aniso && aniso[4 * (size_t)i + 3] != 1.0f) {
+            photon_aniso(t, ph, r, aniso + 4 * (size_t)i, compression, loc, acc, x0, y0, &list[e]);
+            continue;
+        }
 #if defined(TG_AVX)
         if (t->avx) {
             photon_avx(t, ph, r, compression, loc, acc, x0, y0, xa, xb, ya, yb);
@@ -250,13 +280,14 @@ static eng_result tg_run(void *state, const ind_input *in, ind_output *out, eng_
 
     /* Planes, per-pixel terms and tile boxes, then the tile lists (tilelists.c). */
     tl_prepare(&t->tl, &t->gb, in->fs->camera.eye, t->px, threads);
-    tl_build(&t->tl, map, in->radius, s->normal_compression, in->fs->camera.view_proj, threads);
+    tl_build(&t->tl, map, ind_reach(in, &t->reach, &t->reach_capacity), s->normal_compression,
+             in->fs->camera.view_proj, threads);
 
     /* Each tile on one thread, its photons in order. */
     const float compression = s->normal_compression;
 #pragma omp parallel for num_threads(threads) schedule(dynamic, 1)
     for (size_t k = 0; k < tiles; k++)
-        eval_tile(t, map, in->radius, compression, (int)(k % (size_t)tx) * TILE, (int)(k / (size_t)tx) * TILE,
+        eval_tile(t, map, in->radius, in->aniso, compression, (int)(k % (size_t)tx) * TILE, (int)(k / (size_t)tx) * TILE,
                   t->tl.entries + t->tl.offset[k], t->tl.offset[k + 1] - t->tl.offset[k]);
 
     ind_cpu_target_upload(&t->target, 0, t->out);

@@ -31,6 +31,8 @@ typedef struct tgl_state {
     ind_gbuffer gb;  /* positions only: the tile boxes */
     float *packed;   /* 16 floats per photon, as the shader's `photon` */
     size_t packed_capacity;
+    float *reach; /* per photon s_u·r_xy under the anisotropic kernel (the lists' radius) */
+    size_t reach_capacity;
     tl_lists tl;
 } tgl_state;
 
@@ -46,6 +48,7 @@ static void tgl_destroy(void *state)
         glDeleteProgram(t->program);
     free(t->gb.position);
     free(t->packed);
+    free(t->reach);
     tl_destroy(&t->tl);
     free(t);
 }
@@ -103,7 +106,8 @@ static eng_result tgl_run(void *state, const ind_input *in, ind_output *out, eng
     static const int p4[] = {0, 1, 2, 3};
     glu_read(in->gbuf, 0, 0, 4, p4, t->gb.position);
     tl_prepare(&t->tl, &t->gb, in->fs->camera.eye, NULL, threads);
-    tl_build(&t->tl, map, in->radius, s->normal_compression, in->fs->camera.view_proj, threads);
+    tl_build(&t->tl, map, ind_reach(in, &t->reach, &t->reach_capacity), s->normal_compression,
+             in->fs->camera.view_proj, threads);
 
     /* Photons as the shader's `photon`; r_z and the d² bound in the C gathers' float
      * operations (gather_kernel.h: rz = r·compression, r2 = r·r·1.001). */
@@ -114,7 +118,7 @@ static eng_result tgl_run(void *state, const ind_input *in, ind_output *out, eng
     }
     for (size_t i = 0; i < n; i++) {
         const eng_photon *ph = &map->photons[i];
-        const float r = in->radius[i];
+        const float r = in->radius[i], su = in->aniso ? in->aniso[4 * i + 3] : 1.0f, ra = r * su;
         float *q = t->packed + 16 * i;
         for (int c = 0; c < 3; c++) {
             q[c] = ph->position[c];
@@ -124,8 +128,8 @@ static eng_result tgl_run(void *state, const ind_input *in, ind_output *out, eng
         }
         q[3] = r;
         q[7] = r * s->normal_compression;
-        q[11] = r * r * 1.001f;
-        q[15] = 0.0f;
+        q[11] = ra * ra * 1.001f;
+        q[15] = su; /* the anisotropic kernel's s_u (1: isotropic; photon_kernel.glsl) */
     }
     upload(t->buf[BUF_PHOTONS], n * 16 * sizeof(float), t->packed);
     upload(t->buf[BUF_OFFSETS], (tiles + 1) * sizeof(uint32_t), t->tl.offset);

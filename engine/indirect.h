@@ -26,6 +26,9 @@ typedef struct ind_input {
     const float *radius;         /* per photon: kernel radius r_xy (m), r_z = normal_compression·r_xy;
                                   * the engine computes it once per frame (ind_photon_radii) */
     const eng_settings *s;
+    const float *aniso;          /* NULL (isotropic), or per photon 4 floats: the anisotropic kernel's
+                                  * stretch vector and s_u (gather_kernel.h, gk_aniso_of; 002 Eq.
+                                  * 6.3–6.5); its support reaches s_u·r_xy from the photon */
 } ind_input;
 
 /* A CPU-side buffer a method wants announced besides its target (e.g. gather.tile_count). */
@@ -66,12 +69,21 @@ extern const ind_method ind_kdgather_method;
 /* Fills radius[i] (map->count floats) with photon i's kernel radius r_xy under the
  * `kernel_scaling` setting: path-density (ISPM §4.3, splat_radius), ray-length (002 Eq. 6.1),
  * tile-density (002 Eq. 6.2; needs the camera of fs and the width×height image) or bandwidth
- * (004 §6), each in [kernel_radius/4, 2·kernel_radius], then times `scale` (progressive
+ * (004 §6), each in [kernel_radius/4, 2·kernel_radius] ("anisotropic" takes path-density's and
+ * changes the shape: ind_photon_aniso), then times `scale` (progressive
  * photon mapping's shrinking radius; 1 otherwise). Every method reads this array, so a kernel
  * scaling is defined in one place for all of them. Single-threaded: the same for any thread
  * count. */
 void ind_photon_radii(const eng_photon_map *map, const eng_settings *s, const eng_frame_scene *fs, int width,
                       int height, float scale, float *radius);
+
+/* `"kernel_scaling": "anisotropic"`: fills aniso (4 floats per photon, gk_aniso_of) and returns 1;
+ * any other scaling: returns 0 and leaves aniso alone (the kernel is isotropic). */
+int ind_photon_aniso(const eng_photon_map *map, const eng_settings *s, float *aniso);
+
+/* How far each photon's kernel reaches: in->radius when in->aniso is NULL, else s_u·r_xy per
+ * photon in *buf (grown to *cap floats as needed). For a method's culling. */
+const float *ind_reach(const ind_input *in, float **buf, size_t *cap);
 
 /* The method of a setting, or NULL for ENG_INDIRECT_NONE. */
 const ind_method *ind_method_of(eng_indirect m);

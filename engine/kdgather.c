@@ -192,10 +192,16 @@ static int cmp_u32(const void *a, const void *b)
 }
 
 /* One surface point's gather: the per-pixel body of gather() below, inlined there (it is the
- * speed baseline), and exported as kd_gather_point for the traced specular pass. */
-static GK_ALWAYS_INLINE void gather_point(const kd_tree *tree, const eng_photon_map *map, const float *r_xy, float radius,
-                                float compression, const gk_pixel *px, uint32_t **list, size_t *cap, float acc[4],
-                                float *glossy)
+ * speed baseline), and exported as kd_gather_point for the traced specular pass. aniso: NULL
+ * (the isotropic kernel; a constant at every call site, so the default path compiles to what
+ * it was), or the anisotropic kernel's 4 floats per photon, whose support reaches s_u·r_xy
+ * (gather_kernel.h; radius is then the largest reach). */
+#if defined(__GNUC__)
+__attribute__((always_inline))
+#endif
+static inline void gather_point(const kd_tree *tree, const eng_photon_map *map, const float *r_xy, const float *aniso,
+                                float radius, float compression, const gk_pixel *px, uint32_t **list, size_t *cap,
+                                float acc[4], float *glossy)
 {
     const float *p = px->s;
     size_t n = 0, kept = 0;
@@ -206,6 +212,8 @@ static GK_ALWAYS_INLINE void gather_point(const kd_tree *tree, const eng_photon_
     for (size_t k = 0; k < n; k++) {
         const float *x = map->photons[l[k]].position;
         float dx = p[0] - x[0], dy = p[1] - x[1], dz = p[2] - x[2], r = r_xy[l[k]];
+        if (aniso)
+            r *= aniso[4 * (size_t)l[k] + 3];
         if (dx * dx + dy * dy + dz * dz <= r * r * 1.001f)
             l[kept++] = l[k];
     }
@@ -213,19 +221,58 @@ static GK_ALWAYS_INLINE void gather_point(const kd_tree *tree, const eng_photon_
     if (n > 1)
         qsort(l, n, sizeof *l, cmp_u32);
     /* shaders/splat.frag.glsl's main() summed over the photons in index order. */
-    for (size_t k = 0; k < n; k++)
-        gk_add(px, &map->photons[l[k]], r_xy[l[k]], compression, acc, glossy);
+    for (size_t k = 0; k < n; k++) {
+        if (aniso)
+            gk_add_aniso(px, &map->photons[l[k]], r_xy[l[k]], aniso + 4 * (size_t)l[k], compression, acc, glossy);
+        else
+            gk_add(px, &map->photons[l[k]], r_xy[l[k]], compression, acc, glossy);
+    }
 }
 
 void kd_gather_point(const kd_tree *tree, const eng_photon_map *map, const float *r_xy, float radius,
                      float compression, const gk_pixel *px, uint32_t **list, size_t *cap, float acc[4], float *glossy)
 {
-    gather_point(tree, map, r_xy, radius, compression, px, list, cap, acc, glossy);
+    gather_point(tree, map, r_xy, NULL, radius, compression, px, list, cap, acc, glossy);
 }
 
-static eng_result gather(const eng_photon_map *map, const float *radii, int w, int h, const float *position,
-                         const float *normal, const float *albedo, const float *material, const float eye[3],
-                         const eng_settings *s, float *out, float *glossy, eng_error *err)
+/* One row of gather(): the isotropic kernel, or (aniso not NULL) the anisotropic one; two
+ * functions so that the choice is made once per row, outside the per-pixel loop. */
+typedef struct row_ctx {
+    const kd_tree *tree;
+    const eng_photon_map *map;
+    const float *r_xy, *aniso, *position, *normal, *albedo, *material, *eye;
+    float radius, compression;
+    int w;
+    float *out, *glossy;
+} row_ctx;
+
+#if defined(__GNUC__)
+__attribute__((always_inline))
+#endif
+static inline void gather_row(const row_ctx *c, const float *aniso, int y, uint32_t **list, size_t *cap)
+{
+    for (int x = 0; x < c->w; x++) {
+        size_t i = (size_t)y * (size_t)c->w + (size_t)x;
+        const float *p = c->position + 4 * i;
+        if (p[3] == 0.0f)
+            continue;
+        gk_pixel px;
+        gk_pixel_init(&px, p, c->normal + 3 * i, c->albedo + 3 * i, c->material + 4 * i, c->eye);
+        gather_point(c->tree, c->map, c->r_xy, aniso, c->radius, c->compression, &px, list, cap, c->out + 4 * i,
+                     c->glossy ? c->glossy + 4 * i : NULL);
+    }
+}
+
+static void gather_row_iso(const row_ctx *c, int y, uint32_t **list, size_t *cap) { gather_row(c, NULL, y, list, cap); }
+
+static void gather_row_aniso(const row_ctx *c, int y, uint32_t **list, size_t *cap)
+{
+    gather_row(c, c->aniso, y, list, cap);
+}
+
+static eng_result gather(const eng_photon_map *map, const float *radii, const float *aniso, int w, int h,
+                         const float *position, const float *normal, const float *albedo, const float *material,
+                         const float eye[3], const eng_settings *s, float *out, float *glossy, eng_error *err)
 {
     memset(out, 0, (size_t)w * (size_t)h * 4 * sizeof(float));
     if (glossy)
@@ -244,27 +291,19 @@ static eng_result gather(const eng_photon_map *map, const float *radii, int w, i
     float radius = 0.0f;
     for (size_t i = 0; i < map->count; i++) {
         r_xy[i] = radii ? radii[i] : splat_radius(s->kernel_radius, map->photons[i].path_density);
-        radius = fmaxf(radius, r_xy[i]);
+        radius = fmaxf(radius, aniso ? r_xy[i] * aniso[4 * i + 3] : r_xy[i]);
     }
-    const float compression = s->normal_compression;
+    const row_ctx c = {&tree, map, r_xy, aniso, position, normal, albedo, material, eye, radius,
+                       s->normal_compression, w, out, glossy};
+    void (*const row)(const row_ctx *, int, uint32_t **, size_t *) = aniso ? gather_row_aniso : gather_row_iso;
     int threads = s->threads > 0 ? s->threads : 2;
 #pragma omp parallel num_threads(threads)
     {
         uint32_t *list = NULL;
         size_t cap = 0;
 #pragma omp for schedule(dynamic, 1)
-        for (int y = 0; y < h; y++) {
-            for (int x = 0; x < w; x++) {
-                size_t i = (size_t)y * (size_t)w + (size_t)x;
-                const float *p = position + 4 * i;
-                if (p[3] == 0.0f)
-                    continue;
-                gk_pixel px;
-                gk_pixel_init(&px, p, normal + 3 * i, albedo + 3 * i, material + 4 * i, eye);
-                gather_point(&tree, map, r_xy, radius, compression, &px, &list, &cap, out + 4 * i,
-                             glossy ? glossy + 4 * i : NULL);
-            }
-        }
+        for (int y = 0; y < h; y++)
+            row(&c, y, &list, &cap);
         free(list);
     }
     free(r_xy);
@@ -276,7 +315,7 @@ eng_result kd_gather(const eng_photon_map *map, int w, int h, const float *posit
                      const float *albedo, const float *material, const float eye[3], const eng_settings *s,
                      float *out, eng_error *err)
 {
-    return gather(map, NULL, w, h, position, normal, albedo, material, eye, s, out, NULL, err);
+    return gather(map, NULL, NULL, w, h, position, normal, albedo, material, eye, s, out, NULL, err);
 }
 
 /* ---------------------------------------------------------------- the method (indirect.h) */
@@ -329,7 +368,7 @@ static eng_result kd_run(void *state, const ind_input *in, ind_output *out, eng_
 {
     kd_state *k = state;
     ind_gbuffer_read(in->gbuf, &k->gb);
-    eng_result r = gather(in->map, in->radius, k->width, k->height, k->gb.position, k->gb.normal, k->gb.albedo, k->gb.material,
+    eng_result r = gather(in->map, in->radius, in->aniso, k->width, k->height, k->gb.position, k->gb.normal, k->gb.albedo, k->gb.material,
                           in->fs->camera.eye, in->s, k->out, k->glossy, err);
     if (r != ENG_OK)
         return r;

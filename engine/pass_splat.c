@@ -29,8 +29,10 @@
 struct pass_splat {
     glu_target target;
     /* 0 the full BSDF, 1 SPLAT_NO_METALLIC (no glossy term), 2 also SPLAT_NO_TRANSMISSION
-     * (Lambert only, no material fetch). */
-    GLuint program[3], vao, ssbo, ibo;
+     * (Lambert only, no material fetch); 3–5 the same with PHOTON_ANISO (the anisotropic
+     * kernel, photon_kernel.glsl), compiled on first use. */
+    GLuint program[6], vao, ssbo, ibo;
+    int irradiance;
     size_t capacity; /* photons the buffers hold */
     float *position;  /* read-back G-buffer positions, GL row order */
     float *packed;    /* SPLAT_VEC4 vec4 per drawn photon */
@@ -39,7 +41,7 @@ struct pass_splat {
     splat_tiles tiles;
 };
 
-/* Per drawn photon: rect, (x, z_far), (n_p, r_xy), (Φ_i, r_z), (ω_i, 0); splat.vert.glsl. */
+/* Per drawn photon: rect, (x, z_far), (n_p, r_xy), (Φ_i, r_z), (ω_i, s_u); splat.vert.glsl. */
 #define SPLAT_VEC4 5
 
 float splat_radius(float kernel_radius, float rho)
@@ -65,21 +67,41 @@ float splat_kernel(const float d[3], const float n_p[3], float r_xy, float r_z)
     return (float)(2.0 / (ENG_PI * (double)r_xy * r_xy) * (1.0 - t * t));
 }
 
+/* Compiles variant k (0–5, see struct pass_splat) into p->program[k] and sets its samplers. */
+static eng_result splat_program(pass_splat *p, int k, eng_error *err)
+{
+    static const char *const defines[6] = {
+        NULL,
+        "#define SPLAT_NO_METALLIC\n",
+        "#define SPLAT_NO_METALLIC\n#define SPLAT_NO_TRANSMISSION\n",
+        "#define PHOTON_ANISO\n",
+        "#define PHOTON_ANISO\n#define SPLAT_NO_METALLIC\n",
+        "#define PHOTON_ANISO\n#define SPLAT_NO_METALLIC\n#define SPLAT_NO_TRANSMISSION\n"};
+    const char *frag = p->irradiance ? "splat_irradiance.frag.glsl" : "splat.frag.glsl";
+    eng_result r = glu_program_defines("splat.vert.glsl", frag, defines[k], &p->program[k], err);
+    if (r != ENG_OK)
+        return r;
+    GLuint prog = p->program[k];
+    glUseProgram(prog);
+    glUniform1i(glGetUniformLocation(prog, "u_position"), 0);
+    glUniform1i(glGetUniformLocation(prog, "u_normal"), 1);
+    glUniform1i(glGetUniformLocation(prog, "u_albedo"), 2);
+    glUniform1i(glGetUniformLocation(prog, "u_material"), 3);
+    glUniform2f(glGetUniformLocation(prog, "u_viewport"), (float)p->target.width, (float)p->target.height);
+    glUseProgram(0);
+    return ENG_OK;
+}
+
 eng_result pass_splat_create(int width, int height, int irradiance, pass_splat **out, eng_error *err)
 {
     *out = NULL;
     pass_splat *p = calloc(1, sizeof *p);
     if (!p)
         return eng_fail(err, ENG_ERR_NOMEM, "splat: out of memory");
-    const char *frag = irradiance ? "splat_irradiance.frag.glsl" : "splat.frag.glsl";
-    eng_result r = glu_program("splat.vert.glsl", frag, &p->program[0], err);
-    if (r == ENG_OK)
-        r = glu_program_defines("splat.vert.glsl", frag, "#define SPLAT_NO_METALLIC\n", &p->program[1], err);
-    if (r == ENG_OK)
-        r = glu_program_defines("splat.vert.glsl", frag, "#define SPLAT_NO_METALLIC\n#define SPLAT_NO_TRANSMISSION\n",
-                                &p->program[2], err);
-    if (r == ENG_OK)
-        r = glu_target_create(&p->target, irradiance ? 2 : 1, width, height, 0, err);
+    p->irradiance = irradiance;
+    eng_result r = glu_target_create(&p->target, irradiance ? 2 : 1, width, height, 0, err);
+    for (int k = 0; k < 3 && r == ENG_OK; k++)
+        r = splat_program(p, k, err);
     if (r != ENG_OK) {
         pass_splat_destroy(p);
         return r;
@@ -88,15 +110,6 @@ eng_result pass_splat_create(int width, int height, int irradiance, pass_splat *
     glGenVertexArrays(1, &p->vao);
     glGenBuffers(1, &p->ssbo);
     glGenBuffers(1, &p->ibo);
-    for (int k = 0; k < 3; k++) {
-        GLuint prog = p->program[k];
-        glUseProgram(prog);
-        glUniform1i(glGetUniformLocation(prog, "u_position"), 0);
-        glUniform1i(glGetUniformLocation(prog, "u_normal"), 1);
-        glUniform1i(glGetUniformLocation(prog, "u_albedo"), 2);
-        glUniform1i(glGetUniformLocation(prog, "u_material"), 3);
-        glUniform2f(glGetUniformLocation(prog, "u_viewport"), (float)width, (float)height);
-    }
     *out = p;
     return ENG_OK;
 }
@@ -130,7 +143,8 @@ static void reserve(pass_splat *p, size_t n)
 }
 
 const glu_target *pass_splat_run(pass_splat *p, const eng_frame_scene *fs, const glu_target *gbuf,
-                                 const eng_photon_map *map, const float *radius, const eng_settings *s)
+                                 const eng_photon_map *map, const float *radius, const float *aniso,
+                                 const eng_settings *s)
 {
     glu_target *t = &p->target;
     const int w = t->width, h = t->height;
@@ -156,9 +170,10 @@ const glu_target *pass_splat_run(pass_splat *p, const eng_frame_scene *fs, const
 #pragma omp parallel for schedule(static, 1024) num_threads(threads)
     for (long i = 0; i < n; i++) {
         const eng_photon *ph = &map->photons[i];
-        const float r_xy = radius[i];
+        const float r_xy = radius[i], reach = aniso ? r_xy * aniso[4 * i + 3] : r_xy;
+        /* The anisotropic ellipsoid lies inside the one of semi-axes (reach, reach, r_z). */
         p->keep[i] = (unsigned char)splat_photon_bounds(fs->camera.view_proj, fs->camera.proj, &p->tiles, ph->position,
-                                                        ph->normal, r_xy, r_xy * s->normal_compression, &p->bounds[i]);
+                                                        ph->normal, reach, r_xy * s->normal_compression, &p->bounds[i]);
     }
     size_t drawn = 0;
     for (size_t i = 0; i < map->count; i++) {
@@ -173,7 +188,8 @@ const glu_target *pass_splat_run(pass_splat *p, const eng_frame_scene *fs, const
                                          ph->position[0], ph->position[1], ph->position[2], b->z,
                                          ph->normal[0], ph->normal[1], ph->normal[2], r_xy,
                                          ph->power[0], ph->power[1], ph->power[2], r_z,
-                                         ph->direction[0], ph->direction[1], ph->direction[2], 0.0f};
+                                         ph->direction[0], ph->direction[1], ph->direction[2],
+                                         aniso ? aniso[4 * i + 3] : 1.0f};
         memcpy(d, v, sizeof v);
         drawn++;
     }
@@ -191,7 +207,15 @@ const glu_target *pass_splat_run(pass_splat *p, const eng_frame_scene *fs, const
             metallic |= m.metallic > 0.0f;
             transmission |= m.transmission != 0.0f;
         }
-        const GLuint prog = p->program[metallic ? 0 : transmission ? 1 : 2];
+        const int k = (metallic ? 0 : transmission ? 1 : 2) + (aniso ? 3 : 0);
+        if (!p->program[k]) {
+            eng_error e;
+            if (splat_program(p, k, &e) != ENG_OK) {
+                fprintf(stderr, "ispm: %s\n", e.msg);
+                abort();
+            }
+        }
+        const GLuint prog = p->program[k];
         glUseProgram(prog);
         glUniform3fv(glGetUniformLocation(prog, "u_eye"), 1, fs->camera.eye);
         for (int i = 0; i < 4; i++) {
@@ -227,7 +251,7 @@ void pass_splat_destroy(pass_splat *p)
         glDeleteVertexArrays(1, &p->vao);
     GLuint bufs[2] = {p->ssbo, p->ibo};
     glDeleteBuffers(2, bufs);
-    for (int k = 0; k < 3; k++)
+    for (int k = 0; k < 6; k++)
         if (p->program[k])
             glDeleteProgram(p->program[k]);
     free(p->position);

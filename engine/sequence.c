@@ -297,16 +297,17 @@ static eng_result parse_settings(parser *P, const cJSON *obj, eng_settings *s)
     }
     if ((it = cJSON_GetObjectItemCaseSensitive(obj, "kernel_scaling"))) {
         static const eng_kernel_scaling modes[] = {ENG_SCALING_PATH_DENSITY, ENG_SCALING_RAY_LENGTH,
-                                                   ENG_SCALING_TILE_DENSITY, ENG_SCALING_BANDWIDTH};
+                                                   ENG_SCALING_TILE_DENSITY, ENG_SCALING_BANDWIDTH,
+                                                   ENG_SCALING_ANISOTROPIC};
         int found = 0;
-        for (int i = 0; i < 4 && !found; i++)
+        for (int i = 0; i < 5 && !found; i++)
             if (cJSON_IsString(it) && !strcmp(it->valuestring, eng_scaling_name(modes[i]))) {
                 s->kernel_scaling = modes[i];
                 found = 1;
             }
         if (!found)
             return bad(P, "settings.kernel_scaling: %s is not one of \"path-density\", \"ray-length\", "
-                          "\"tile-density\", \"bandwidth\"", show(it, v, sizeof v));
+                          "\"tile-density\", \"bandwidth\", \"anisotropic\"", show(it, v, sizeof v));
     }
     if ((it = cJSON_GetObjectItemCaseSensitive(obj, "progressive"))) {
         if (!cJSON_IsBool(it))

@@ -27,3 +27,33 @@ vec3 photon_glossy(vec3 n, vec3 s, vec3 eye, vec3 w_i, float cos_i, vec3 albedo,
     vec3 fr = albedo + (1.0 - albedo) * pow(1.0 - max(dot(v, h), 0.0), 5.0);
     return mat.y * fr * ggx_d(max(dot(n, h), 0.0), a2) * smith_g1(cos_i, a2) * smith_g1(nov, a2) / (4.0 * cos_i * nov);
 }
+
+// The anisotropic kernel of 002_… §6.1.2 (Eq. 6.3–6.5), gather_kernel.h's gk_aniso_of and
+// gk_kappa_aniso in the same operations: the ellipsoid stretched by s_u = min(1/(n_p·ω_i), s_max)
+// along û, ω_i projected onto the kernel plane. aniso = (a, s_u), a = √(1 − 1/s_u) û, or
+// (0, 0, 0, 1) for the isotropic kernel; κ is photon_kappa's at d' = d − (d·a) a, divided by s_u
+// (still 1 integrated over the plane). Compiled only into the programs of
+// "kernel_scaling": "anisotropic" (PHOTON_ANISO), so the isotropic programs do not change.
+vec4 photon_aniso(vec3 w_i, vec3 n_p, float su)
+{
+    float c = dot(w_i, n_p);
+    vec3 u = w_i - c * n_p;
+    float ul = sqrt(dot(u, u));
+    if (!(su > 1.0) || !(ul > 0.0))
+        return vec4(0.0, 0.0, 0.0, 1.0);
+    return vec4(u * (sqrt(1.0 - 1.0 / su) / ul), su);
+}
+
+float photon_kappa_aniso(vec3 s, vec3 x, vec3 n_p, vec2 radius, vec4 aniso)
+{
+    if (aniso.w == 1.0)
+        return photon_kappa(s, x, n_p, radius);
+    vec3 d = s - x;
+    vec3 e = d - dot(d, aniso.xyz) * aniso.xyz;
+    float len = length(e);
+    float r_xy = radius.x, r_z = radius.y;
+    float t = len > 0.0 ? len / r_xy * (1.0 + abs(dot(e, n_p)) / len * (r_xy - r_z) / r_z) : 0.0;
+    if (t >= 1.0)
+        return -1.0;
+    return 2.0 / (3.14159265358979323846 * r_xy * r_xy * aniso.w) * (1.0 - t * t);
+}

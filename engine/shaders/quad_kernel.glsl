@@ -29,3 +29,16 @@ float quad_kappa(vec3 s, vec3 n, vec3 x, vec3 n_p, vec2 radius)
         return -1.0;
     return 2.0 / (3.14159265358979323846 * r_xy * r_xy) * (1.0 - t2) * w;
 }
+
+// The anisotropic kernel (002_… Eq. 6.3–6.5; photon_kernel.glsl's photon_aniso gives aniso):
+// the disk becomes the ellipse of semi-axes s_u·r_xy along û and r_xy across it: quad_kappa at
+// the point x + d − (d·a) a (a ⟂ n_p, so the slab test sees the same height), divided by s_u
+// (still 1 over the plane). aniso.w = 1: quad_kappa itself.
+float quad_kappa_aniso(vec3 s, vec3 n, vec3 x, vec3 n_p, vec2 radius, vec4 aniso)
+{
+    if (aniso.w == 1.0)
+        return quad_kappa(s, n, x, n_p, radius);
+    vec3 d = s - x;
+    float k = quad_kappa(x + (d - dot(d, aniso.xyz) * aniso.xyz), n, x, n_p, radius);
+    return k < 0.0 ? k : k / aniso.w;
+}

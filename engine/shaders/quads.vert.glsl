@@ -12,6 +12,7 @@ layout(location = 2) in vec3 a_normal;       // n_p
 layout(location = 3) in vec3 a_power;        // Φ_i
 layout(location = 4) in vec3 a_direction;    // ω_i
 layout(location = 5) in vec2 a_radius;       // r_xy, r_z (the slab's half-thickness)
+layout(location = 6) in float a_stretch;     // s_u of the anisotropic kernel (1: isotropic)
 
 uniform mat4 u_view_proj;
 
@@ -20,6 +21,7 @@ flat out vec3 v_normal;
 flat out vec3 v_power;
 flat out vec3 v_direction;
 flat out vec2 v_radius;
+flat out float v_stretch;
 
 void main()
 {
@@ -27,12 +29,14 @@ void main()
     vec3 a = abs(n.x) > 0.9 ? vec3(0.0, 1.0, 0.0) : vec3(1.0, 0.0, 0.0);
     vec3 t = normalize(cross(a, n));
     vec3 b = cross(n, t);
-    vec2 c = a_corner * (1.01 * a_radius.x);
+    // The anisotropic ellipse (quad_kernel.glsl) lies in the disk of radius s_u·r_xy.
+    vec2 c = a_corner * (1.01 * a_radius.x) * a_stretch;
     vec3 world = a_position + t * c.x + b * c.y;
     v_position = a_position;
     v_normal = n;
     v_power = a_power;
     v_direction = a_direction;
     v_radius = a_radius;
+    v_stretch = a_stretch;
     gl_Position = u_view_proj * vec4(world, 1.0);
 }

@@ -12,6 +12,7 @@ flat in vec3 v_normal;
 flat in vec3 v_power;
 flat in vec3 v_direction;
 flat in vec2 v_radius;
+flat in float v_stretch;
 
 uniform sampler2D u_position;
 uniform sampler2D u_normal;
@@ -33,7 +34,11 @@ void main()
     if (s.w == 0.0)
         discard;
     vec3 n = texelFetch(u_normal, px, 0).xyz;
+#ifdef PHOTON_ANISO
+    float kappa = quad_kappa_aniso(s.xyz, n, v_position, v_normal, v_radius, photon_aniso(v_direction, v_normal, v_stretch));
+#else
     float kappa = quad_kappa(s.xyz, n, v_position, v_normal, v_radius);
+#endif
     if (kappa < 0.0)
         discard;
     float cos_i = dot(v_direction, n);

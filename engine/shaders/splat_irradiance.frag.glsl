@@ -15,6 +15,7 @@ flat in vec3 v_normal;
 flat in vec3 v_power;
 flat in vec3 v_direction;
 flat in vec2 v_radius;
+flat in float v_stretch;
 
 uniform sampler2D u_position;
 uniform sampler2D u_normal;
@@ -34,7 +35,11 @@ void main()
     vec4 s = texelFetch(u_position, px, 0);
     if (s.w == 0.0)
         discard;
+#ifdef PHOTON_ANISO
+    float kappa = photon_kappa_aniso(s.xyz, v_position, v_normal, v_radius, photon_aniso(v_direction, v_normal, v_stretch));
+#else
     float kappa = photon_kappa(s.xyz, v_position, v_normal, v_radius);
+#endif
     if (kappa < 0.0)
         discard;
     vec3 n = texelFetch(u_normal, px, 0).xyz;

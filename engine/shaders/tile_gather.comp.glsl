@@ -16,7 +16,8 @@
 layout(local_size_x = 16, local_size_y = 16) in;
 
 // One photon: position and r_xy, normal n_p and r_z, ω_i and the k-d gather's bound
-// r_xy²·1.001 on d², power Φ.
+// (s_u r_xy)²·1.001 on d², power Φ and s_u, the anisotropic kernel's stretch (1: isotropic;
+// photon_kernel.glsl, 002 Eq. 6.3–6.5).
 struct photon {
     vec4 position_r;
     vec4 normal_rz;
@@ -98,13 +99,17 @@ void main()
             if (!(d.x * d.x + d.y * d.y + d.z * d.z <= direction_r2.w))
                 continue;
             vec4 normal_rz = sh_normal_rz[k];
-            float kappa = photon_kappa(s.xyz, position_r.xyz, normal_rz.xyz, vec2(position_r.w, normal_rz.w));
+            vec4 power_su = sh_power[k];
+            float kappa = power_su.w == 1.0
+                              ? photon_kappa(s.xyz, position_r.xyz, normal_rz.xyz, vec2(position_r.w, normal_rz.w))
+                              : photon_kappa_aniso(s.xyz, position_r.xyz, normal_rz.xyz, vec2(position_r.w, normal_rz.w),
+                                                   photon_aniso(direction_r2.xyz, normal_rz.xyz, power_su.w));
             if (kappa < 0.0)
                 continue;
             float cos_i = dot(direction_r2.xyz, n);
             if (cos_i <= 0.0)
                 continue;
-            vec3 power = sh_power[k].rgb;
+            vec3 power = power_su.rgb;
             if (u_irradiance != 0) {
                 vec3 e3 = power * kappa;
                 acc.rgb += e3;
