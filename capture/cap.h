@@ -8,8 +8,9 @@
  * not describe.
  *
  * Use: cap_create; eng_listener l = cap_listener(c); eng_add_listener(engine, &l); render
- * every frame; cap_finish; cap_destroy. Not thread-safe: the engine calls listeners from the
- * thread that renders.
+ * every frame; cap_finish; cap_destroy. The callbacks, cap_finish and cap_destroy are called
+ * from one thread (the engine's, which renders); with writers (cap_desc.writers) frames are
+ * encoded and written on threads of the capture's own.
  */
 #ifndef ISPM_CAP_H
 #define ISPM_CAP_H
@@ -52,6 +53,14 @@ typedef struct cap_desc {
      * text that is not a JSON object is ENG_ERR_INVALID. Copied by cap_create. */
     const char *renderer;
     const char *renderer_settings;
+    /* Writer threads (issue 22): 0 (the default) writes each frame in frame_end, on the
+     * caller's thread; N > 0 hands ended frames to N threads through a queue of queue_depth
+     * frames (0: 2), so that encoding and writing overlap rendering the next frame. At most
+     * queue_depth + writers + 1 frames of buffers are held. A writer's failure is sticky as a
+     * callback's: it makes the next callback, and cap_finish, fail. The files are the same
+     * bytes either way. */
+    int writers;
+    int queue_depth;
 } cap_desc;
 
 typedef struct cap_capture cap_capture;
@@ -70,8 +79,9 @@ eng_result cap_create(const cap_desc *desc, cap_capture **out, eng_error *err);
  * Buffers that seq_wants-style matching of sequence->capture rejects are ignored; the others
  * are copied at announce time, so the engine may reuse its memory as soon as the callback
  * returns. frame_end writes frames/NNNNNN.exr, then frames/NNNNNN.json (the frame's manifest
- * record, for --resume), each atomically: a frame counts as captured only when both exist. Errors are sticky: after one callback failed,
- * every later callback and cap_finish fail with the same error. */
+ * record, for --resume), each atomically: a frame counts as captured only when both exist
+ * (with writers, frame_end queues the frame and a writer does this). Errors are sticky: after
+ * one callback or write failed, every later callback and cap_finish fail with the same error. */
 eng_listener cap_listener(cap_capture *c);
 
 /* Was frame already captured (by this capture, or by the interrupted run it resumes)?
@@ -81,7 +91,7 @@ int cap_frame_done(const cap_capture *c, int frame);
 /* The error that made a callback fail (ENG_OK if none); copies its message into err. */
 eng_result cap_status(const cap_capture *c, eng_error *err);
 
-/* After the last frame: writes manifest.json atomically (temp + fsync + rename + fsync of
+/* After the last frame: waits for the writers to write every frame ended, then writes manifest.json atomically (temp + fsync + rename + fsync of
  * the folder), after making the frames' directory entries durable. Fails if any frame in
  * 0..frame_count-1 was not completed (ENG_ERR_INVALID) or a callback had failed. */
 eng_result cap_finish(cap_capture *c, eng_error *err);

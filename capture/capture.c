@@ -26,6 +26,7 @@
 #define _POSIX_C_SOURCE 200809L
 
 #include "cap_internal.h"
+#include "workq.h"
 
 #include <cjson/cJSON.h>
 
@@ -33,6 +34,7 @@
 #include <errno.h>
 #include <fcntl.h>
 #include <fnmatch.h>
+#include <pthread.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -97,8 +99,13 @@ struct cap_capture {
     double cur_time;
     int pending_count, pending_cap;
     cap_pending *pending;
-    eng_result status; /* sticky: the first callback failure */
+    eng_capture_compression compression;
+    cap_wq *wq;        /* the writers, or NULL: frames are written in on_frame_end */
+    /* status, error and frames[] are shared with the writers: under lock. */
+    pthread_mutex_t lock;
+    eng_result status; /* sticky: the first failure, of a callback or a writer */
     eng_error error;
+    eng_error cb_error; /* where the callbacks format a failure (this thread only) */
 };
 
 static char *dup_or_null(const char *s)
@@ -316,6 +323,8 @@ static eng_result prepare_run_dir(const char *run_dir, const char *frames_dir, i
 
 static eng_result write_runinfo(cap_capture *c, eng_error *err);
 static eng_result write_frame_record(cap_capture *c, int frame, eng_error *err);
+static int write_job(void *ctx, void *job);
+static void free_job(void *ctx, void *job);
 static eng_result resume_run(cap_capture *c, eng_error *err);
 
 /* ---------------------------------------------------------------- create / destroy */
@@ -344,6 +353,7 @@ eng_result cap_create(const cap_desc *desc, cap_capture **out, eng_error *err)
     }
 
     cap_capture *c = cap__xcalloc(1, sizeof *c);
+    pthread_mutex_init(&c->lock, NULL);
     c->renderer = dup_or_null(desc->renderer);
     c->renderer_settings = renderer_settings;
     c->run_dir = cap__xstrdup(desc->run_dir);
@@ -376,11 +386,16 @@ eng_result cap_create(const cap_desc *desc, cap_capture **out, eng_error *err)
     c->frames = cap__xcalloc((size_t)c->frame_count, sizeof *c->frames);
     c->cur_frame = -1;
     c->status = ENG_OK;
+    eng_settings st = desc->sequence->settings;
+    eng_settings_defaults(&st);
+    c->compression = st.capture_compression;
     r = resume ? resume_run(c, err) : write_runinfo(c, err);
     if (r != ENG_OK) {
         cap_destroy(c);
         return r;
     }
+    if (desc->writers > 0)
+        c->wq = cap_wq_create(desc->writers, desc->queue_depth > 0 ? desc->queue_depth : 2, write_job, free_job, c);
     *out = c;
     return ENG_OK;
 }
@@ -389,6 +404,7 @@ void cap_destroy(cap_capture *c)
 {
     if (!c)
         return;
+    cap_wq_destroy(c->wq); /* frames already ended are still written (unless a write failed) */
     drop_pending(c);
     free(c->pending);
     if (c->frames)
@@ -409,29 +425,59 @@ void cap_destroy(cap_capture *c)
     cJSON_Delete(c->renderer_settings);
     free(c->run_dir);
     free(c->frames_dir);
+    pthread_mutex_destroy(&c->lock);
     free(c);
 }
 
 int cap_frame_done(const cap_capture *c, int frame)
 {
-    return c && frame >= 0 && frame < c->frame_count && c->frames[frame].done;
+    if (!c || frame < 0 || frame >= c->frame_count)
+        return 0;
+    cap_capture *m = (cap_capture *)c; /* the lock only */
+    pthread_mutex_lock(&m->lock);
+    int done = c->frames[frame].done;
+    pthread_mutex_unlock(&m->lock);
+    return done;
 }
 
 eng_result cap_status(const cap_capture *c, eng_error *err)
 {
     if (!c)
         return eng_fail(err, ENG_ERR_INVALID, "cap_status: no capture");
-    if (c->status != ENG_OK && err)
+    cap_capture *m = (cap_capture *)c; /* the lock only */
+    pthread_mutex_lock(&m->lock);
+    eng_result r = c->status;
+    if (r != ENG_OK && err)
         *err = c->error;
-    return c->status;
+    pthread_mutex_unlock(&m->lock);
+    return r;
 }
 
 /* ---------------------------------------------------------------- listener */
 
-/* Makes the failure already formatted into c->error sticky; returns the callback's non-zero. */
+/* The first failure wins (callbacks on this thread, writers on theirs). */
+static void set_error(cap_capture *c, eng_result r, const eng_error *err)
+{
+    pthread_mutex_lock(&c->lock);
+    if (c->status == ENG_OK) {
+        c->status = r;
+        c->error = *err;
+    }
+    pthread_mutex_unlock(&c->lock);
+}
+
+static eng_result current_status(cap_capture *c)
+{
+    pthread_mutex_lock(&c->lock);
+    eng_result r = c->status;
+    pthread_mutex_unlock(&c->lock);
+    return r;
+}
+
+/* Makes the failure already formatted into c->cb_error sticky; returns the callback's non-zero. */
 static int fail_cb(cap_capture *c, eng_result r)
 {
-    c->status = r;
+    set_error(c, r, &c->cb_error);
     drop_pending(c);
     c->cur_frame = -1;
     return 1;
@@ -440,10 +486,10 @@ static int fail_cb(cap_capture *c, eng_result r)
 static int on_frame_begin(void *user, int frame, double time)
 {
     cap_capture *c = user;
-    if (c->status != ENG_OK)
+    if (current_status(c) != ENG_OK)
         return 1;
     if (frame < 0 || frame >= c->frame_count)
-        return fail_cb(c, eng_fail(&c->error, ENG_ERR_INVALID, "%s: frame %d is outside the sequence's 0..%d",
+        return fail_cb(c, eng_fail(&c->cb_error, ENG_ERR_INVALID, "%s: frame %d is outside the sequence's 0..%d",
                                    c->run_dir, frame, c->frame_count - 1));
     /* A frame begun and never ended was aborted (by another listener or the engine): its
      * buffers are not a frame, drop them. */
@@ -456,24 +502,24 @@ static int on_frame_begin(void *user, int frame, double time)
 static int on_buffer(void *user, int frame, const eng_buffer *buf)
 {
     cap_capture *c = user;
-    if (c->status != ENG_OK)
+    if (current_status(c) != ENG_OK)
         return 1;
     if (c->cur_frame < 0 || frame != c->cur_frame)
-        return fail_cb(c, eng_fail(&c->error, ENG_ERR_INVALID,
+        return fail_cb(c, eng_fail(&c->cb_error, ENG_ERR_INVALID,
                                    "%s: buffer announced for frame %d outside that frame's begin/end",
                                    c->run_dir, frame));
     char *where = frame_path(c, frame);
     eng_result r = ENG_OK;
     if (!buf || !buf->name)
-        r = cap__check_buffer(where, buf, &c->error);
+        r = cap__check_buffer(where, buf, &c->cb_error);
     else if (!capture_wanted(c->seq, buf->name)) {
         free(where);
         return 0;
     } else
-        r = cap__check_buffer(where, buf, &c->error);
+        r = cap__check_buffer(where, buf, &c->cb_error);
     for (int i = 0; r == ENG_OK && i < c->pending_count; i++)
         if (strcmp(c->pending[i].rec.name, buf->name) == 0)
-            r = eng_fail(&c->error, ENG_ERR_INVALID, "%s: buffer \"%s\" announced twice", where, buf->name);
+            r = eng_fail(&c->cb_error, ENG_ERR_INVALID, "%s: buffer \"%s\" announced twice", where, buf->name);
     free(where);
     if (r != ENG_OK)
         return fail_cb(c, r);
@@ -487,6 +533,8 @@ static int on_buffer(void *user, int frame, const eng_buffer *buf)
         c->pending = p;
         c->pending_cap = cap;
     }
+    /* Only the copy is made here, on the thread that renders; digests and encoding are the
+     * writer's (write_job). */
     cap_pending *p = &c->pending[c->pending_count++];
     memset(p, 0, sizeof *p);
     size_t n = (size_t)buf->width * (size_t)buf->height * (size_t)buf->channel_count;
@@ -498,57 +546,106 @@ static int on_buffer(void *user, int frame, const eng_buffer *buf)
     p->rec.channel_count = buf->channel_count;
     for (int i = 0; i < buf->channel_count; i++)
         p->rec.channels[i] = cap__xstrdup(buf->channels[i]);
-
-    const char *chans[ENG_MAX_CHANNELS];
-    for (int i = 0; i < buf->channel_count; i++)
-        chans[i] = p->rec.channels[i];
-    eng_buffer copy = {p->rec.name, buf->width, buf->height, buf->channel_count, chans, p->data};
-    eng_buffer_digest(&copy, p->rec.digest);
-    eng_buffer_nonfinite(&copy, &p->rec.nan_count, &p->rec.inf_count, &p->rec.first_x, &p->rec.first_y);
     return 0;
+}
+
+/* One ended frame on its way to disk: its buffers (copies and records) and its record. */
+typedef struct cap_job {
+    int frame;
+    cap_frame rec;  /* everything but buffers, taken from the frame's stats */
+    int count;
+    cap_pending *bufs;
+} cap_job;
+
+static void free_job(void *ctx, void *job)
+{
+    (void)ctx;
+    cap_job *j = job;
+    for (int i = 0; i < j->count; i++) {
+        free_rec(&j->bufs[i].rec);
+        free(j->bufs[i].data);
+    }
+    free(j->bufs);
+    free_frame(&j->rec);
+    free(j);
+}
+
+/* Digests, frames/NNNNNN.exr, then the frame's record and frames/NNNNNN.json: on the writer
+ * thread (or in on_frame_end when the capture has none). Returns non-zero on failure, the
+ * error then sticky in c. Whatever the thread, a frame's file is written by one thread from
+ * the same bytes, so it is byte-identical whatever the number of writers and their timing. */
+static int write_job(void *ctx, void *job)
+{
+    cap_capture *c = ctx;
+    cap_job *j = job;
+    eng_error err = {{0}};
+    const eng_buffer **bufs = cap__xcalloc((size_t)j->count, sizeof *bufs);
+    eng_buffer *views = cap__xcalloc((size_t)j->count, sizeof *views);
+    const char *(*chans)[ENG_MAX_CHANNELS] = cap__xcalloc((size_t)j->count, sizeof *chans);
+    for (int i = 0; i < j->count; i++) {
+        cap_bufrec *rec = &j->bufs[i].rec;
+        for (int k = 0; k < rec->channel_count; k++)
+            chans[i][k] = rec->channels[k];
+        views[i] = (eng_buffer){rec->name, rec->width, rec->height, rec->channel_count, chans[i], j->bufs[i].data};
+        bufs[i] = &views[i];
+        eng_buffer_digest(&views[i], rec->digest);
+        eng_buffer_nonfinite(&views[i], &rec->nan_count, &rec->inf_count, &rec->first_x, &rec->first_y);
+    }
+    char *path = frame_path(c, j->frame);
+    cap_exr_meta meta = {j->frame, j->rec.time, c->compression};
+    eng_result r = cap__write_exr(path, bufs, j->count, &meta, &err);
+    free(bufs);
+    free(views);
+    free(chans);
+    free(path);
+    if (r == ENG_OK) {
+        /* A frame rendered again replaces its earlier record (the file was replaced too). */
+        pthread_mutex_lock(&c->lock);
+        cap_frame *f = &c->frames[j->frame];
+        free_frame(f);
+        *f = j->rec;
+        memset(&j->rec, 0, sizeof j->rec); /* moved */
+        f->buffer_count = j->count;
+        f->buffers = cap__xcalloc((size_t)j->count, sizeof *f->buffers);
+        for (int i = 0; i < j->count; i++) {
+            f->buffers[i] = j->bufs[i].rec;
+            memset(&j->bufs[i].rec, 0, sizeof j->bufs[i].rec); /* moved */
+        }
+        f->done = 1;
+        pthread_mutex_unlock(&c->lock);
+        r = write_frame_record(c, j->frame, &err);
+        if (r != ENG_OK) {
+            pthread_mutex_lock(&c->lock);
+            c->frames[j->frame].done = 0;
+            pthread_mutex_unlock(&c->lock);
+        }
+    }
+    if (r != ENG_OK)
+        set_error(c, r, &err);
+    free_job(c, j);
+    return r != ENG_OK;
 }
 
 static int on_frame_end(void *user, const eng_frame_stats *stats)
 {
     cap_capture *c = user;
-    if (c->status != ENG_OK)
+    if (current_status(c) != ENG_OK)
         return 1;
     if (!stats || c->cur_frame < 0 || stats->frame != c->cur_frame)
-        return fail_cb(c, eng_fail(&c->error, ENG_ERR_INVALID, "%s: frame %d ended without being begun",
+        return fail_cb(c, eng_fail(&c->cb_error, ENG_ERR_INVALID, "%s: frame %d ended without being begun",
                                    c->run_dir, stats ? stats->frame : -1));
     int frame = c->cur_frame;
-    char *path = frame_path(c, frame);
     if (c->pending_count == 0) {
-        eng_fail(&c->error, ENG_ERR_INVALID,
+        char *path = frame_path(c, frame);
+        eng_fail(&c->cb_error, ENG_ERR_INVALID,
                  "%s: no announced buffer matches the sequence's capture patterns", path);
         free(path);
         return fail_cb(c, ENG_ERR_INVALID);
     }
 
-    const eng_buffer **bufs = cap__xcalloc((size_t)c->pending_count, sizeof *bufs);
-    eng_buffer *views = cap__xcalloc((size_t)c->pending_count, sizeof *views);
-    const char *(*chans)[ENG_MAX_CHANNELS] = cap__xcalloc((size_t)c->pending_count, sizeof *chans);
-    for (int i = 0; i < c->pending_count; i++) {
-        cap_bufrec *rec = &c->pending[i].rec;
-        for (int k = 0; k < rec->channel_count; k++)
-            chans[i][k] = rec->channels[k];
-        views[i] = (eng_buffer){rec->name, rec->width, rec->height, rec->channel_count, chans[i],
-                                c->pending[i].data};
-        bufs[i] = &views[i];
-    }
-    cap_exr_meta meta = {frame, c->cur_time};
-    eng_result r = cap__write_exr(path, bufs, c->pending_count, &meta, &c->error);
-    free(bufs);
-    free(views);
-    free(chans);
-    free(path);
-    if (r != ENG_OK)
-        return fail_cb(c, r);
-
-    /* A frame rendered again replaces its earlier record (the file was replaced too). */
-    cap_frame *f = &c->frames[frame];
-    free_frame(f);
-    f->done = 1;
+    cap_job *j = cap__xcalloc(1, sizeof *j);
+    j->frame = frame;
+    cap_frame *f = &j->rec;
     f->time = c->cur_time;
     f->pass_count = stats->pass_count < 0 ? 0
                   : stats->pass_count > ENG_MAX_PASSES ? ENG_MAX_PASSES : stats->pass_count;
@@ -565,22 +662,16 @@ static int on_frame_end(void *user, const eng_frame_stats *stats)
                   : stats->trace_maps > ENG_MAX_TRACE_MAPS ? ENG_MAX_TRACE_MAPS : stats->trace_maps;
     memcpy(f->trace_centres, stats->trace_centres, sizeof f->trace_centres);
     f->trace = stats->trace;
-    f->buffer_count = c->pending_count;
-    f->buffers = cap__xcalloc((size_t)c->pending_count, sizeof *f->buffers);
-    for (int i = 0; i < c->pending_count; i++) {
-        f->buffers[i] = c->pending[i].rec;
-        memset(&c->pending[i].rec, 0, sizeof c->pending[i].rec); /* moved */
-        free(c->pending[i].data);
-        c->pending[i].data = NULL;
-    }
-    c->pending_count = 0;
+    /* The pending list moves into the job; the next frame starts a new one. */
+    j->count = c->pending_count;
+    j->bufs = c->pending;
+    c->pending = NULL;
+    c->pending_count = c->pending_cap = 0;
     c->cur_frame = -1;
-    r = write_frame_record(c, frame, &c->error);
-    if (r != ENG_OK) {
-        f->done = 0;
-        return fail_cb(c, r);
-    }
-    return 0;
+    if (!c->wq)
+        return write_job(c, j);
+    /* Blocks while the queue is full (the memory bound); a writer's failure makes it fail. */
+    return cap_wq_push(c->wq, j) != 0;
 }
 
 eng_listener cap_listener(cap_capture *c)
@@ -814,6 +905,11 @@ static cJSON *manifest_json(const cap_capture *c)
     jadd(st, "specular", jstr(eng_specular_name(s.specular)));
     jadd(st, "specular_depth", cJSON_CreateNumber(s.specular_depth));
     jadd(root, "settings", st);
+    /* How the frame files are encoded: not a setting of the pictures (provenance does not
+     * compare it), since every lossless choice decodes to the same bits. */
+    cJSON *cp = jok(cJSON_CreateObject());
+    jadd(cp, "compression", jstr(eng_compression_name(s.capture_compression)));
+    jadd(root, "capture", cp);
 
     cJSON *det = jok(cJSON_CreateObject());
     for (int i = 0; i < c->det_count; i++)
@@ -887,6 +983,8 @@ eng_result cap_finish(cap_capture *c, eng_error *err)
 {
     if (!c)
         return eng_fail(err, ENG_ERR_INVALID, "cap_finish: no capture");
+    if (c->wq)
+        cap_wq_finish(c->wq); /* every frame ended is on disk (or failed) before the manifest */
     if (c->status != ENG_OK) {
         if (err)
             *err = c->error;
@@ -962,7 +1060,9 @@ static eng_result write_frame_record(cap_capture *c, int frame, eng_error *err)
 {
     char name[32];
     snprintf(name, sizeof name, "%06d.json", frame);
+    pthread_mutex_lock(&c->lock);
     cJSON *o = frame_json(&c->frames[frame], frame);
+    pthread_mutex_unlock(&c->lock);
     char *doc = json_text(o);
     cJSON_Delete(o);
     eng_result r = write_atomic(c->frames_dir, name, doc, err);

@@ -7,7 +7,7 @@
  * failing write (ENOSPC, EFBIG, EIO) is kept, so the message says what went wrong instead
  * of the library's generic "write failed"; and the library's error callback is captured
  * instead of printed, so a failure is reported once, through eng_error. Pixels are float32
- * in and float32 out (FLOAT channels, ZIP), so what is written is bit-exact what was
+ * in and float32 out (FLOAT channels, ZIP or the lossless compression the meta names), so what is written is bit-exact what was
  * announced, NaN payloads and -0.0 included, and replay's digests match capture's.
  *
  * Parts are scanline images with INCREASING_Y line order: file row 0 is the top row, which
@@ -197,6 +197,19 @@ static exr_result_t write_part_pixels(exr_context_t ctxt, int part, const eng_bu
     return rv;
 }
 
+static exr_compression_t exr_compression(const cap_exr_meta *meta)
+{
+    switch (meta ? meta->compression : ENG_COMPRESSION_DEFAULT) {
+    case ENG_COMPRESSION_NONE: return EXR_COMPRESSION_NONE;
+    case ENG_COMPRESSION_RLE: return EXR_COMPRESSION_RLE;
+    case ENG_COMPRESSION_ZIPS: return EXR_COMPRESSION_ZIPS;
+    case ENG_COMPRESSION_PIZ: return EXR_COMPRESSION_PIZ;
+    case ENG_COMPRESSION_ZIP:
+    case ENG_COMPRESSION_DEFAULT: break;
+    }
+    return EXR_COMPRESSION_ZIP;
+}
+
 /* Defines the parts, writes the header and every part's pixels into the sink. */
 static exr_result_t write_exr_stream(exr_sink *s, const char *path, const eng_buffer *const *bufs,
                                      int count, const cap_exr_meta *meta)
@@ -243,7 +256,7 @@ static exr_result_t write_exr_stream(exr_sink *s, const char *path, const eng_bu
         rv = exr_add_part(ctxt, b->name, EXR_STORAGE_SCANLINE, &part);
         if (rv == EXR_ERR_SUCCESS)
             rv = exr_initialize_required_attr(ctxt, part, &display, &data, 1.0f, &center, 1.0f,
-                                              EXR_LINEORDER_INCREASING_Y, EXR_COMPRESSION_ZIP);
+                                              EXR_LINEORDER_INCREASING_Y, exr_compression(meta));
         for (int c = 0; c < b->channel_count && rv == EXR_ERR_SUCCESS; c++)
             rv = exr_add_channel(ctxt, part, b->channels[c], EXR_PIXEL_FLOAT,
                                  EXR_PERCEPTUALLY_LOGARITHMIC, 1, 1);

@@ -41,7 +41,7 @@ static void usage(FILE *f)
 static void record_usage(FILE *f)
 {
     fprintf(f,
-            "usage: ispm record SEQUENCE -o RUN [--force | --resume] [--threads N] [--gl osmesa|egl [--gl-device N]] [--quiet]\n"
+            "usage: ispm record SEQUENCE -o RUN [--force | --resume] [--threads N] [--gl osmesa|egl [--gl-device N]] [--capture GLOBS] [--quiet]\n"
             "\n"
             "Renders frame i of SEQUENCE at t = i / fps and writes every announced buffer to\n"
             "RUN/frames/NNNNNN.exr (one multi-part EXR per frame), then RUN/manifest.json last.\n"
@@ -52,6 +52,8 @@ static void record_usage(FILE *f)
             "                     frames already written are kept, the rest rendered (same\n"
             "                     options as the interrupted run; the result is bit-identical)\n"
             "  -j, --threads N    CPU threads (llvmpipe, Embree); overrides the sequence's settings\n"
+            "      --capture GLOBS buffers to capture, comma-separated globs (e.g. final.display);\n"
+            "                     replaces the sequence's \"capture\" list\n"
             "      --gl BACKEND   how the GL 4.5 context is made: osmesa (default; Mesa's llvmpipe, the\n"
             "                     goldens' reference) or egl (no window: Mesa's surfaceless platform,\n"
             "                     or with --gl-device an EGL device such as a GPU); in the manifest\n"
@@ -167,15 +169,36 @@ static int exit_for(eng_result r)
     }
 }
 
+/* --capture GLOB[,GLOB...]: replaces the sequence's "capture" list. Non-zero if a pattern is
+ * empty or too long, or there are too many. */
+static int set_capture(seq_sequence *seq, const char *list)
+{
+    int n = 0;
+    for (const char *p = list;; n++) {
+        const char *e = strchr(p, ',');
+        size_t len = e ? (size_t)(e - p) : strlen(p);
+        if (n >= SEQ_MAX_CAPTURE || len == 0 || len >= SCN_NAME_MAX)
+            return 1;
+        memcpy(seq->capture[n], p, len);
+        seq->capture[n][len] = 0;
+        if (!e)
+            break;
+        p = e + 1;
+    }
+    seq->capture_count = n + 1;
+    return 0;
+}
+
 static int cmd_record(int argc, char **argv, const char *command_line)
 {
     static const struct option opts[] = {
         {"output", required_argument, NULL, 'o'}, {"force", no_argument, NULL, 'f'},
         {"threads", required_argument, NULL, 'j'}, {"quiet", no_argument, NULL, 'q'},
         {"resume", no_argument, NULL, 'r'}, {"help", no_argument, NULL, 'h'},
-        {"gl", required_argument, NULL, 'G'}, {"gl-device", required_argument, NULL, 'D'}, {NULL, 0, NULL, 0},
+        {"gl", required_argument, NULL, 'G'}, {"gl-device", required_argument, NULL, 'D'},
+        {"capture", required_argument, NULL, 'C'}, {NULL, 0, NULL, 0},
     };
-    const char *out = NULL, *gl = NULL;
+    const char *out = NULL, *gl = NULL, *capture = NULL;
     int force = 0, resume = 0, quiet = 0, threads = 0, gl_device = -1, c;
     while ((c = getopt_long(argc, argv, "o:fj:qrh", opts, NULL)) != -1) {
         switch (c) {
@@ -210,6 +233,7 @@ static int cmd_record(int argc, char **argv, const char *command_line)
             gl_device = (int)v;
             break;
         }
+        case 'C': capture = optarg; break;
         case 'h': record_usage(stdout); return EXIT_OK;
         default: record_usage(stderr); return EXIT_INPUT;
         }
@@ -240,6 +264,12 @@ static int cmd_record(int argc, char **argv, const char *command_line)
     eng_result r = seq_load(seq_path, seq, &err);
     if (r == ENG_OK && threads)
         seq->settings.threads = threads;
+    if (r == ENG_OK && capture && set_capture(seq, capture) != 0) {
+        fprintf(stderr, "ispm record: --capture: '%s' is not 1..%d comma-separated glob patterns of at most %d "
+                "characters\n", capture, SEQ_MAX_CAPTURE, SCN_NAME_MAX - 1);
+        free(seq);
+        return EXIT_INPUT;
+    }
     if (r == ENG_OK)
         r = seq_load_scene(seq, &scene, &err);
     if (r != ENG_OK) {
@@ -265,6 +295,7 @@ static int cmd_record(int argc, char **argv, const char *command_line)
         .tool_version = ISPM_VERSION, .git_revision = ISPM_GIT_REV,
         .command_line = command_line, .overwrite = force,
         .determinism = eng_determinism_info(), .resume = resume,
+        .writers = 1, /* frame N is encoded and written while frame N+1 renders */
     };
     r = cap_create(&cd, &cap, &err);
     if (r != ENG_OK) {

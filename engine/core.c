@@ -184,6 +184,24 @@ void eng_settings_defaults(eng_settings *s)
     if (s->multi_image_miss == ENG_MISS_DEFAULT) s->multi_image_miss = ENG_MISS_EMBREE;
     if (s->specular == ENG_SPECULAR_DEFAULT) s->specular = ENG_SPECULAR_TRACED;
     if (s->specular_depth == 0) s->specular_depth = 4;
+    if (s->capture_compression == ENG_COMPRESSION_DEFAULT) s->capture_compression = ENG_COMPRESSION_ZIP;
+}
+
+static const char *const COMPRESSION_NAMES[] = {"zip", "none", "rle", "zips", "zip", "piz"};
+
+const char *eng_compression_name(eng_capture_compression m)
+{
+    return (unsigned)m < sizeof COMPRESSION_NAMES / sizeof COMPRESSION_NAMES[0] ? COMPRESSION_NAMES[m] : "unknown";
+}
+
+int eng_compression_parse(const char *name, eng_capture_compression *out)
+{
+    for (int m = ENG_COMPRESSION_NONE; name && m <= ENG_COMPRESSION_PIZ; m++)
+        if (strcmp(name, COMPRESSION_NAMES[m]) == 0) {
+            *out = (eng_capture_compression)m;
+            return 1;
+        }
+    return 0;
 }
 
 const char *eng_boundary_name(eng_boundary m)

@@ -324,6 +324,20 @@ typedef enum eng_miss_mode {
     ENG_MISS_DROP            /* end the path there (the paper's behaviour) */
 } eng_miss_mode;
 
+/* How capture compresses each EXR part (lossless only: what replay decodes is bit-exact what
+ * was announced whatever the choice; only the file's bytes and size change). */
+typedef enum eng_capture_compression {
+    ENG_COMPRESSION_DEFAULT = 0, /* = zip */
+    ENG_COMPRESSION_NONE,
+    ENG_COMPRESSION_RLE,
+    ENG_COMPRESSION_ZIPS,        /* zlib, one scanline per block */
+    ENG_COMPRESSION_ZIP,         /* zlib, 16 scanlines per block */
+    ENG_COMPRESSION_PIZ          /* wavelet + Huffman */
+} eng_capture_compression;
+const char *eng_compression_name(eng_capture_compression m);
+/* "none", "rle", "zips", "zip", "piz" → *out; 0 if name is none of them. */
+int eng_compression_parse(const char *name, eng_capture_compression *out);
+
 const char *eng_indirect_name(eng_indirect m);
 const char *eng_trace_name(eng_photon_trace m);
 const char *eng_miss_name(eng_miss_mode m);
@@ -377,6 +391,8 @@ typedef struct eng_settings {
     /* Specular eye paths (issue 14, specular.h). */
     eng_specular specular;    /* default traced */
     int specular_depth;       /* specular surfaces an eye path crosses, 1..16; default 4 */
+    /* Capture (issue 22): EXR compression of the frame files; default zip. */
+    eng_capture_compression capture_compression;
 } eng_settings;
 
 void eng_settings_defaults(eng_settings *s);

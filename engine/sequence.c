@@ -160,7 +160,7 @@ static eng_result parse_settings(parser *P, const cJSON *obj, eng_settings *s)
                                        "atrous_detail", "atrous_gamma", "kernel_scaling", "progressive", "boundary",
                                        "specular", "specular_depth",
                                        "photon_trace", "multi_image_maps", "multi_image_size",
-                                       "multi_image_miss", "multi_image_compare", NULL};
+                                       "multi_image_miss", "multi_image_compare", "capture_compression", NULL};
     char v[80];
     eng_result r;
     if (!cJSON_IsObject(obj))
@@ -364,6 +364,10 @@ static eng_result parse_settings(parser *P, const cJSON *obj, eng_settings *s)
     if ((it = cJSON_GetObjectItemCaseSensitive(obj, "specular_depth")) &&
         (r = get_int(P, it, "settings.specular_depth", 1, 16, &s->specular_depth)))
         return r;
+    if ((it = cJSON_GetObjectItemCaseSensitive(obj, "capture_compression")) &&
+        !(cJSON_IsString(it) && eng_compression_parse(it->valuestring, &s->capture_compression)))
+        return bad(P, "settings.capture_compression: %s is not one of \"none\", \"rle\", \"zips\", \"zip\", \"piz\" "
+                   "(lossless only)", show(it, v, sizeof v));
     return ENG_OK;
 }
 

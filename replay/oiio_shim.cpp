@@ -13,6 +13,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <memory>
+#include <mutex>
 #include <string>
 #include <vector>
 
@@ -217,14 +218,14 @@ eng_result check_exr_header(const char *path, eng_error *err)
 // Frame files hold many small parts: decoding each on OpenImageIO's and OpenEXR's thread
 // pools costs a thread start and join per part (slow, and very slow under ASan) for no gain.
 // Replay decodes on the calling thread; the results do not depend on it.
+// Replay's own threads may decode several files at once (each through its own ImageInput).
 void single_threaded_decode()
 {
-    static bool done = false;
-    if (done)
-        return;
-    OIIO::attribute("threads", 1);
-    OIIO::attribute("exr_threads", -1); // -1: no OpenEXR thread pool at all
-    done = true;
+    static std::once_flag once;
+    std::call_once(once, [] {
+        OIIO::attribute("threads", 1);
+        OIIO::attribute("exr_threads", -1); // -1: no OpenEXR thread pool at all
+    });
 }
 
 eng_result read_parts(const char *path, size_t max_floats, rep_part **out, int *count, eng_error *err)

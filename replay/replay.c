@@ -103,9 +103,20 @@ static void integrity_only(rep_report *r, const char *glob, const rep_frame_info
     }
 }
 
+/* One comparison of compare_frame: entry index, run part, golden part. */
+typedef struct cmp_job {
+    size_t entry;
+    int j, k;
+} cmp_job;
+
+/* The entries are added in the report's order first (run buffers, then the golden's extra
+ * ones), then the comparisons, each writing only its own entry, run on the OpenMP threads:
+ * the report is the same whatever the thread count and timing. */
 static void compare_frame(rep_report *r, const rep_tolerances *tols, const char *glob, const rep_frame_info *rf,
                           const rep_part *rp, const rep_frame_info *gf, const rep_part *gp)
 {
+    cmp_job *jobs = rep_xcalloc((size_t)rf->buffer_count + 1, sizeof *jobs);
+    int njobs = 0;
     for (int j = 0; j < rf->buffer_count; j++) {
         const char *name = rf->buffers[j].name;
         if (!wanted(glob, name))
@@ -117,8 +128,20 @@ static void compare_frame(rep_report *r, const rep_tolerances *tols, const char 
             e->problem = REP_PROB_EXTRA;
             continue;
         }
-        eng_buffer a = rep_part_buffer(&rp[j]), b = rep_part_buffer(&gp[k]);
         e->tol_match = rep_xstrdup(rep_tol_lookup(tols, name, &e->tol));
+        jobs[njobs++] = (cmp_job){r->count - 1, j, k};
+    }
+    for (int k = 0; k < gf->buffer_count; k++)
+        if (wanted(glob, gf->buffers[k].name) && rep_frame_find(rf, gf->buffers[k].name) < 0) {
+            rep_entry *e = rep_report_add(r, gf->index, gf->buffers[k].name);
+            e->verdict = REP_V_FAIL;
+            e->problem = REP_PROB_MISSING;
+        }
+    rep_entry *entries = r->entries; /* no entry is added below: the array stays put */
+#pragma omp parallel for schedule(dynamic, 1)
+    for (int i = 0; i < njobs; i++) {
+        rep_entry *e = &entries[jobs[i].entry];
+        eng_buffer a = rep_part_buffer(&rp[jobs[i].j]), b = rep_part_buffer(&gp[jobs[i].k]);
         if (rep_is_photon_map(&a) && rep_is_photon_map(&b)) {
             e->photon_set = 1;
             e->verdict = rep_photon_compare(&a, &b, &e->tol, &e->m, &e->pd);
@@ -132,12 +155,7 @@ static void compare_frame(rep_report *r, const rep_tolerances *tols, const char 
             e->compared = 1;
         }
     }
-    for (int k = 0; k < gf->buffer_count; k++)
-        if (wanted(glob, gf->buffers[k].name) && rep_frame_find(rf, gf->buffers[k].name) < 0) {
-            rep_entry *e = rep_report_add(r, gf->index, gf->buffers[k].name);
-            e->verdict = REP_V_FAIL;
-            e->problem = REP_PROB_MISSING;
-        }
+    free(jobs);
 }
 
 static void one_side(rep_report *r, const char *glob, const rep_frame_info *f, rep_problem problem)
@@ -208,13 +226,32 @@ static eng_result stab_begin(stab_walk *w, const rep_options *o, const char *rep
     return res;
 }
 
+static eng_result stab_run_frame(stab_walk *w, int i, const rep_frame_info *rf, const rep_part *rp, eng_error *err);
+
 /* Feeds frame i of the run (and of the golden) to the stability measurement. */
 static eng_result stab_frame(stab_walk *w, int i, const rep_frame_info *rf, const rep_part *rp,
                              const rep_frame_info *gf, const rep_part *gp, eng_error *err)
 {
     eng_result res = ENG_OK;
-    if (w->golden_on && gf && !rep_stab_frame(&w->s->golden, gf, gp, gf->buffer_count, NULL, 0, NULL, NULL))
+    int golden_ok = 1;
+    /* The golden's measure and the run's are independent: side by side. */
+#pragma omp parallel sections
+    {
+#pragma omp section
+        if (w->golden_on && gf)
+            golden_ok = rep_stab_frame(&w->s->golden, gf, gp, gf->buffer_count, NULL, 0, NULL, NULL);
+#pragma omp section
+        res = stab_run_frame(w, i, rf, rp, err);
+    }
+    if (!golden_ok)
         w->golden_on = 0;
+    return res;
+}
+
+/* stab_frame's part for the run (and its reference). */
+static eng_result stab_run_frame(stab_walk *w, int i, const rep_frame_info *rf, const rep_part *rp, eng_error *err)
+{
+    eng_result res = ENG_OK;
     if (!w->on || !rf)
         return ENG_OK;
     rep_part *refp = w->ref_parts, *own = NULL;
@@ -336,10 +373,23 @@ static eng_result walk(const rep_options *o, const char *report_dir, rep_report 
         rep_part *rp = NULL, *gp = NULL;
         const rep_frame_info *rf = i < run->frame_count ? &run->frames[i] : NULL;
         const rep_frame_info *gf = gold && i < gold->frame_count ? &gold->frames[i] : NULL;
-        if (rf)
-            res = rep_run_read_frame(run, i, &rp, err);
-        if (res == ENG_OK && gf)
-            res = rep_run_read_frame(gold, i, &gp, err);
+        /* The run's frame and the golden's are decoded (and verified against their manifests)
+         * at the same time; the run's error is the one reported when both fail. */
+        eng_error gerr = {{0}};
+        eng_result gres = ENG_OK;
+#pragma omp parallel sections
+        {
+#pragma omp section
+            if (rf)
+                res = rep_run_read_frame(run, i, &rp, err);
+#pragma omp section
+            if (gf)
+                gres = rep_run_read_frame(gold, i, &gp, &gerr);
+        }
+        if (res == ENG_OK && gres != ENG_OK) {
+            res = gres;
+            *err = gerr;
+        }
         if (res == ENG_OK) {
             if (!gold)
                 integrity_only(r, o->buffers, rf, rp);

@@ -1,0 +1,106 @@
+#!/bin/sh
+# bench/perf.sh — issue 22's harness-performance ratios, each pair measured side by side in one
+# run, alternating (A B A B ...), RUNS times each (default 3), median wall time per side:
+#
+#   1. record cornell-box-ci capturing all buffers vs final.display only (8 frames, 160²)  goal ≤ 1.2×
+#   2. replay of that run against golden/cornell-box-ci vs idiff -a over the same EXR pairs
+#      (identical files), and against golden/cornell-box-quads-ci (differing files)         goal ≥ 4×
+#   3. record of scenes/cornell-box/cornell-box-perf.json (3 frames, 65,536 photons,
+#      final.display captured) with --threads 1 vs --threads 2                              goal ≥ 1.8×
+#   4. photon trace rays/s vs Embree's raw rtcIntersect1 (`ispm tracebench`, issue 22 item 4,
+#      when the tool has it)                                                                goal ≥ 70 %
+#
+# usage: bench/perf.sh [OUTDIR]     (from the repository root; ISPM=path/to/ispm, RUNS=N)
+# Everything it writes goes to OUTDIR (default: a fresh folder under /tmp). Wall times on a
+# loaded machine vary by ±50 %; the ratios of alternated pairs are what to read.
+set -eu
+
+ISPM=${ISPM:-build/cli/ispm}
+RUNS=${RUNS:-3}
+OUT=${1:-$(mktemp -d /tmp/ispm-perf.XXXXXX)}
+CI=scenes/cornell-box/cornell-box-ci.json
+PERF=scenes/cornell-box/cornell-box-perf.json
+GOLD=golden/cornell-box-ci
+GOLD_DIFF=golden/cornell-box-quads-ci
+
+[ -x "$ISPM" ] || { echo "perf.sh: $ISPM not built (cmake --build build)" >&2; exit 2; }
+command -v idiff >/dev/null || { echo "perf.sh: idiff (openimageio-tools) is not installed" >&2; exit 2; }
+mkdir -p "$OUT"
+
+now() { date +%s.%N; }
+
+# seconds COMMAND...: runs it (output to $OUT/log), prints its wall time in seconds. Exit
+# codes are not judged here (replay and idiff exit non-zero on differing files by design).
+seconds() {
+    s=$(now)
+    "$@" >>"$OUT/log" 2>&1 || true
+    e=$(now)
+    awk -v s="$s" -v e="$e" 'BEGIN { printf "%.3f\n", e - s }'
+}
+
+median() { tr ' ' '\n' | grep . | sort -n | awk '{ v[NR] = $1 } END { print v[int((NR + 1) / 2)] }'; }
+
+# pair NAME_A NAME_B CMD_A CMD_B: alternates A and B RUNS times; sets A_MED, B_MED.
+pair() {
+    ta="" tb=""
+    i=0
+    while [ "$i" -lt "$RUNS" ]; do
+        ta="$ta $(seconds sh -c "$3")"
+        tb="$tb $(seconds sh -c "$4")"
+        i=$((i + 1))
+    done
+    A_MED=$(echo "$ta" | median)
+    B_MED=$(echo "$tb" | median)
+    printf '  %-44s %8.2f s   (runs:%s)\n' "$1" "$A_MED" "$ta"
+    printf '  %-44s %8.2f s   (runs:%s)\n' "$2" "$B_MED" "$tb"
+}
+
+ratio() { awk -v a="$1" -v b="$2" 'BEGIN { printf "%.2f", a / b }'; }
+
+# verdict RATIO OP GOAL: "goal met" or "SHORT of the goal".
+verdict() { awk -v r="$1" -v g="$3" -v op="$2" 'BEGIN { ok = op == "le" ? r <= g : r >= g; print ok ? "goal met" : "SHORT of the goal" }'; }
+
+echo "bench/perf.sh: $RUNS runs per side, alternating; $(nproc) CPUs, load $(cut -d' ' -f1-3 /proc/loadavg); output in $OUT"
+
+echo "1. record $CI: all buffers vs final.display only"
+pair "all buffers" "final.display only" \
+    "$ISPM record $CI -o $OUT/all --force --quiet" \
+    "$ISPM record $CI -o $OUT/display --force --quiet --capture final.display"
+r=$(ratio "$A_MED" "$B_MED")
+echo "  ratio all / display-only: ${r}x   (goal <= 1.2x: $(verdict "$r" le 1.2))"
+
+frames=$(ls "$OUT/all/frames/"*.exr | wc -l)
+idiff_all() { # RUN GOLDEN: idiff -a over every frame pair
+    echo "for f in $1/frames/*.exr; do idiff -a \"\$f\" $2/frames/\$(basename \"\$f\"); done"
+}
+echo "2. replay vs idiff -a over the same $frames EXR pairs"
+pair "replay (identical files)" "idiff -a (identical files)" \
+    "$ISPM replay $OUT/all --golden $GOLD --report $OUT/replay-same --quiet" \
+    "$(idiff_all "$OUT/all" "$GOLD")"
+r=$(ratio "$B_MED" "$A_MED")
+echo "  replay is ${r}x faster than idiff (identical)   (goal >= 4x: $(verdict "$r" ge 4))"
+if [ -d "$GOLD_DIFF" ]; then
+    pair "replay (differing files)" "idiff -a (differing files)" \
+        "$ISPM replay $OUT/all --golden $GOLD_DIFF --report $OUT/replay-diff --quiet" \
+        "$(idiff_all "$OUT/all" "$GOLD_DIFF")"
+    r=$(ratio "$B_MED" "$A_MED")
+    echo "  replay is ${r}x faster than idiff (differing)   (goal >= 4x: $(verdict "$r" ge 4))"
+else
+    echo "  (differing files: $GOLD_DIFF not present)"
+fi
+
+echo "3. record $PERF (3 frames, 65,536 photons, final.display): 1 thread vs 2 threads"
+pair "--threads 1" "--threads 2" \
+    "$ISPM record $PERF -o $OUT/t1 --force --quiet --threads 1 --capture final.display" \
+    "$ISPM record $PERF -o $OUT/t2 --force --quiet --threads 2 --capture final.display"
+r=$(ratio "$A_MED" "$B_MED")
+echo "  2 threads are ${r}x faster   (goal >= 1.8x: $(verdict "$r" ge 1.8))"
+
+# Row 4 belongs to issue 22 item 4 (the photon-trace helper): its `ispm tracebench` prints the
+# photon trace's rays/s against raw rtcIntersect1 on the same rays.
+echo "4. photon trace rays/s vs raw Embree rtcIntersect1 (ispm tracebench)"
+if "$ISPM" tracebench --help >/dev/null 2>&1; then
+    "$ISPM" tracebench "$PERF" 2>&1 | sed 's/^/  /'
+else
+    echo "  not available (this ispm has no tracebench command)"
+fi
