@@ -94,6 +94,7 @@ static void replay_usage(FILE *f)
             "                          is over RATIO times the golden's (default: timing is reported only)\n"
             "      --frames A-B        compare frames A to B only (no stability measurement then)\n"
             "      --buffers GLOB      compare the buffers whose names match GLOB only\n"
+            "      --no-flip           skip the perceptual metric FLIP of the colour buffers\n"
             "  -q, --quiet             print only failures and the verdict\n"
             "  -h, --help              this text\n"
             "\n"
@@ -398,7 +399,7 @@ static int parse_frames(const char *s, rep_options *o)
 
 static int cmd_replay(int argc, char **argv)
 {
-    enum { OPT_TOL = 1000, OPT_TIMING_FAIL = 1100, OPT_PROV_FAIL, OPT_FRAMES, OPT_BUFFERS };
+    enum { OPT_TOL = 1000, OPT_TIMING_FAIL = 1100, OPT_PROV_FAIL, OPT_FRAMES, OPT_BUFFERS, OPT_NO_FLIP };
     static const struct option opts[] = {
         {"golden", required_argument, NULL, 'g'}, {"tolerances", required_argument, NULL, 't'},
         {"report", required_argument, NULL, 'r'}, {"quiet", no_argument, NULL, 'q'},
@@ -410,6 +411,7 @@ static int cmd_replay(int argc, char **argv)
         {"timing-fail", required_argument, NULL, OPT_TIMING_FAIL},
         {"provenance-fail", no_argument, NULL, OPT_PROV_FAIL},
         {"frames", required_argument, NULL, OPT_FRAMES}, {"buffers", required_argument, NULL, OPT_BUFFERS},
+        {"no-flip", no_argument, NULL, OPT_NO_FLIP},
         {NULL, 0, NULL, 0},
     };
     rep_options o;
@@ -447,6 +449,7 @@ static int cmd_replay(int argc, char **argv)
             }
             break;
         case OPT_BUFFERS: o.buffers = optarg; break;
+        case OPT_NO_FLIP: o.no_flip = 1; break;
         default: replay_usage(stderr); return EXIT_INPUT;
         }
     }

@@ -13,6 +13,7 @@
 
 #include <math.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 enum { CLS_FINITE = 0, CLS_NAN, CLS_PINF, CLS_NINF };
@@ -150,4 +151,70 @@ rep_verdict rep_compare(const eng_buffer *run, const eng_buffer *golden, const r
     if (m->rmse > tol->rmse_warn)
         m->warn_why |= REP_WHY_RMSE;
     return m->warn_why ? REP_V_WARN : REP_V_WITHIN;
+}
+
+static int rgb_index(const eng_buffer *b, int idx[3])
+{
+    static const char *const names[3] = {"R", "G", "B"};
+    for (int i = 0; i < 3; i++) {
+        idx[i] = -1;
+        for (int c = 0; c < b->channel_count; c++)
+            if (strcmp(b->channels[c], names[i]) == 0)
+                idx[i] = c;
+        if (idx[i] < 0)
+            return 0;
+    }
+    return 1;
+}
+
+static float *packed_rgb(const eng_buffer *b, const int idx[3])
+{
+    size_t n = (size_t)b->width * (size_t)b->height;
+    float *o = rep_xmalloc(n * 3 * sizeof *o);
+    for (size_t p = 0; p < n; p++)
+        for (int c = 0; c < 3; c++)
+            o[3 * p + (size_t)c] = b->data[p * (size_t)b->channel_count + (size_t)idx[c]];
+    return o;
+}
+
+float *rep_flip_buffers(const eng_buffer *run, const eng_buffer *golden, const rep_tol *tol, rep_flip_kind k,
+                        int *exposures)
+{
+    int ia[3], ib[3];
+    if (k == REP_FLIP_NONE || run->width != golden->width || run->height != golden->height || !rgb_index(run, ia) ||
+        !rgb_index(golden, ib))
+        return NULL;
+    float *a = packed_rgb(run, ia), *b = packed_rgb(golden, ib);
+    float *map = rep_xmalloc((size_t)run->width * (size_t)run->height * sizeof *map);
+    rep_flip_desc d = {k, tol->flip_ppd, tol->flip_exposure[0], tol->flip_exposure[1]};
+    rep_flip_map(a, b, run->width, run->height, 3, &d, map);
+    if (exposures)
+        *exposures = rep_flip_exposures(&d);
+    free(a);
+    free(b);
+    return map;
+}
+
+rep_verdict rep_compare_flip(const eng_buffer *run, const eng_buffer *golden, const rep_tol *tol, rep_verdict v,
+                             int skip, rep_metrics *m, rep_flip_kind *kind, rep_flip_stats *s)
+{
+    memset(s, 0, sizeof *s);
+    *kind = REP_FLIP_NONE;
+    int ia[3], ib[3];
+    rep_flip_kind k = rep_flip_kind_of(run->name ? run->name : "");
+    if (skip || k == REP_FLIP_NONE || v == REP_V_SIZE || !rgb_index(run, ia) || !rgb_index(golden, ib))
+        return v;
+    *kind = k;
+    if (v == REP_V_BITEXACT)
+        return v; /* identical: ꟻLIP is 0 by construction, not worth a filter pass */
+    int exposures = 0;
+    float *map = rep_flip_buffers(run, golden, tol, k, &exposures);
+    rep_flip_stats_of(map, (size_t)run->width * (size_t)run->height, s);
+    s->exposures = exposures;
+    free(map);
+    if (s->mean > tol->flip_mean_fail || s->p99 > tol->flip_p99_fail) {
+        m->fail_why |= REP_WHY_FLIP;
+        return REP_V_FAIL;
+    }
+    return v;
 }

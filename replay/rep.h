@@ -67,6 +67,7 @@ typedef struct rep_options {
     int frames_set, frame_first, frame_last; /* frames_set: only frames frame_first..frame_last */
     const char *buffers;      /* NULL, or an fnmatch pattern: only the buffers it matches are compared */
     rep_progress *progress;   /* NULL, or stepped once per frame compared (total set by replay) */
+    int no_flip;              /* skip ꟻLIP (flip.h) of the colour buffers (for timing it; reports show none) */
 } rep_options;
 
 /* Parses one idiff-style option name ("fail", "-failpercent", "--hardwarn") and its value into

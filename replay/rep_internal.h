@@ -23,6 +23,7 @@
 #include <stdint.h>
 
 #include "eng.h"
+#include "flip.h"
 #include "oiio_shim.h"
 #include "rep.h"
 
@@ -102,6 +103,8 @@ typedef struct rep_run {
     char *gl_renderer;   /* the manifest's gl.renderer (GL_RENDERER); NULL if absent */
     int frame_count;
     rep_frame_info *frames;
+    int complete;        /* manifest.json read; 0: a run still being recorded (rep_run_open_live) */
+    int planned_frames;  /* live: run.json's frame_count (0 if absent); complete: frame_count */
 } rep_run;
 
 /* Opens a run: parses and validates manifest.json (format, version, "complete": true, frame
@@ -111,6 +114,19 @@ typedef struct rep_run {
  * problem (ENG_ERR_IO missing, ENG_ERR_PARSE not JSON, ENG_ERR_INVALID otherwise). */
 eng_result rep_run_open(const char *dir, rep_run **out, eng_error *err);
 void rep_run_close(rep_run *run);
+
+/* Opens a run that may still be recording (live view, issue 19 item 3). With manifest.json it
+ * is rep_run_open. Without it, a folder holding run.json (written by capture before any frame)
+ * is a run in progress: its frames are those whose frames/NNNNNN.exr and frames/NNNNNN.json
+ * (the frame's manifest record, written after the EXR) both exist, from frame 0 up to the first
+ * one missing either: the rule by which capture's --resume counts a frame as captured. Zero
+ * frames is a valid state. Without either file: rep_run_open's error. */
+eng_result rep_run_open_live(const char *dir, rep_run **out, eng_error *err);
+/* Appends the frames of a live run that have landed since (same rule); once manifest.json is
+ * there, the manifest's frames replace the records and run->complete is set. *added gets the
+ * number of new frames. Already listed frames keep their rep_frame_info (pointers stay valid;
+ * the frames array itself may move). A complete run is left as it is. */
+eng_result rep_run_refresh(rep_run *run, int *added, eng_error *err);
 
 /* Index of the buffer called name in frame f, or -1. */
 int rep_frame_find(const rep_frame_info *f, const char *name);
@@ -142,6 +158,10 @@ typedef struct rep_tol {
     double warn, warnrelative, warnpercent, hardwarn;
     double fail, failrelative, failpercent, hardfail;
     double rmse_warn, rmse_fail;
+    /* ꟻLIP (flip.h) of colour buffers: fail when the mean or the 99th percentile is over
+     * (INFINITY: unchecked); the HDR exposure range [start, stop] and the observer's ppd (0: 67). */
+    double flip_mean_fail, flip_p99_fail;
+    double flip_exposure[2], flip_ppd;
 } rep_tol;
 
 typedef struct rep_tol_rule {
@@ -210,7 +230,8 @@ enum {
     REP_WHY_HARD = 2,      /* some |Δ| over hardfail (hardwarn) */
     REP_WHY_RMSE = 4,      /* RMSE over rmse_fail (rmse_warn) */
     REP_WHY_NONFINITE = 8, /* a non-finite value changed class, or appeared in a run without golden */
-    REP_WHY_EXACT = 16     /* exact mode and some bit differs */
+    REP_WHY_EXACT = 16,    /* exact mode and some bit differs */
+    REP_WHY_FLIP = 32      /* ꟻLIP mean or 99th percentile over flip_mean_fail / flip_p99_fail */
 };
 
 #define REP_CHANNEL_NAME_MAX 64
@@ -242,6 +263,19 @@ typedef struct rep_metrics {
  * non-finite in both with the same class count as d = 0. */
 rep_verdict rep_compare(const eng_buffer *run, const eng_buffer *golden, const rep_tol *tol,
                         rep_metrics *m);
+
+/* ꟻLIP of a colour buffer (flip.h; rep_flip_kind_of its name, channels R, G, B) against its
+ * golden, under tol's exposure range and ppd: kind and statistics into *kind and *s (a
+ * bit-exact buffer gets zeros without computing). Over flip_mean_fail or flip_p99_fail adds
+ * REP_WHY_FLIP to m->fail_why and returns REP_V_FAIL; otherwise returns v. A buffer that is no
+ * colour image, or whose sizes differ, gets REP_FLIP_NONE and v back. skip: measure nothing. */
+/* The ꟻLIP map (w×h floats, caller frees) of a run buffer against its golden as kind k under
+ * tol (the map behind rep_compare_flip's statistics; report.html's heat map); *exposures (may be
+ * NULL) gets how many exposures were evaluated. NULL when either lacks R, G, B or sizes differ. */
+float *rep_flip_buffers(const eng_buffer *run, const eng_buffer *golden, const rep_tol *tol, rep_flip_kind k,
+                        int *exposures);
+rep_verdict rep_compare_flip(const eng_buffer *run, const eng_buffer *golden, const rep_tol *tol, rep_verdict v,
+                             int skip, rep_metrics *m, rep_flip_kind *kind, rep_flip_stats *s);
 
 /* ---------------------------------------------------------------- provenance.c */
 
@@ -332,6 +366,8 @@ typedef struct rep_entry {
     rep_photon_diff pd;
     char *run_shape;      /* "WxH C1,C2,.." for size mismatches */
     char *golden_shape;
+    rep_flip_kind flip_kind; /* ꟻLIP measured (LDR/HDR), or REP_FLIP_NONE */
+    rep_flip_stats flip;     /* zero without computing when the buffer is bit-exact */
 } rep_entry;
 
 typedef struct rep_report {

@@ -112,8 +112,8 @@ typedef struct cmp_job {
 /* The entries are added in the report's order first (run buffers, then the golden's extra
  * ones), then the comparisons, each writing only its own entry, run on the OpenMP threads:
  * the report is the same whatever the thread count and timing. */
-static void compare_frame(rep_report *r, const rep_tolerances *tols, const char *glob, const rep_frame_info *rf,
-                          const rep_part *rp, const rep_frame_info *gf, const rep_part *gp)
+static void compare_frame(rep_report *r, const rep_tolerances *tols, const char *glob, int no_flip,
+                          const rep_frame_info *rf, const rep_part *rp, const rep_frame_info *gf, const rep_part *gp)
 {
     cmp_job *jobs = rep_xcalloc((size_t)rf->buffer_count + 1, sizeof *jobs);
     int njobs = 0;
@@ -147,6 +147,7 @@ static void compare_frame(rep_report *r, const rep_tolerances *tols, const char 
             e->verdict = rep_photon_compare(&a, &b, &e->tol, &e->m, &e->pd);
         } else {
             e->verdict = rep_compare(&a, &b, &e->tol, &e->m);
+            e->verdict = rep_compare_flip(&a, &b, &e->tol, e->verdict, no_flip, &e->m, &e->flip_kind, &e->flip);
         }
         if (e->verdict == REP_V_SIZE) {
             e->run_shape = shape(a.width, a.height, a.channel_count, a.channels);
@@ -398,7 +399,7 @@ static eng_result walk(const rep_options *o, const char *report_dir, rep_report 
             else if (!gf)
                 one_side(r, o->buffers, rf, REP_PROB_FRAME_EXTRA);
             else
-                compare_frame(r, use, o->buffers, rf, rp, gf, gp);
+                compare_frame(r, use, o->buffers, o->no_flip, rf, rp, gf, gp);
             res = stab_frame(&sw, i, rf, rp, gf, gp, err);
         }
         if (rf)

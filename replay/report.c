@@ -163,6 +163,16 @@ static void why_text(rep_sb *sb, unsigned why, const rep_metrics *m, int fail, c
         rep_sb_printf(sb, "  rmse over %g", fail ? t->rmse_fail : t->rmse_warn);
     if (why & REP_WHY_EXACT)
         rep_sb_printf(sb, "  exact: %llu values differ", (unsigned long long)m->values_differing);
+    if (why & REP_WHY_FLIP)
+        rep_sb_printf(sb, "  FLIP over flip_mean_fail %g / flip_p99_fail %g", t->flip_mean_fail, t->flip_p99_fail);
+}
+
+/* "  FLIP mean 0.0123 p99 0.2 (HDR)" for a colour buffer (flip.h). */
+static void flip_text(rep_sb *sb, const rep_entry *e)
+{
+    if (e->flip_kind != REP_FLIP_NONE)
+        rep_sb_printf(sb, "  FLIP mean %.3g p99 %.3g (%s)", e->flip.mean, e->flip.p99,
+                      e->flip_kind == REP_FLIP_HDR ? "HDR" : "LDR");
 }
 
 void rep_report_line(rep_sb *sb, const rep_report *r, const rep_entry *e)
@@ -220,6 +230,7 @@ void rep_report_line(rep_sb *sb, const rep_report *r, const rep_entry *e)
                       m->max_channel, m->rmse);
     else
         rep_sb_printf(sb, "max |Δ| 0 (%llu values differ in bits only)", (unsigned long long)m->values_differing);
+    flip_text(sb, e);
     if (e->verdict == REP_V_FAIL) {
         rep_sb_printf(sb, "  over fail ");
         share_text(sb, m->fail_pixels, m->pixels, m->fail_percent, e->photon_set ? "photons" : "px");
@@ -343,6 +354,7 @@ static cJSON *why_json(unsigned why)
     if (why & REP_WHY_RMSE) cJSON_AddItemToArray(a, cJSON_CreateString("rmse"));
     if (why & REP_WHY_NONFINITE) cJSON_AddItemToArray(a, cJSON_CreateString("nonfinite"));
     if (why & REP_WHY_EXACT) cJSON_AddItemToArray(a, cJSON_CreateString("exact"));
+    if (why & REP_WHY_FLIP) cJSON_AddItemToArray(a, cJSON_CreateString("flip"));
     return a;
 }
 
@@ -362,6 +374,12 @@ static cJSON *tol_json(const rep_entry *e)
     add_num(o, "hardfail", t->hardfail);
     add_num(o, "rmse_warn", t->rmse_warn);
     add_num(o, "rmse_fail", t->rmse_fail);
+    add_num(o, "flip_mean_fail", t->flip_mean_fail);
+    add_num(o, "flip_p99_fail", t->flip_p99_fail);
+    cJSON *ex = cJSON_AddArrayToObject(o, "flip_exposure");
+    cJSON_AddItemToArray(ex, cJSON_CreateNumber(t->flip_exposure[0]));
+    cJSON_AddItemToArray(ex, cJSON_CreateNumber(t->flip_exposure[1]));
+    add_num(o, "flip_ppd", t->flip_ppd > 0 ? t->flip_ppd : REP_FLIP_PPD_DEFAULT);
     return o;
 }
 
@@ -496,6 +514,17 @@ char *rep_report_json(const rep_report *r)
             if (r->golden_dir)
                 cJSON_AddItemToObject(b, "tolerance", tol_json(e));
             cJSON_AddItemToObject(b, "metrics", metrics_json(r, &e->m));
+        }
+        if (e->flip_kind != REP_FLIP_NONE) { /* ꟻLIP (flip.h): 0 without computing when bit-exact */
+            cJSON *fl = cJSON_AddObjectToObject(b, "flip");
+            cJSON_AddStringToObject(fl, "kind", e->flip_kind == REP_FLIP_HDR ? "HDR" : "LDR");
+            add_num(fl, "mean", e->flip.mean);
+            add_num(fl, "p50", e->flip.p50);
+            add_num(fl, "p95", e->flip.p95);
+            add_num(fl, "p99", e->flip.p99);
+            add_num(fl, "max", e->flip.max);
+            cJSON_AddNumberToObject(fl, "exposures", e->flip.exposures);
+            cJSON_AddBoolToObject(fl, "computed", e->verdict != REP_V_BITEXACT);
         }
         cJSON_AddItemToArray(bufs, b);
     }

@@ -33,6 +33,7 @@
 /* The thumbnails of one card or preview: file names relative to the page, NULL where none. */
 typedef struct tset {
     char *golden, *run, *diff;
+    char *flip;          /* ꟻLIP heat map (colour buffers that differ), or NULL */
     int tw, th;          /* thumbnail size */
     double scale;        /* heatmap white */
     rep_thumb_map map;
@@ -45,6 +46,7 @@ typedef struct job {
     const char *buffer;
     tset *t;
     int want_golden, want_run, want_diff;
+    const rep_entry *e;  /* the card's entry (NULL: a preview): ꟻLIP heat map with the difference */
 } job;
 
 typedef struct page {
@@ -143,6 +145,22 @@ static const rep_part *find_part(const rep_part *parts, int n, const char *name)
     return NULL;
 }
 
+/* The ꟻLIP heat map of a colour buffer that differs (flip.h's ramp, box maximum). */
+static void flip_thumb(page *pg, const job *jb, const eng_buffer *a, const eng_buffer *b)
+{
+    const rep_entry *e = jb->e;
+    if (!e || e->flip_kind == REP_FLIP_NONE || e->verdict == REP_V_BITEXACT)
+        return;
+    float *map = rep_flip_buffers(a, b, &e->tol, e->flip_kind, NULL);
+    if (!map)
+        return;
+    int w, h;
+    unsigned char *px = rep_flip_heat(map, a->width, a->height, REP_THUMB_MAX_SIDE, &w, &h);
+    jb->t->flip = save(pg, px, w, h, jb->frame, jb->buffer, "flip", &jb->t->note);
+    free(px);
+    free(map);
+}
+
 static void make_thumbs(page *pg, const job *jb, const rep_part *rp, int rn, const rep_part *gp, int gn)
 {
     tset *t = jb->t;
@@ -179,6 +197,7 @@ static void make_thumbs(page *pg, const job *jb, const rep_part *rp, int rn, con
             t->diff = save(pg, px, w, h, jb->frame, jb->buffer, "diff", &t->note);
             free(px);
         }
+        flip_thumb(pg, jb, &av, &bv);
     }
 }
 
@@ -284,7 +303,7 @@ static void why(rep_sb *sb, unsigned w)
 {
     static const struct { unsigned bit; const char *name; } names[] = {
         {REP_WHY_PERCENT, "too many pixels over threshold"}, {REP_WHY_HARD, "hard limit"}, {REP_WHY_RMSE, "RMSE"},
-        {REP_WHY_NONFINITE, "NaN/Inf"}, {REP_WHY_EXACT, "exact: bits differ"}};
+        {REP_WHY_NONFINITE, "NaN/Inf"}, {REP_WHY_EXACT, "exact: bits differ"}, {REP_WHY_FLIP, "ꟻLIP"}};
     int any = 0;
     for (size_t i = 0; i < sizeof names / sizeof names[0]; i++)
         if (w & names[i].bit)
@@ -326,6 +345,15 @@ static void metrics_table(rep_sb *sb, const rep_report *r, const rep_entry *e)
         row(sb, "pixels over warn");
         rep_sb_printf(sb, "%llu (%.4g%%)</td></tr>", (unsigned long long)m->warn_pixels, m->warn_percent);
     }
+    if (e->flip_kind != REP_FLIP_NONE) {
+        row(sb, e->flip_kind == REP_FLIP_HDR ? "ꟻLIP (HDR)" : "ꟻLIP (LDR)");
+        rep_sb_printf(sb, "mean %.4f · p50 %.4f · p95 %.4f · p99 %.4f · max %.4f", e->flip.mean, e->flip.p50,
+                      e->flip.p95, e->flip.p99, e->flip.max);
+        if (e->flip_kind == REP_FLIP_HDR && e->flip.exposures)
+            rep_sb_printf(sb, " (%d exposures, %g to %g)", e->flip.exposures, e->tol.flip_exposure[0],
+                          e->tol.flip_exposure[1]);
+        rep_sb_printf(sb, "</td></tr>");
+    }
     row(sb, "NaN / Inf");
     rep_sb_printf(sb, "run %llu / %llu", (unsigned long long)m->run_nan, (unsigned long long)m->run_inf);
     if (r->golden_dir)
@@ -364,7 +392,7 @@ static void tol_table(rep_sb *sb, const rep_entry *e)
         {"fail", t->fail}, {"failrelative", t->failrelative}, {"failpercent", t->failpercent},
         {"hardfail", t->hardfail}, {"rmse_fail", t->rmse_fail}, {"warn", t->warn},
         {"warnrelative", t->warnrelative}, {"warnpercent", t->warnpercent}, {"hardwarn", t->hardwarn},
-        {"rmse_warn", t->rmse_warn}};
+        {"rmse_warn", t->rmse_warn}, {"flip_mean_fail", t->flip_mean_fail}, {"flip_p99_fail", t->flip_p99_fail}};
     for (size_t i = 0; i < sizeof v / sizeof v[0]; i++) {
         row(sb, v[i].k);
         if (isinf(v[i].v))
@@ -455,6 +483,11 @@ static void thumbs(rep_sb *sb, const tset *t, const char *missing_golden, const 
         rep_sb_printf(sb, "</figcaption></figure>");
     } else if (with_diff && t->golden && t->run) {
         placeholder(sb, "no difference image: sizes or channels differ");
+    }
+    if (t->flip) {
+        rep_sb_printf(sb, "<figure>");
+        img(sb, t->flip, t->tw, t->th, "t", "FLIP heat map");
+        rep_sb_printf(sb, "<figcaption>ꟻLIP: black 0 (invisible), pale yellow 1</figcaption></figure>");
     }
     rep_sb_printf(sb, "</div>\n<p class=\"map\">");
     map_caption(sb, t);
@@ -704,7 +737,7 @@ static void all_table(rep_sb *sb, const rep_report *r, const rep_entry *const *o
 {
     rep_sb_printf(sb, "<section id=\"all\"><h2>All buffers (%zu, worst first)</h2>\n<table class=\"all\"><thead><tr>"
                       "<th>verdict</th><th>frame</th><th>buffer</th><th>max |Δ|</th><th>RMSE</th><th>over fail</th>"
-                      "<th>NaN/Inf (run)</th></tr></thead><tbody>\n", n);
+                      "<th>ꟻLIP mean / p99</th><th>NaN/Inf (run)</th></tr></thead><tbody>\n", n);
     for (size_t i = 0; i < n; i++) {
         const rep_entry *e = order[i];
         rep_sb_printf(sb, "<tr class=\"%s\"><td><span class=\"tag %s\">%s</span></td><td class=\"n\">%d</td><td>",
@@ -722,6 +755,9 @@ static void all_table(rep_sb *sb, const rep_report *r, const rep_entry *const *o
         } else {
             rep_sb_printf(sb, "</td><td class=\"n\"></td><td class=\"n\">");
         }
+        rep_sb_printf(sb, "</td><td class=\"n\">");
+        if (e->flip_kind != REP_FLIP_NONE)
+            rep_sb_printf(sb, "%.4f / %.4f", e->flip.mean, e->flip.p99);
         rep_sb_printf(sb, "</td><td class=\"n\">");
         if (e->compared)
             rep_sb_printf(sb, "%llu / %llu", (unsigned long long)e->m.run_nan, (unsigned long long)e->m.run_inf);
@@ -787,12 +823,12 @@ eng_result rep_report_html_write(const rep_report *r, const rep_run *run, const 
     }
     for (size_t i = 0; i < listed; i++) {
         const rep_entry *e = order[i];
-        job jb = {e->frame, e->buffer, &sets[e - r->entries], 0, 0, 0};
+        job jb = {e->frame, e->buffer, &sets[e - r->entries], 0, 0, 0, e};
         jb.want_run = run && e->frame < run->frame_count && rep_frame_find(&run->frames[e->frame], e->buffer) >= 0;
         jb.want_golden = golden && e->frame < golden->frame_count &&
                          rep_frame_find(&golden->frames[e->frame], e->buffer) >= 0;
         jb.want_diff = jb.want_run && jb.want_golden && e->verdict != REP_V_SIZE;
-        int cost = jb.want_run + jb.want_golden + jb.want_diff;
+        int cost = jb.want_run + jb.want_golden + 2 * jb.want_diff; /* the diff and, maybe, ꟻLIP */
         if (cost == 0 || cost > budget)
             continue;
         budget -= cost;
@@ -844,7 +880,10 @@ eng_result rep_report_html_write(const rep_report *r, const rep_run *run, const 
                       "channels, maximum over each box: black where equal, then dark red (smallest non-zero) through "
                       "yellow to white at the buffer's largest difference; magenta where a value's class "
                       "(finite/NaN/+Inf/−Inf) changed; a <b style=\"color:#00c8ff\">cyan</b> square ring (over black only) "
-                      "marks the largest difference. At most %d thumbnails, worst buffers first.</p></footer>\n"
+                      "marks the largest difference. The ꟻLIP heat map (colour buffers: *.display as LDR-ꟻLIP, "
+                      "*.radiance as HDR-ꟻLIP over the rule's pinned exposure range) shows per pixel how visible the "
+                      "difference is when flipping between the images, black 0 through purple and orange to pale "
+                      "yellow 1, maximum over each box. At most %d thumbnails, worst buffers first.</p></footer>\n"
                       "<script>%s</script>\n</body>\n</html>\n",
                       REP_THUMB_MAX_SIDE, REP_THUMB_MAX_IMAGES, JS);
         char *path = rep_path_join(dir, "report.html");
@@ -857,6 +896,7 @@ eng_result rep_report_html_write(const rep_report *r, const rep_run *run, const 
         free(sets[i].golden);
         free(sets[i].run);
         free(sets[i].diff);
+        free(sets[i].flip);
     }
     for (int i = 0; i < 2; i++) {
         free(previews[i].golden);

@@ -77,18 +77,21 @@ static void free_buffer(rep_buffer_info *b)
         free(b->channels[c]);
 }
 
+static void free_frame(rep_frame_info *f)
+{
+    for (int j = 0; j < f->buffer_count; j++)
+        free_buffer(&f->buffers[j]);
+    free(f->buffers);
+    free(f->file);
+    free(f->path);
+}
+
 void rep_run_close(rep_run *run)
 {
     if (!run)
         return;
-    for (int i = 0; i < run->frame_count; i++) {
-        rep_frame_info *f = &run->frames[i];
-        for (int j = 0; j < f->buffer_count; j++)
-            free_buffer(&f->buffers[j]);
-        free(f->buffers);
-        free(f->file);
-        free(f->path);
-    }
+    for (int i = 0; i < run->frame_count; i++)
+        free_frame(&run->frames[i]);
     free(run->frames);
     free(run->sequence_name);
     free(run->gl_renderer);
@@ -159,9 +162,9 @@ static eng_result parse_buffer(const char *mf, const char *where, const cJSON *j
     return ENG_OK;
 }
 
-static eng_result parse_frame(rep_run *run, int i, const cJSON *jf, eng_error *err)
+/* Frame i of run from its manifest record jf; mf is the file the record came from (messages). */
+static eng_result parse_frame(rep_run *run, const char *mf, int i, const cJSON *jf, eng_error *err)
 {
-    const char *mf = run->manifest_path;
     rep_frame_info *f = &run->frames[i];
     char where[96];
     snprintf(where, sizeof where, "frames[%d]", i);
@@ -228,23 +231,9 @@ static eng_result parse_frame(rep_run *run, int i, const cJSON *jf, eng_error *e
     return ENG_OK;
 }
 
-static eng_result parse_manifest(rep_run *run, const cJSON *root, eng_error *err)
+/* What a manifest and run.json share: resolution, sequence name, GL renderer (all optional). */
+static eng_result parse_head(rep_run *run, const char *mf, const cJSON *root, eng_error *err)
 {
-    const char *mf = run->manifest_path;
-    if (!cJSON_IsObject(root))
-        return eng_fail(err, ENG_ERR_INVALID, "%s: not a JSON object", mf);
-    const char *format = get_string(root, "format");
-    if (!format || strcmp(format, "ispm-run") != 0)
-        return eng_fail(err, ENG_ERR_INVALID, "%s: \"format\" is not \"ispm-run\"", mf);
-    int64_t version;
-    eng_result r = get_int(mf, "top level", root, "format_version", 0, 1e9, &version, err);
-    if (r != ENG_OK)
-        return r;
-    if (version != 1)
-        return eng_fail(err, ENG_ERR_UNSUPPORTED, "%s: format_version %lld, this replay reads 1", mf,
-                        (long long)version);
-    if (!cJSON_IsTrue(cJSON_GetObjectItemCaseSensitive(root, "complete")))
-        return eng_fail(err, ENG_ERR_INVALID, "%s: run is incomplete (\"complete\" is not true)", mf);
     const cJSON *res = cJSON_GetObjectItemCaseSensitive(root, "resolution");
     if (res) {
         const cJSON *w = cJSON_GetArrayItem(res, 0), *h = cJSON_GetArrayItem(res, 1);
@@ -262,6 +251,29 @@ static eng_result parse_manifest(rep_run *run, const cJSON *root, eng_error *err
     const char *renderer = cJSON_IsObject(gl) ? get_string(gl, "renderer") : NULL;
     if (renderer)
         run->gl_renderer = rep_xstrdup(renderer);
+    return ENG_OK;
+}
+
+static eng_result parse_manifest(rep_run *run, const cJSON *root, eng_error *err)
+{
+    const char *mf = run->manifest_path;
+    if (!cJSON_IsObject(root))
+        return eng_fail(err, ENG_ERR_INVALID, "%s: not a JSON object", mf);
+    const char *format = get_string(root, "format");
+    if (!format || strcmp(format, "ispm-run") != 0)
+        return eng_fail(err, ENG_ERR_INVALID, "%s: \"format\" is not \"ispm-run\"", mf);
+    int64_t version;
+    eng_result r = get_int(mf, "top level", root, "format_version", 0, 1e9, &version, err);
+    if (r != ENG_OK)
+        return r;
+    if (version != 1)
+        return eng_fail(err, ENG_ERR_UNSUPPORTED, "%s: format_version %lld, this replay reads 1", mf,
+                        (long long)version);
+    if (!cJSON_IsTrue(cJSON_GetObjectItemCaseSensitive(root, "complete")))
+        return eng_fail(err, ENG_ERR_INVALID, "%s: run is incomplete (\"complete\" is not true)", mf);
+    if ((r = parse_head(run, mf, root, err)) != ENG_OK)
+        return r;
+    run->complete = 1;
     int64_t fc;
     if ((r = get_int(mf, "top level", root, "frame_count", 1, 1e7, &fc, err)) != ENG_OK)
         return r;
@@ -276,7 +288,7 @@ static eng_result parse_manifest(rep_run *run, const cJSON *root, eng_error *err
     const cJSON *jf = frames->child;
     for (int i = 0; i < n; i++, jf = jf->next) {
         run->frame_count = i + 1;
-        if ((r = parse_frame(run, i, jf, err)) != ENG_OK)
+        if ((r = parse_frame(run, mf, i, jf, err)) != ENG_OK)
             return r;
     }
     return ENG_OK;
@@ -394,4 +406,125 @@ eng_result rep_run_read_frame(const rep_run *run, int frame, rep_part **out, eng
     }
     *out = sorted;
     return ENG_OK;
+}
+
+/* ---------------------------------------------------------------- runs still being recorded */
+
+static eng_result load_json(const char *path, cJSON **root, eng_error *err)
+{
+    char *text = NULL;
+    size_t len = 0;
+    *root = NULL;
+    eng_result r = eng_read_file(path, REP_MAX_JSON_BYTES, &text, &len, err);
+    if (r != ENG_OK)
+        return r;
+    const char *end = NULL;
+    *root = cJSON_ParseWithLengthOpts(text, len, &end, 0);
+    if (!*root) {
+        size_t at = end && end >= text ? (size_t)(end - text) : 0;
+        r = eng_fail(err, ENG_ERR_PARSE, "%s: byte %zu: not valid JSON", path, at);
+    }
+    free(text);
+    return r;
+}
+
+/* Adds the frames from run->frame_count on whose EXR and record both exist. */
+static eng_result scan_records(rep_run *run, int *added, eng_error *err)
+{
+    eng_result r = ENG_OK;
+    *added = 0;
+    for (int i = run->frame_count; r == ENG_OK; i++) {
+        char rel[40];
+        snprintf(rel, sizeof rel, "frames/%06d.json", i);
+        char *rec = rep_path_join(run->dir, rel);
+        snprintf(rel, sizeof rel, "frames/%06d.exr", i);
+        char *exr = rep_path_join(run->dir, rel);
+        int both = rep_is_file(rec) && rep_is_file(exr);
+        cJSON *jf = NULL;
+        if (both)
+            r = load_json(rec, &jf, err);
+        if (both && r == ENG_OK) {
+            run->frames = rep_xrealloc(run->frames, (size_t)(i + 1) * sizeof *run->frames);
+            memset(&run->frames[i], 0, sizeof run->frames[i]);
+            run->frame_count = i + 1;
+            r = parse_frame(run, rec, i, jf, err);
+            if (r == ENG_OK) {
+                ++*added;
+            } else { /* the run stays as it was: frames before i */
+                free_frame(&run->frames[i]);
+                run->frame_count = i;
+            }
+        }
+        cJSON_Delete(jf);
+        free(rec);
+        free(exr);
+        if (!both)
+            break;
+    }
+    return r;
+}
+
+eng_result rep_run_open_live(const char *dir, rep_run **out, eng_error *err)
+{
+    *out = NULL;
+    char *mf = rep_path_join(dir, "manifest.json"), *info = rep_path_join(dir, "run.json");
+    int live = !rep_is_file(mf) && rep_is_file(info);
+    free(mf);
+    if (!live) {
+        free(info);
+        eng_result r = rep_run_open(dir, out, err);
+        if (r == ENG_OK)
+            (*out)->planned_frames = (*out)->frame_count;
+        return r;
+    }
+    rep_run *run = rep_xcalloc(1, sizeof *run);
+    run->dir = rep_xstrdup(dir);
+    run->manifest_path = rep_path_join(dir, "manifest.json");
+    cJSON *root = NULL;
+    eng_result r = load_json(info, &root, err);
+    if (r == ENG_OK && !cJSON_IsObject(root))
+        r = eng_fail(err, ENG_ERR_INVALID, "%s: not a JSON object", info);
+    if (r == ENG_OK)
+        r = parse_head(run, info, root, err);
+    if (r == ENG_OK) {
+        const cJSON *fc = cJSON_GetObjectItemCaseSensitive(root, "frame_count");
+        if (cJSON_IsNumber(fc) && fc->valuedouble >= 1 && fc->valuedouble <= 1e7)
+            run->planned_frames = (int)fc->valuedouble;
+    }
+    cJSON_Delete(root);
+    free(info);
+    int added;
+    if (r == ENG_OK)
+        r = scan_records(run, &added, err);
+    if (r != ENG_OK) {
+        rep_run_close(run);
+        return r;
+    }
+    *out = run;
+    return ENG_OK;
+}
+
+eng_result rep_run_refresh(rep_run *run, int *added, eng_error *err)
+{
+    *added = 0;
+    if (run->complete)
+        return ENG_OK;
+    if (rep_is_file(run->manifest_path)) {
+        rep_run *full = NULL;
+        eng_result r = rep_run_open(run->dir, &full, err);
+        if (r != ENG_OK)
+            return r;
+        int have = run->frame_count < full->frame_count ? run->frame_count : full->frame_count;
+        /* the records already listed are the manifest's own (capture writes both from one frame) */
+        run->frames = rep_xrealloc(run->frames, (size_t)full->frame_count * sizeof *run->frames);
+        memcpy(run->frames + have, full->frames + have, (size_t)(full->frame_count - have) * sizeof *run->frames);
+        *added = full->frame_count - have;
+        run->frame_count = full->frame_count;
+        run->planned_frames = full->frame_count;
+        run->complete = 1;
+        full->frame_count = have; /* the moved frames are run's now */
+        rep_run_close(full);
+        return ENG_OK;
+    }
+    return scan_records(run, added, err);
 }

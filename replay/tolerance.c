@@ -15,6 +15,10 @@
  * stability object replaces the default's whole: limits do not merge key by key, so what a
  * rule checks is what it says.
  *
+ * Colour buffers also take ꟻLIP limits (flip.h): flip_mean_fail and flip_p99_fail (off unless set),
+ * flip_exposure [start, stop] (HDR-ꟻLIP's pinned range in stops, start <= stop; default −4..4) and
+ * flip_ppd (0: the papers' 67).
+ *
  * A file may also hold "cross_renderer": a separate, looser set with the same "default" and
  * "buffers" keys, used instead of the rest when the run was rendered by another GL renderer
  * than the golden (a GPU through EGL against an llvmpipe golden: renderer.c). Without it such
@@ -31,13 +35,15 @@
 #include <string.h>
 
 static const char *const KEYS[] = {"warn", "warnrelative", "warnpercent", "hardwarn", "fail", "failrelative",
-                                   "failpercent", "hardfail", "rmse_warn", "rmse_fail"};
+                                   "failpercent", "hardfail", "rmse_warn", "rmse_fail",
+                                   "flip_mean_fail", "flip_p99_fail", "flip_ppd"};
 #define KEY_COUNT (sizeof KEYS / sizeof KEYS[0])
 
 static double *field(rep_tol *t, size_t k)
 {
     double *f[KEY_COUNT] = {&t->warn, &t->warnrelative, &t->warnpercent, &t->hardwarn, &t->fail,
-                            &t->failrelative, &t->failpercent, &t->hardfail, &t->rmse_warn, &t->rmse_fail};
+                            &t->failrelative, &t->failpercent, &t->hardfail, &t->rmse_warn, &t->rmse_fail,
+                            &t->flip_mean_fail, &t->flip_p99_fail, &t->flip_ppd};
     return f[k];
 }
 
@@ -54,6 +60,11 @@ void rep_tol_builtin(rep_tol *t)
     t->hardfail = 1e-2;
     t->rmse_warn = INFINITY;
     t->rmse_fail = INFINITY;
+    t->flip_mean_fail = INFINITY;
+    t->flip_p99_fail = INFINITY;
+    t->flip_ppd = 0;
+    t->flip_exposure[0] = REP_FLIP_EXPOSURE_START;
+    t->flip_exposure[1] = REP_FLIP_EXPOSURE_STOP;
     t->stab.set = 0;
     t->stab.static_mean = t->stab.static_p99 = t->stab.reprojected_mean = t->stab.reprojected_p99 = INFINITY;
     t->stab.temporal_std_mean = t->stab.temporal_std_p99 = INFINITY;
@@ -112,6 +123,18 @@ static eng_result parse_block(const char *path, const char *where, const cJSON *
             if (!cJSON_IsBool(v))
                 return eng_fail(err, ENG_ERR_INVALID, "%s: %s: \"exact\" must be true or false", path, where);
             t->exact = cJSON_IsTrue(v);
+            continue;
+        }
+        if (strcmp(key, "flip_exposure") == 0) { /* HDR-ꟻLIP's pinned range: [start, stop], stops */
+            const cJSON *a = cJSON_GetArrayItem(v, 0), *b = cJSON_GetArrayItem(v, 1);
+            if (!cJSON_IsArray(v) || cJSON_GetArraySize(v) != 2 || !cJSON_IsNumber(a) || !cJSON_IsNumber(b) ||
+                !isfinite(a->valuedouble) || !isfinite(b->valuedouble) || a->valuedouble > b->valuedouble ||
+                b->valuedouble - a->valuedouble > 64)
+                return eng_fail(err, ENG_ERR_INVALID,
+                                "%s: %s: \"flip_exposure\" must be [start, stop], finite, start <= stop, at most 64 apart",
+                                path, where);
+            t->flip_exposure[0] = a->valuedouble;
+            t->flip_exposure[1] = b->valuedouble;
             continue;
         }
         if (strcmp(key, "stability") == 0) {

@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # End-to-end report test: record the CI sequence, change one pixel of direct.radiance in frame 1,
-# replay, and check report.junit.xml (well-formed, counts, the failure) and report.html in
+# replay, and check report.junit.xml (well-formed, counts, the failure), ꟻLIP in every report and
+# the flip_mean_fail tolerance key, and report.html in
 # headless Chromium: the page loads, the failing buffer is listed first, and every <img> points
 # at a file that exists. The mutated run is replayed against the fresh recording (with the CI
 # golden's tolerances) rather than golden/ itself, so that this test is about the report and
@@ -79,6 +80,38 @@ check_images "$REP/report.html"
 for href in $(grep -o 'href="[^"#][^"]*\.exr"' "$REP/report.html" | sed 's/href="\(.*\)"/\1/'); do
   [ -f "$REP/$href" ] || fail "EXR link $href does not resolve"
 done
+
+# ꟻLIP (issue 19 item 2): the changed radiance buffer gets HDR-ꟻLIP statistics in report.json,
+# the text and JUnit lines and a heat map in the page; bit-exact colour buffers get 0 without
+# computing; flip_mean_fail in a tolerance rule fails the buffer, a loose one lets it pass.
+python3 - "$REP/report.json" <<'PY' || fail "report.json: FLIP"
+import json, sys
+r = json.load(open(sys.argv[1]))
+b = {(f["index"], x["name"]): x for f in r["frames"] for x in f["buffers"]}
+f = b[(1, "direct.radiance")]["flip"]
+assert f["kind"] == "HDR" and f["computed"] and f["exposures"] == 8, f
+assert 0 < f["mean"] < 0.01 and f["p50"] == 0 and 0 < f["max"] <= 1 and f["p99"] <= f["max"], f
+for key in [(0, "direct.radiance"), (1, "final.display"), (1, "composite.radiance")]:
+    g = b[key]["flip"]
+    assert g["mean"] == 0 and g["max"] == 0 and not g["computed"], (key, g)
+assert b[(1, "final.display")]["flip"]["kind"] == "LDR"
+assert "flip" not in b[(1, "gbuffer.normal")]
+t = b[(1, "direct.radiance")]["tolerance"]
+assert t["flip_exposure"] == [-4, 4] and t["flip_mean_fail"] is None, t
+PY
+grep 'direct.radiance' "$REP/report.txt" | grep -q 'FLIP mean [0-9.e-]* p99 [0-9.e-]* (HDR)' || fail "report.txt: no FLIP on the failing line"
+grep -q 'FLIP mean' "$XML" || fail "report.junit.xml: no FLIP in the failure text"
+grep -q 'src="img/[^"]*-f000001-direct.radiance-flip.png"' "$REP/report.html" || fail "report.html: no FLIP heat map"
+printf '{"buffers": [{"match": "direct.radiance", "fail": 1, "failrelative": 1, "hardfail": 1, "flip_mean_fail": %s}]}\n' 1e-9 > "$WORK/flip-tight.json"
+printf '{"buffers": [{"match": "direct.radiance", "fail": 1, "failrelative": 1, "hardfail": 1, "warn": 1, "flip_mean_fail": %s, "flip_p99_fail": 0.5}]}\n' 0.5 > "$WORK/flip-loose.json"
+"$ISPM" replay "$WORK/pixel" --golden "$WORK/run" --tolerances "$WORK/flip-tight.json" --frames 1-1 \
+  --buffers direct.radiance --report "$WORK/flip-tight" --quiet > /dev/null; rc=$?
+[ $rc -eq 2 ] || fail "flip_mean_fail 1e-9: replay exited $rc, want 2"
+grep -q '"flip"' "$WORK/flip-tight/report.json" && grep -q 'FLIP over flip_mean_fail' "$WORK/flip-tight/report.txt" ||
+  fail "flip_mean_fail 1e-9: the failure does not name FLIP"
+"$ISPM" replay "$WORK/pixel" --golden "$WORK/run" --tolerances "$WORK/flip-loose.json" --frames 1-1 \
+  --buffers direct.radiance --report "$WORK/flip-loose" --quiet > /dev/null; rc=$?
+[ $rc -eq 0 ] || fail "flip_mean_fail 0.5: replay exited $rc, want 0"
 
 if ! command -v chromium >/dev/null; then
   # The structural checks passed; the rendering ones cannot run: a skip (exit 77, CTest's

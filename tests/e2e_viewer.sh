@@ -5,7 +5,8 @@
 # that turns grey walls into saturated hues, a difference against an identical run that is
 # black and one against a run with one changed pixel that shows exactly that spot, the A/B flip
 # showing the same pixels, the help overlay's text, the probe panel following the cursor, the
-# photon map (p) as cyan/yellow/magenta points over the image that vanish again. Also
+# photon map (p) as cyan/yellow/magenta points over the image that vanish again, the ꟻLIP heat
+# map (e) of a changed pixel, live view of a run whose frames land after the viewer started. Also
 # the command-line contract: --help, and one line plus exit 2 for a missing or incomplete run,
 # exit 1 without a display. The regions come from viewer/main.c's fixed layout at 1280x800:
 # buffer list x<260, probe panel x>=920, timeline and status below y=752; a 160x160 buffer is
@@ -52,6 +53,7 @@ expect_error 1 "no display" env -u DISPLAY -u WAYLAND_DISPLAY -u SDL_VIDEODRIVER
 "$ISPM" record "$SEQ" -o "$WORK/run" --quiet || fail "record exited $?"
 cp -r "$WORK/run" "$WORK/run2"
 "$MUTATE" "$WORK/run2" 1 gbuffer.position 80 80 X add 5 || fail "mutate exited $?"
+"$MUTATE" "$WORK/run2" 1 final.display 80 80 R add 0.5 || fail "mutate exited $?"
 
 # ---- an X server on a free display (Xvfb picks it and writes its number when ready)
 PIDS=()
@@ -178,5 +180,64 @@ gt 0.01 "$(mean spot $IMG)" || fail "abs error: more than the changed pixel ligh
 keys d d; shot spot_signed
 read -r r g b <<< "$(stat spot_signed 1x1+592+378 '%[fx:r] %[fx:g] %[fx:b]')"
 gt "$b" 0.5 && gt 0.3 "$r" || fail "signed difference (run - copy < 0) is not blue: $r $g $b"
+# e: the ꟻLIP heat map of final.display (one pixel changed in the copy's frame 1): bright at that
+# pixel, black (0) away from it, and gone again on a second e.
+DOWNS=$(for _ in $(seq $((i_final - i_pos))); do printf 'Down '; done)
+keys d $DOWNS; shot final1
+keys e; shot flip
+gt "$(stat flip 1x1+592+378 '%[fx:maxima]')" 0.3 || fail "FLIP heat map: the changed pixel is not bright"
+gt 0.02 "$(mean flip $IMG)" || fail "FLIP heat map: more than the changed pixel's surroundings light up"
+gt "$(differ final1 flip $IMG)" 50 || fail "FLIP heat map (e): the image did not change"
+keys e; shot flip_off
+[ "$(differ final1 flip_off $IMG)" = 0 ] || fail "FLIP heat map off (e): the image is not as before"
+keys q
+
+# ---- session 3: live view. A run being recorded is a folder with run.json and, per frame, an
+# EXR and its record (capture writes the EXR, then the record, each by rename); here they land
+# by the same renames from the recorded run. The viewer starts before any frame exists, shows
+# the first frames when they land, follows the newest, stays on a frame the user went back to,
+# and takes the manifest when it appears. What it shows is compared with the finished run's
+# frames 5, 4 and 7, shot first; each wait polls the screen (up to 15 s on a loaded machine).
+# until_shot NAME TEST...: screenshots NAME until TEST (a command) succeeds; fails after 15 s.
+until_shot() {
+  name=$1; shift
+  for _ in $(seq 60); do shot "$name"; "$@" && return 0; sleep 0.25; done
+  return 1
+}
+same_as() { [ "$(differ "$1" "$2" $IMG)" = 0 ]; }
+unlike() { gt "$(differ "$1" "$2" $IMG)" 100; }
+start_viewer "$WORK/run" --frame 5; shot done5
+xdotool key Left; until_shot done4 unlike done4 done5 || fail "finished run: Left from frame 5 did not change the image"
+xdotool key End; until_shot done7 unlike done7 done4 || fail "finished run: End from frame 4 did not change the image"
+keys q
+LIVE=$WORK/live
+mkdir -p "$LIVE/frames"
+cp "$WORK/run/run.json" "$LIVE/"
+land() {
+  for i in "$@"; do
+    n=$(printf %06d "$i")
+    cp "$WORK/run/frames/$n.exr" "$LIVE/frames/$n.exr.tmp" && mv "$LIVE/frames/$n.exr.tmp" "$LIVE/frames/$n.exr"
+    cp "$WORK/run/frames/$n.json" "$LIVE/frames/$n.json.tmp" && mv "$LIVE/frames/$n.json.tmp" "$LIVE/frames/$n.json"
+  done
+}
+# the first frames land once the viewer has said it waits for them
+(for _ in $(seq 150); do grep -q "waiting for the recording's first frame" "$WORK/view.log" 2> /dev/null && break
+   sleep 0.1; done; land 0 1) &
+start_viewer "$LIVE"
+grep -q "waiting for the recording's first frame" "$WORK/view.log" || fail "live: no waiting message before the first frame"
+shot live1
+land 2 3 4 5
+until_shot live5 same_as live5 done5 || fail "live: frames 2-5 landed, the viewer does not show frame 5"
+gt "$(differ live1 live5 $IMG)" 100 || fail "live: the first frame shown is already frame 5"
+keys Left; shot live4
+same_as live4 done4 || fail "live: Left from the newest did not show frame 4"
+status_moved() { gt "$(differ live4 live4b 1280x48+0+752)" 0; }
+land 6 7
+until_shot live4b status_moved || fail "live: the timeline and status line did not show the new frames"
+sleep 0.5; shot live4b
+same_as live4 live4b || fail "live: after going back to frame 4 the view moved when frames landed"
+cp "$WORK/run/manifest.json" "$LIVE/"
+keys End
+until_shot live7 same_as live7 done7 || fail "live: End after the manifest landed is not frame 7"
 keys q
 echo "viewer e2e: ok"

@@ -1724,8 +1724,10 @@ START_TEST(report_junit_and_html_name_the_failure)
         imgs++;
     }
     ck_assert_int_ge(imgs, 6);
-    /* golden, new, diff for each of two cards, golden and new of frame 0 and frame 2's final image */
-    ck_assert_int_eq(img_files(run), 10);
+    /* golden, new, diff for each of two cards, the ꟻLIP heat map of the colour buffer
+     * (direct.radiance), golden and new of frame 0 and frame 2's final image */
+    ck_assert_int_eq(img_files(run), 11);
+    ck_assert_ptr_nonnull(strstr(html, "-f000001-direct.radiance-flip.png"));
 
     free(html);
     free(hp);

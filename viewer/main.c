@@ -50,6 +50,7 @@ static const char *const HELP[] = {
     "click timeline  go to frame",
     "p               photons as points over eye-sized buffers:",
     "                bounce 2 cyan, 3 yellow, 4+ magenta",
+    "e               FLIP heat map vs the second run (colour)",
     "h or F1         this help; q or Esc quits",
 };
 
@@ -75,6 +76,10 @@ typedef struct app {
     view_point *points;            /* photon points of the shown frame */
     SDL_Rect *rects;
     size_t points_cap;
+    int flip_view;                 /* e: ꟻLIP heat map instead of the image (view_flip.c) */
+    view_flip_cache flip;
+    unsigned live_last;            /* live view (view_live.c): last look for new frames */
+    char live_err[512];
 } app;
 
 static void usage(FILE *f)
@@ -447,6 +452,27 @@ static void draw_photons(app *ap, const eng_buffer *bufs, int count, const eng_b
     snprintf(note + len, n - len, "  | photons %d (%d in view)", total, shown);
 }
 
+/* With e on: the ꟻLIP heat map replaces the image in ap->pixels; the status line says its mean. */
+static void flip_note(app *ap, const eng_buffer *a, const eng_buffer *b, char *note, size_t n)
+{
+    if (!ap->flip_view)
+        return;
+    size_t len = strlen(note);
+    if (view_flip_render(&ap->flip, ap->s.frame, a, b, ap->pixels))
+        snprintf(note + len, n - len, "  | FLIP mean %.4f p99 %.4f", ap->flip.mean, ap->flip.p99);
+    else
+        snprintf(note + len, n - len, "  | FLIP: colour buffers against a second run only");
+}
+
+/* A run still being recorded: how far it has got, and a record that could not be read. */
+static void live_note(app *ap, char *note, size_t n)
+{
+    size_t len = strlen(note);
+    if (view_run_live(ap->a))
+        snprintf(note + len, n - len, "  | live: %d of %d frames%s%s", view_run_frame_count(ap->a),
+                 view_run_planned_frames(ap->a), ap->live_err[0] ? ": " : "", ap->live_err);
+}
+
 static void redraw(app *ap)
 {
     int w, h;
@@ -492,6 +518,7 @@ static void redraw(app *ap)
                 snprintf(note, sizeof note, "  | %s: showing A", why ? why : "no second run");
             else if (st == VIEW_RENDER_MISMATCH)
                 snprintf(note, sizeof note, "  | B differs in size or channels: showing A");
+            flip_note(ap, a, bcur, note, sizeof note);
             SDL_UpdateTexture(ap->tex, NULL, ap->pixels, a->width * 4);
             view_rect dst = view_fit(area, a->width, a->height, ap->s.zoom);
             dst.x += ap->pan_x;
@@ -511,6 +538,7 @@ static void redraw(app *ap)
             SDL_RenderSetClipRect(ap->ren, NULL);
         }
     }
+    live_note(ap, note, sizeof note);
     draw_left(ap, h);
     draw_right(ap, w, h, bufs, count, bcur);
     draw_bottom(ap, w, h, a, note);
@@ -586,6 +614,11 @@ static int handle(app *ap, const SDL_Event *ev)
     case SDL_QUIT: ap->s.quit = 1; return 0;
     case SDL_WINDOWEVENT: dirty = 1; break;
     case SDL_KEYDOWN: {
+        if (ev->key.keysym.sym == SDLK_e) {
+            ap->flip_view = !ap->flip_view;
+            dirty = 1;
+            break;
+        }
         if (ev->key.keysym.sym == SDLK_a) {
             const eng_buffer *bufs;
             int count;
@@ -718,6 +751,19 @@ int main(int argc, char **argv)
         view_run_close(ap.a);
         return 2;
     }
+    if (view_run_frame_count(ap.a) < 1 && view_run_live(ap.a)) {
+        /* A recording that has not finished its first frame yet: wait for it. */
+        fprintf(stderr, "ispm-view: %s: waiting for the recording's first frame\n", run_dir);
+        while (view_run_frame_count(ap.a) < 1 && view_run_live(ap.a)) {
+            if (view_run_refresh(ap.a, &err) < 0) {
+                fprintf(stderr, "ispm-view: %s\n", err.msg);
+                view_run_close(ap.a);
+                view_run_close(ap.b);
+                return 2;
+            }
+            SDL_Delay(200);
+        }
+    }
     if (view_run_frame_count(ap.a) < 1) {
         fprintf(stderr, "ispm-view: %s: the run has no frames\n", run_dir);
         view_run_close(ap.a);
@@ -809,6 +855,12 @@ int main(int argc, char **argv)
                 dirty |= handle(&ap, &ev);
             while (!ap.s.quit && SDL_PollEvent(&ev));
         }
+        if (view_live_poll(ap.a, &ap.s, SDL_GetTicks(), &ap.live_last, 250, ap.live_err, sizeof ap.live_err)) {
+            sync_buffer(&ap);
+            ap.series_valid = 0;
+            update_hover(&ap);
+            dirty = 1;
+        }
         /* Playback at about 8 frames a second, whatever the decode time. */
         if (ap.s.playing && SDL_GetTicks() - last_tick >= 125) {
             last_tick = SDL_GetTicks();
@@ -835,6 +887,7 @@ out:
     if (TTF_WasInit())
         TTF_Quit();
     SDL_Quit();
+    view_flip_cache_free(&ap.flip);
     free(ap.pixels);
     free(ap.points);
     free(ap.rects);

@@ -247,6 +247,46 @@ int view_run_camera(const view_run *r, int f, float view_proj[16]);
 /* How many frame decodes this run has done (cache misses); for tests. */
 int view_run_decodes(const view_run *r);
 
+/* ---------------------------------------------------------------- live view (view_live.c) */
+
+/* A run opened while it is still being recorded (no manifest.json yet) is live: its frames are
+ * those whose EXR and record have both landed (rep_run_open_live). 1 while live. */
+int view_run_live(const view_run *r);
+/* Frames the recording will have (run.json's frame_count; 0 if unknown), or the frame count. */
+int view_run_planned_frames(const view_run *r);
+/* Picks up the frames that landed since; a run whose manifest has appeared stops being live.
+ * Returns the number of new frames, or -1 (err names the file) when a new record is unreadable. */
+int view_run_refresh(view_run *r, eng_error *err);
+
+/* The state after the run grew to frame_count frames: a viewer showing the newest frame (or
+ * none yet) follows to the new newest one; one that was sent back to an older frame stays
+ * there (End follows again). Returns 1 if the shown frame changed. */
+int view_state_follow(view_state *s, int frame_count);
+
+/* Live polling: refreshes r at most every interval_ms (now_ms: a monotonic clock; *last_ms the
+ * time of the last refresh, updated), then applies view_state_follow. Returns 1 if anything
+ * visible changed (frames added); a refresh error is told once through err_out (may be NULL). */
+int view_live_poll(view_run *r, view_state *s, unsigned now_ms, unsigned *last_ms, unsigned interval_ms,
+                   char *err_out, size_t err_n);
+
+/* ---------------------------------------------------------------- ꟻLIP heat map (view_flip.c) */
+
+/* The last ꟻLIP map computed (per frame and buffer: recomputed only when either changes). */
+typedef struct view_flip_cache {
+    int frame;
+    char name[256];
+    float *map;
+    int w, h;
+    double mean, p99;
+    int valid;
+} view_flip_cache;
+
+/* The ꟻLIP heat map (flip.h: *.display LDR, *.radiance HDR over the default pinned exposure
+ * range) of a against b into out (a->width*a->height RGBA). Returns 1 when drawn, 0 when a is no
+ * colour buffer or b is missing or of another size (out untouched). */
+int view_flip_render(view_flip_cache *c, int frame, const eng_buffer *a, const eng_buffer *b, uint8_t *out);
+void view_flip_cache_free(view_flip_cache *c);
+
 #ifdef __cplusplus
 }
 #endif

@@ -1,7 +1,9 @@
 /* view_run.c — a recorded run as the viewer sees it: the manifest, and frames decoded lazily.
  *
  * Opening reads only the manifest, through replay's run reader (rep_run_open validates it
- * and checks that every frame file exists), so a run of any length opens at once. A frame's
+ * and checks that every frame file exists), so a run of any length opens at once. A run still
+ * being recorded (no manifest.json yet, run.json there) opens with the frames that have landed
+ * (rep_run_open_live: EXR and record both written) and grows by view_run_refresh. A frame's
  * EXR is decoded the first time it is asked for, verified against the manifest's digests by
  * rep_run_read_frame, and kept in a small least-recently-used cache: scrubbing back and forth
  * costs one decode per frame, and memory stays bounded by the cache size whatever the run's
@@ -52,7 +54,7 @@ eng_result view_run_open(const char *dir, int cache_frames, view_run **out, eng_
 {
     *out = NULL;
     rep_run *run = NULL;
-    eng_result r = rep_run_open(dir, &run, err);
+    eng_result r = rep_run_open_live(dir, &run, err);
     if (r != ENG_OK)
         return r;
     view_run *v = rep_xcalloc(1, sizeof *v);
@@ -198,4 +200,22 @@ int view_run_camera(const view_run *r, int f, float view_proj[16])
         return 0;
     memcpy(view_proj, r->run->frames[f].view_proj, 16 * sizeof *view_proj);
     return 1;
+}
+
+int view_run_live(const view_run *r)
+{
+    return !r->run->complete;
+}
+
+int view_run_planned_frames(const view_run *r)
+{
+    return r->run->planned_frames;
+}
+
+int view_run_refresh(view_run *r, eng_error *err)
+{
+    int added = 0;
+    if (rep_run_refresh(r->run, &added, err) != ENG_OK)
+        return -1;
+    return added;
 }

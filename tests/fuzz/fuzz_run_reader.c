@@ -7,7 +7,8 @@
  *   0  manifest.json of a run folder made once per process in a temp folder, which also holds
  *      frames/000000.exr, a fixed two-part frame ("a.rgb" 4x3 R,G,B and "b.z" 2x2 Z), so a
  *      manifest that names it gets past the existence check into decoding and the per-part
- *      checks (names, sizes, channel sets, digests, non-finite counts);
+ *      checks (names, sizes, channel sets, digests, non-finite counts); the same bytes first
+ *      as a live recording's run.json and frame record (rep_run_open_live);
  *   1  tolerances.json, then a lookup for a few buffer names;
  *   2  an EXR file, decoded with the same float limit replay uses.
  * Every failure must leave a one-line, non-empty message. With FUZZ_RUN_READER_SEED=DIR set,
@@ -139,8 +140,35 @@ int LLVMFuzzerInitialize(int *argc, char ***argv)
     return 0;
 }
 
+/* The same bytes as a recording in progress's run.json and frame 0's record (rep_run_open_live,
+ * rep_run_refresh: the viewer's live view reads them). */
+static void fuzz_live(const uint8_t *data, size_t size)
+{
+    unlink(manifest_path);
+    char *info = rep_path_join(run_dir, "run.json"), *rec = rep_path_join(run_dir, "frames/000000.json");
+    write_file(info, data, size);
+    write_file(rec, data, size);
+    rep_run *run = NULL;
+    eng_error err = {{0}};
+    if (rep_run_open_live(run_dir, &run, &err) != ENG_OK) {
+        if (run)
+            abort();
+        check_message(&err);
+    } else {
+        int added;
+        if (rep_run_refresh(run, &added, &err) != ENG_OK)
+            check_message(&err);
+        rep_run_close(run);
+    }
+    unlink(info);
+    unlink(rec);
+    free(info);
+    free(rec);
+}
+
 static void fuzz_manifest(const uint8_t *data, size_t size)
 {
+    fuzz_live(data, size);
     write_file(manifest_path, data, size);
     rep_run *run = NULL;
     eng_error err = {{0}};
