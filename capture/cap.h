@@ -61,7 +61,22 @@ typedef struct cap_desc {
      * bytes either way. */
     int writers;
     int queue_depth;
+    /* A frame shard (ispm record --frames A-B; NULL: the whole sequence). The run holds frames
+     * first - overlap .. last (the last `overlap` frames of the warm-up are written too, for
+     * ispm merge to compare with the previous shard's), each file and frames/NNNNNN.json named
+     * by its sequence frame. Its manifest lists those frames in order ("index" 0, 1, ...,
+     * "sequence_frame" the frame of the sequence, "history_from" the engine's
+     * eng_frame_stats.history_from), "frame_count" their number, and "shard": {"frames": [A, B],
+     * "warmup", "overlap", "sequence_frame_count"}; run.json repeats "shard" (--resume checks
+     * it). Needs 0 <= overlap <= warmup <= first <= last < the sequence's frame count. */
+    const struct cap_shard *shard;
 } cap_desc;
+
+typedef struct cap_shard {
+    int first, last;  /* the shard's own frames, A..B */
+    int warmup;       /* frames rendered before A (their state only), W */
+    int overlap;      /* of which the last ones written, O <= W */
+} cap_shard;
 
 typedef struct cap_capture cap_capture;
 

@@ -31,4 +31,16 @@ char *cap__join(const char *a, const char *b);
  * cannot fsync a folder (EINVAL) count as success. */
 eng_result cap__fsync_dir(const char *dir, eng_error *err);
 
+/* What ispm merge (merge.c) shares with capture.c: the run folder prepared as cap_create
+ * does (refused when it holds a run unless overwrite; the old manifest unlinked first), and
+ * text written to dir/name atomically (name.tmp, fsync, rename, fsync of dir). */
+eng_result cap__prepare_run(const char *run_dir, const char *frames_dir, int overwrite, eng_error *err);
+eng_result cap__write_atomic(const char *dir, const char *name, const char *text, eng_error *err);
+/* capture.c's JSON helpers: j itself, or the process ends (out of memory); obj[key] as an
+ * integer in [lo, hi] (1) or not (0); a tree printed with a trailing newline (free it). */
+struct cJSON;
+struct cJSON *cap__jok(struct cJSON *j);
+int cap__json_int(const struct cJSON *o, const char *key, double lo, double hi, int *out);
+char *cap__json_text(struct cJSON *root);
+
 #endif

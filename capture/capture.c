@@ -47,7 +47,12 @@
 #define RUNINFO_TMP_NAME "run.json.tmp"
 /* The keys of the manifest that run.json repeats and --resume compares. */
 static const char *const runinfo_keys[] = {"sequence", "scene", "resolution", "fps", "frame_count",
-                                           "camera", "settings", "gl", NULL};
+                                           "camera", "settings", "gl", "shard", NULL};
+/* Keys of runinfo_keys a run may lack (then absent from run.json, not null). */
+static int runinfo_optional(const char *key)
+{
+    return strcmp(key, "shard") == 0;
+}
 
 /* What the manifest says about one captured buffer. */
 typedef struct cap_bufrec {
@@ -76,6 +81,7 @@ typedef struct cap_frame {
     int trace_maps;
     float trace_centres[ENG_MAX_TRACE_MAPS][3];
     eng_trace_counts trace;
+    int history_from; /* eng_frame_stats.history_from (recorded in shards only) */
 } cap_frame;
 
 /* A buffer of the frame in progress: its record and its pixel copy. */
@@ -95,6 +101,9 @@ struct cap_capture {
     char **det;     /* 2*det_count strings; a value may be NULL */
     int frame_count;
     cap_frame *frames;
+    int shard;           /* a frame shard (cap_desc.shard) */
+    cap_shard shard_info;
+    int write_first, write_last; /* frames this run holds: 0..frame_count-1, or a shard's */
     int cur_frame;  /* -1 outside frame_begin .. frame_end */
     double cur_time;
     int pending_count, pending_cap;
@@ -342,6 +351,12 @@ eng_result cap_create(const cap_desc *desc, cap_capture **out, eng_error *err)
     if (desc->sequence->frame_count < 1)
         return eng_fail(err, ENG_ERR_INVALID, "%s: the sequence has %d frames", desc->run_dir,
                         desc->sequence->frame_count);
+    const cap_shard *sh = desc->shard;
+    if (sh && !(sh->overlap >= 0 && sh->overlap <= sh->warmup && sh->warmup <= sh->first && sh->first <= sh->last &&
+                sh->last < desc->sequence->frame_count))
+        return eng_fail(err, ENG_ERR_INVALID, "%s: shard frames %d-%d, warm-up %d, overlap %d do not fit the "
+                        "sequence's 0..%d", desc->run_dir, sh->first, sh->last, sh->warmup, sh->overlap,
+                        desc->sequence->frame_count - 1);
     cJSON *renderer_settings = NULL;
     if (desc->renderer && desc->renderer_settings) {
         renderer_settings = cJSON_Parse(desc->renderer_settings);
@@ -384,6 +399,14 @@ eng_result cap_create(const cap_desc *desc, cap_capture **out, eng_error *err)
     }
     c->frame_count = desc->sequence->frame_count;
     c->frames = cap__xcalloc((size_t)c->frame_count, sizeof *c->frames);
+    c->write_first = 0;
+    c->write_last = c->frame_count - 1;
+    if (desc->shard) {
+        c->shard = 1;
+        c->shard_info = *desc->shard;
+        c->write_first = desc->shard->first - desc->shard->overlap;
+        c->write_last = desc->shard->last;
+    }
     c->cur_frame = -1;
     c->status = ENG_OK;
     eng_settings st = desc->sequence->settings;
@@ -431,7 +454,7 @@ void cap_destroy(cap_capture *c)
 
 int cap_frame_done(const cap_capture *c, int frame)
 {
-    if (!c || frame < 0 || frame >= c->frame_count)
+    if (!c || frame < c->write_first || frame > c->write_last)
         return 0;
     cap_capture *m = (cap_capture *)c; /* the lock only */
     pthread_mutex_lock(&m->lock);
@@ -488,9 +511,9 @@ static int on_frame_begin(void *user, int frame, double time)
     cap_capture *c = user;
     if (current_status(c) != ENG_OK)
         return 1;
-    if (frame < 0 || frame >= c->frame_count)
-        return fail_cb(c, eng_fail(&c->cb_error, ENG_ERR_INVALID, "%s: frame %d is outside the sequence's 0..%d",
-                                   c->run_dir, frame, c->frame_count - 1));
+    if (frame < c->write_first || frame > c->write_last)
+        return fail_cb(c, eng_fail(&c->cb_error, ENG_ERR_INVALID, "%s: frame %d is outside the run's %d..%d",
+                                   c->run_dir, frame, c->write_first, c->write_last));
     /* A frame begun and never ended was aborted (by another listener or the engine): its
      * buffers are not a frame, drop them. */
     drop_pending(c);
@@ -662,6 +685,7 @@ static int on_frame_end(void *user, const eng_frame_stats *stats)
                   : stats->trace_maps > ENG_MAX_TRACE_MAPS ? ENG_MAX_TRACE_MAPS : stats->trace_maps;
     memcpy(f->trace_centres, stats->trace_centres, sizeof f->trace_centres);
     f->trace = stats->trace;
+    f->history_from = stats->history_from;
     /* The pending list moves into the job; the next frame starts a new one. */
     j->count = c->pending_count;
     j->bufs = c->pending;
@@ -825,6 +849,17 @@ static cJSON *frame_json(const cap_frame *f, int index)
     return o;
 }
 
+/* A shard's frame record: frame_json with the sequence's frame and the engine's history_from
+ * (ispm merge reads them), listed at position pos of the shard's frames. */
+static cJSON *shard_frame_json(const cap_frame *f, int frame, int pos)
+{
+    cJSON *o = frame_json(f, frame);
+    cJSON_ReplaceItemInObjectCaseSensitive(o, "index", jok(cJSON_CreateNumber(pos)));
+    jadd(o, "sequence_frame", cJSON_CreateNumber(frame));
+    jadd(o, "history_from", cJSON_CreateNumber(f->history_from));
+    return o;
+}
+
 static cJSON *manifest_json(const cap_capture *c)
 {
     const seq_sequence *seq = c->seq;
@@ -852,7 +887,7 @@ static cJSON *manifest_json(const cap_capture *c)
 
     jadd(root, "resolution", jpair(seq->width, seq->height));
     jadd(root, "fps", cJSON_CreateNumber(seq->fps));
-    jadd(root, "frame_count", cJSON_CreateNumber(seq->frame_count));
+    jadd(root, "frame_count", cJSON_CreateNumber(c->write_last - c->write_first + 1));
     /* A look-at camera (keys in the sequence) has no node name: null; the keys are covered
      * by the sequence digest. */
     jadd(root, "camera", seq->camera_node[0]   ? jfield(seq->camera_node, sizeof seq->camera_node)
@@ -889,6 +924,8 @@ static cJSON *manifest_json(const cap_capture *c)
     jadd(st, "splat_subsample", cJSON_CreateNumber(s.splat_subsample));
     jadd(st, "temporal", cJSON_CreateBool(s.temporal));
     jadd(st, "temporal_alpha", jfloat(s.temporal_alpha));
+    if (s.temporal_window > 0) /* only when set: runs without keep their manifests */
+        jadd(st, "temporal_window", cJSON_CreateNumber(s.temporal_window));
     jadd(st, "atrous_iterations", cJSON_CreateNumber(s.atrous_iterations));
     jadd(st, "atrous_detail", jstr(eng_detail_name(s.atrous_detail)));
     jadd(st, "atrous_gamma", jfloat(s.atrous_gamma));
@@ -933,9 +970,18 @@ static cJSON *manifest_json(const cap_capture *c)
         jadd(root, "renderer", rd);
     }
 
+    if (c->shard) {
+        cJSON *sh = jok(cJSON_CreateObject());
+        jadd(sh, "frames", jpair(c->shard_info.first, c->shard_info.last));
+        jadd(sh, "warmup", cJSON_CreateNumber(c->shard_info.warmup));
+        jadd(sh, "overlap", cJSON_CreateNumber(c->shard_info.overlap));
+        jadd(sh, "sequence_frame_count", cJSON_CreateNumber(seq->frame_count));
+        jadd(root, "shard", sh);
+    }
+
     cJSON *frames = jok(cJSON_CreateArray());
-    for (int i = 0; i < c->frame_count; i++)
-        jpush(frames, frame_json(&c->frames[i], i));
+    for (int i = c->write_first; i <= c->write_last; i++)
+        jpush(frames, c->shard ? shard_frame_json(&c->frames[i], i, i - c->write_first) : frame_json(&c->frames[i], i));
     jadd(root, "frames", frames);
     jadd(root, "complete", cJSON_CreateTrue());
     return root;
@@ -993,10 +1039,10 @@ eng_result cap_finish(cap_capture *c, eng_error *err)
     if (c->cur_frame >= 0)
         return eng_fail(err, ENG_ERR_INVALID, "%s: frame %d was begun but never ended", c->run_dir,
                         c->cur_frame);
-    for (int i = 0; i < c->frame_count; i++)
+    for (int i = c->write_first; i <= c->write_last; i++)
         if (!c->frames[i].done)
-            return eng_fail(err, ENG_ERR_INVALID, "%s: frame %d of 0..%d was not captured", c->run_dir,
-                            i, c->frame_count - 1);
+            return eng_fail(err, ENG_ERR_INVALID, "%s: frame %d of %d..%d was not captured", c->run_dir,
+                            i, c->write_first, c->write_last);
     eng_result r = cap__fsync_dir(c->frames_dir, err);
     if (r != ENG_OK)
         return r;
@@ -1040,7 +1086,8 @@ static cJSON *runinfo_json(const cap_capture *c)
     jadd(info, "format_version", cJSON_CreateNumber(1));
     for (int i = 0; runinfo_keys[i]; i++) {
         cJSON *item = cJSON_DetachItemFromObjectCaseSensitive(m, runinfo_keys[i]);
-        jadd(info, runinfo_keys[i], item ? item : cJSON_CreateNull());
+        if (item || !runinfo_optional(runinfo_keys[i]))
+            jadd(info, runinfo_keys[i], item ? item : cJSON_CreateNull());
     }
     cJSON_Delete(m);
     return info;
@@ -1062,6 +1109,8 @@ static eng_result write_frame_record(cap_capture *c, int frame, eng_error *err)
     snprintf(name, sizeof name, "%06d.json", frame);
     pthread_mutex_lock(&c->lock);
     cJSON *o = frame_json(&c->frames[frame], frame);
+    if (c->shard)
+        jadd(o, "history_from", cJSON_CreateNumber(c->frames[frame].history_from));
     pthread_mutex_unlock(&c->lock);
     char *doc = json_text(o);
     cJSON_Delete(o);
@@ -1171,6 +1220,8 @@ static eng_result frame_from_json(const char *path, int index, const cJSON *o, c
         for (int i = 0; i < 4; i++)
             f->trace.types[i] = (uint64_t)cJSON_GetArrayItem(ty, i)->valuedouble;
     }
+    const cJSON *hf = cJSON_GetObjectItemCaseSensitive(o, "history_from");
+    f->history_from = cJSON_IsNumber(hf) ? (int)hf->valuedouble : -1;
     const cJSON *bufs = cJSON_GetObjectItemCaseSensitive(o, "buffers");
     int n = cJSON_IsArray(bufs) ? cJSON_GetArraySize(bufs) : 0;
     if (n < 1)
@@ -1222,19 +1273,23 @@ static eng_result resume_run(cap_capture *c, eng_error *err)
     eng_result r = read_json(path, &old, err);
     if (r == ENG_OK) {
         cJSON *now = runinfo_json(c);
-        for (int i = 0; r == ENG_OK && runinfo_keys[i]; i++)
-            if (!cJSON_Compare(cJSON_GetObjectItemCaseSensitive(old, runinfo_keys[i]),
-                               cJSON_GetObjectItemCaseSensitive(now, runinfo_keys[i]), 1))
+        for (int i = 0; r == ENG_OK && runinfo_keys[i]; i++) {
+            const cJSON *a = cJSON_GetObjectItemCaseSensitive(old, runinfo_keys[i]);
+            const cJSON *b = cJSON_GetObjectItemCaseSensitive(now, runinfo_keys[i]);
+            if (!a && !b && runinfo_optional(runinfo_keys[i]))
+                continue;
+            if (!cJSON_Compare(a, b, 1))
                 r = eng_fail(err, ENG_ERR_INVALID,
                              "%s: \"%s\" differs from this recording's: the run was recorded from another "
                              "sequence, scene or settings (use --force to start again)",
                              path, runinfo_keys[i]);
+        }
         cJSON_Delete(now);
     }
     cJSON_Delete(old);
     free(path);
     int removed = 0;
-    for (int i = 0; r == ENG_OK && i < c->frame_count; i++) {
+    for (int i = c->write_first; r == ENG_OK && i <= c->write_last; i++) {
         char name[32];
         snprintf(name, sizeof name, "%06d.json", i);
         char *json = cap__join(c->frames_dir, name);
@@ -1258,4 +1313,32 @@ static eng_result resume_run(cap_capture *c, eng_error *err)
     if (r == ENG_OK && removed)
         r = cap__fsync_dir(c->frames_dir, err);
     return r;
+}
+
+/* ---------------------------------------------------------------- for merge.c */
+
+eng_result cap__prepare_run(const char *run_dir, const char *frames_dir, int overwrite, eng_error *err)
+{
+    int resume = 0;
+    return prepare_run_dir(run_dir, frames_dir, overwrite, &resume, err);
+}
+
+eng_result cap__write_atomic(const char *dir, const char *name, const char *text, eng_error *err)
+{
+    return write_atomic(dir, name, text, err);
+}
+
+cJSON *cap__jok(cJSON *j)
+{
+    return jok(j);
+}
+
+int cap__json_int(const cJSON *o, const char *key, double lo, double hi, int *out)
+{
+    return json_int(o, key, lo, hi, out);
+}
+
+char *cap__json_text(cJSON *root)
+{
+    return json_text(root);
 }

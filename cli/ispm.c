@@ -5,6 +5,7 @@
 #define _POSIX_C_SOURCE 200809L
 #include "cap.h"
 #include "eng.h"
+#include "merge.h"
 #include "rep.h"
 
 #include <getopt.h>
@@ -17,6 +18,7 @@
 enum { EXIT_OK = 0, EXIT_RUNTIME = 1, EXIT_INPUT = 2 };
 
 int cmd_reference(int argc, char **argv, const char *command_line); /* cmd_reference.c */
+int cmd_merge(int argc, char **argv, const char *command_line);     /* cmd_merge.c */
 
 static void usage(FILE *f)
 {
@@ -34,6 +36,7 @@ static void usage(FILE *f)
             "  export RUN --frame F --buffer NAME -o FILE.png|.exr   one buffer as an image\n"
             "  reference SEQUENCE -o RUN  render ground truth (path tracing + photon mapping) to RUN\n"
             "  bench CONFIG -o OUTDIR     speed vs accuracy of engine settings against a reference run\n"
+            "  merge SHARD... -o RUN      frame shards (record --frames) checked and merged into one run\n"
             "\n"
             "Run 'ispm <command> --help' for a command's options and exit codes.\n");
 }
@@ -42,6 +45,7 @@ static void record_usage(FILE *f)
 {
     fprintf(f,
             "usage: ispm record SEQUENCE -o RUN [--force | --resume] [--threads N] [--gl osmesa|egl [--gl-device N]] [--capture GLOBS] [--quiet]\n"
+            "                   [--frames A-B | --shard K/N] [--warmup W] [--overlap O]\n"
             "\n"
             "Renders frame i of SEQUENCE at t = i / fps and writes every announced buffer to\n"
             "RUN/frames/NNNNNN.exr (one multi-part EXR per frame), then RUN/manifest.json last.\n"
@@ -59,6 +63,14 @@ static void record_usage(FILE *f)
             "                     or with --gl-device an EGL device such as a GPU); in the manifest\n"
             "      --gl-device N  with --gl egl: EGL device N (EGL_EXT_platform_device, from 0)\n"
             "  -q, --quiet        no per-frame progress\n"
+            "      --frames A-B   a shard: frames A..B only (ispm merge joins shards into one run)\n"
+            "      --shard K/N    a shard: the K-th (from 0) of N equal parts of the sequence's frames\n"
+            "      --warmup W     render the W frames before A first, unwritten, so that temporal state\n"
+            "                     (temporal and progressive accumulation) is rebuilt as in a whole run\n"
+            "                     (default: as far back as the settings need: 0 without temporal\n"
+            "                     state, to the temporal_window's start, else from frame 0)\n"
+            "      --overlap O    write the last O warm-up frames too, for merge to compare with the\n"
+            "                     previous shard (default 1; both clamped to A)\n"
             "  -h, --help         this text\n"
             "\n"
             "exit: 0 run complete; 1 rendering or writing failed (no manifest is written);\n"
@@ -190,6 +202,30 @@ static int set_capture(seq_sequence *seq, const char *list)
     return 0;
 }
 
+/* A shard's warm-up and overlap (-1: not given): the overlap defaults to 1, the warm-up to what
+ * the settings need for the overlap frames' state — none without temporal state, back to the
+ * temporal_window boundary, else to frame 0 — never less than the overlap; both clamped to
+ * the frames before the shard. */
+static void shard_warmup(const eng_engine *eng, const eng_settings *s, cap_shard *sh, int warmup, int overlap)
+{
+    if (overlap < 0)
+        overlap = warmup >= 0 && warmup < 1 ? warmup : 1;
+    if (overlap > sh->first)
+        overlap = sh->first;
+    if (warmup < 0) {
+        int from = sh->first - overlap;
+        if (eng_stateful(eng))
+            from = s->temporal_window > 0 ? from / s->temporal_window * s->temporal_window : 0;
+        warmup = sh->first - from;
+    }
+    if (warmup > sh->first)
+        warmup = sh->first;
+    if (warmup < overlap)
+        warmup = overlap;
+    sh->warmup = warmup;
+    sh->overlap = overlap;
+}
+
 static int cmd_record(int argc, char **argv, const char *command_line)
 {
     static const struct option opts[] = {
@@ -197,10 +233,13 @@ static int cmd_record(int argc, char **argv, const char *command_line)
         {"threads", required_argument, NULL, 'j'}, {"quiet", no_argument, NULL, 'q'},
         {"resume", no_argument, NULL, 'r'}, {"help", no_argument, NULL, 'h'},
         {"gl", required_argument, NULL, 'G'}, {"gl-device", required_argument, NULL, 'D'},
-        {"capture", required_argument, NULL, 'C'}, {NULL, 0, NULL, 0},
+        {"capture", required_argument, NULL, 'C'},
+        {"frames", required_argument, NULL, 'F'}, {"warmup", required_argument, NULL, 'W'},
+        {"overlap", required_argument, NULL, 'O'}, {"shard", required_argument, NULL, 'S'}, {NULL, 0, NULL, 0},
     };
     const char *out = NULL, *gl = NULL, *capture = NULL;
     int force = 0, resume = 0, quiet = 0, threads = 0, gl_device = -1, c;
+    int shard = 0, first = 0, last = 0, warmup = -1, overlap = -1, shard_k = -1, shard_n = 0;
     while ((c = getopt_long(argc, argv, "o:fj:qrh", opts, NULL)) != -1) {
         switch (c) {
         case 'o': out = optarg; break;
@@ -235,9 +274,41 @@ static int cmd_record(int argc, char **argv, const char *command_line)
             break;
         }
         case 'C': capture = optarg; break;
+        case 'F':
+            if (!cap_parse_range(optarg, &first, &last)) {
+                fprintf(stderr, "ispm record: --frames: '%s' is not A-B (frame indices, A <= B)\n", optarg);
+                return EXIT_INPUT;
+            }
+            shard = 1;
+            break;
+        case 'S': {
+            char tail;
+            if (sscanf(optarg, "%d/%d%c", &shard_k, &shard_n, &tail) != 2 || shard_n < 1 || shard_k < 0 ||
+                shard_k >= shard_n) {
+                fprintf(stderr, "ispm record: --shard: '%s' is not K/N (0 <= K < N)\n", optarg);
+                return EXIT_INPUT;
+            }
+            shard = 1;
+            break;
+        }
+        case 'W':
+        case 'O': {
+            int v, v2;
+            if (!cap_parse_range(optarg, &v, &v2) || v != v2 || strchr(optarg, '-')) {
+                fprintf(stderr, "ispm record: --%s: '%s' is not a number of frames\n", c == 'W' ? "warmup" : "overlap",
+                        optarg);
+                return EXIT_INPUT;
+            }
+            *(c == 'W' ? &warmup : &overlap) = v;
+            break;
+        }
         case 'h': record_usage(stdout); return EXIT_OK;
         default: record_usage(stderr); return EXIT_INPUT;
         }
+    }
+    if (!shard && (warmup >= 0 || overlap >= 0)) {
+        fprintf(stderr, "ispm record: --warmup and --overlap need --frames or --shard\n");
+        return EXIT_INPUT;
     }
     if (optind + 1 != argc || !out) {
         record_usage(stderr);
@@ -279,6 +350,22 @@ static int cmd_record(int argc, char **argv, const char *command_line)
         rc = EXIT_INPUT;
         goto done;
     }
+    if (shard_n > 0) { /* --shard K/N: the K-th of N equal parts of the sequence */
+        if (shard_n > seq->frame_count) {
+            fprintf(stderr, "ispm record: --shard %d/%d: %s has only %d frames\n", shard_k, shard_n, seq_path,
+                    seq->frame_count);
+            rc = EXIT_INPUT;
+            goto done;
+        }
+        first = (int)((long)shard_k * seq->frame_count / shard_n);
+        last = (int)((long)(shard_k + 1) * seq->frame_count / shard_n) - 1;
+    }
+    if (shard && last >= seq->frame_count) {
+        fprintf(stderr, "ispm record: --frames %d-%d: %s has frames 0..%d\n", first, last, seq_path,
+                seq->frame_count - 1);
+        rc = EXIT_INPUT;
+        goto done;
+    }
     for (uint32_t w = 0; w < scene->warning_count && w < SCN_MAX_WARNINGS; w++)
         fprintf(stderr, "ispm record: warning: %s\n", scene->warnings[w]);
     eng_desc ed = {.scene = scene, .sequence = seq, .gl = gl, .gl_use_device = gl_device >= 0,
@@ -289,13 +376,18 @@ static int cmd_record(int argc, char **argv, const char *command_line)
         rc = exit_for(r);
         goto done;
     }
+    cap_shard sh = {first, last, 0, 0};
+    if (shard) {
+        shard_warmup(eng, &seq->settings, &sh, warmup, overlap);
+        eng_set_history_start(eng, first - sh.warmup);
+    }
     cap_desc cd = {
         .run_dir = out, .sequence = seq, .scene = scene,
         .gl_version = eng_gl_version(eng), .gl_renderer = eng_gl_renderer(eng),
         .gl_backend = eng_gl_backend(eng), .gl_where = eng_gl_where(eng),
         .tool_version = ISPM_VERSION, .git_revision = ISPM_GIT_REV,
         .command_line = command_line, .overwrite = force,
-        .determinism = eng_determinism_info(), .resume = resume,
+        .determinism = eng_determinism_info(), .resume = resume, .shard = shard ? &sh : NULL,
         .writers = 1, /* frame N is encoded and written while frame N+1 renders */
     };
     r = cap_create(&cd, &cap, &err);
@@ -308,8 +400,8 @@ static int cmd_record(int argc, char **argv, const char *command_line)
     eng_listener l = cap_listener(cap);
     eng_add_listener(eng, &l);
     record_progress prog;
-    int to_render = 0;
-    for (int i = 0; i < seq->frame_count; i++)
+    int to_render = 0, write_first = shard ? sh.first - sh.overlap : 0, write_last = shard ? sh.last : seq->frame_count - 1;
+    for (int i = write_first; i <= write_last; i++)
         to_render += !cap_frame_done(cap, i);
     rep_progress_begin(&prog.p, stderr, "ispm record", "frame", to_render);
     prog.done = 0;
@@ -321,7 +413,10 @@ static int cmd_record(int argc, char **argv, const char *command_line)
                 seq->frame_count, seq->fps, seq->width, seq->height, eng_gl_renderer(eng));
     if (!quiet && gl)
         fprintf(stderr, "ispm record: GL through %s, %s\n", eng_gl_backend(eng), eng_gl_where(eng));
-    for (int i = 0; i < seq->frame_count; i++) {
+    if (!quiet && shard)
+        fprintf(stderr, "ispm record: shard: frames %d-%d, warm-up %d (from frame %d), of which %d written\n",
+                sh.first, sh.last, sh.warmup, sh.first - sh.warmup, sh.overlap);
+    for (int i = write_first; i <= write_last; i++) {
         /* Resuming: frames the interrupted run completed are kept (each is rendered from
          * scratch, so skipping some changes no other frame). */
         if (cap_frame_done(cap, i))
@@ -560,6 +655,8 @@ int main(int argc, char **argv)
         return cmd_bench(argc, argv, line);
     if (!strcmp(cmd, "check"))
         return cmd_check(argc, argv);
+    if (!strcmp(cmd, "merge"))
+        return cmd_merge(argc, argv, line);
     if (!strcmp(cmd, "info"))
         return cmd_info(argc, argv);
     if (!strcmp(cmd, "export"))

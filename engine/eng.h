@@ -373,6 +373,9 @@ typedef struct eng_settings {
                                * joint bilateral upsampling level by level (003 §5.2); default 1 */
     int temporal;             /* 1: temporal accumulation (002 §7.2, Eq. 7.3–7.4); default 0 */
     float temporal_alpha;     /* the 0.95 of Eq. 7.4 (history weight); default 0.95 */
+    int temporal_window;      /* > 0: the temporal and progressive state restarts at every frame that
+                               * is a multiple of it (a bounded history: frame shards converge after
+                               * a warm-up of window - 1 frames); 0 (default): never */
     int atrous_iterations;    /* À-Trous wavelet iterations (002 §7.3, Eq. 7.5), 0 = off; default 0 */
     eng_atrous_detail atrous_detail; /* default clipped */
     float atrous_gamma;       /* γ of Eq. 7.7; default 0.05 (002 §8.2's table) */
@@ -534,6 +537,11 @@ typedef struct eng_frame_stats {
      * position, so tools can project world-space data (e.g. photons) into the image. */
     float camera_view_proj[16];
     float camera_eye[3];
+    /* The earliest frame this frame's temporal state (temporal accumulation, progressive
+     * accumulation) depends on: the last reset of that state (frame 0, a temporal_window
+     * boundary, a progressive global restart, or where the history of a shard was rebuilt
+     * from). -1: nothing in the engine carries state from frame to frame at these settings. */
+    int history_from;
 } eng_frame_stats;
 
 /* A listener sees every announced buffer. Any callback may be NULL. A non-zero return
@@ -582,6 +590,16 @@ eng_result eng_add_listener(eng_engine *e, const eng_listener *l);
 /* Renders frame i at t = i / fps, announcing every buffer to the listeners. Frames may be
  * rendered in any order, but motion vectors refer to frame i-1's transforms (frame 0: zero). */
 eng_result eng_render_frame(eng_engine *e, int frame, eng_error *err);
+
+/* Frame shards (ispm record --frames A-B --warmup W): the temporal state a frame rendered out
+ * of order rebuilds (silently, without announcing) begins at frame first instead of frame 0,
+ * so a shard's first frame renders frames first .. A-1 as its warm-up. first = 0 is the
+ * default (an uninterrupted run's history). A frame before first rebuilds from frame 0. */
+void eng_set_history_start(eng_engine *e, int first);
+
+/* 1 when some pass carries state from frame to frame at these settings (temporal or
+ * progressive accumulation): a frame then depends on the frames before it. */
+int eng_stateful(const eng_engine *e);
 
 /* Is the segment from a to b blocked by scene geometry, as posed at the last rendered frame
  * (Embree occlusion query; the end points themselves are excluded by a small epsilon)?

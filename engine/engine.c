@@ -86,6 +86,8 @@ struct eng_engine {
     float radius_scale; /* this frame's progressive radius scale (1 without) */
     int next_frame; /* the frame the temporal/progressive history is ready for (frames render in order) */
     int silent;     /* re-rendering earlier frames for the temporal history: announce nothing */
+    int history_start; /* eng_set_history_start: where a rebuilt history begins (0: frame 0) */
+    int temporal_from; /* the frame the temporal history was last reset at */
     int listener_count;
     eng_listener listeners[ENG_MAX_LISTENERS];
     float *world, *prev_world;
@@ -1059,20 +1061,60 @@ static eng_result filtered_indirect(eng_engine *e, int frame, const glu_target *
     return ENG_OK;
 }
 
+/* Forgets the temporal and progressive state: the next frame (from) starts them anew. */
+static void history_reset(eng_engine *e, int from)
+{
+    if (e->temporal)
+        pass_temporal_reset(e->temporal);
+    if (e->prog)
+        prog_reset(e->prog);
+    e->temporal_from = from;
+}
+
+/* The earliest frame the state of frame `frame` depends on (eng_frame_stats): the last
+ * temporal reset, or the progressive accumulation's last global restart, whichever is earlier
+ * (the state depends on both); -1 without a stateful pass. */
+static int history_from(const eng_engine *e, int frame)
+{
+    int from = -1;
+    if (e->temporal)
+        from = e->temporal_from;
+    if (e->prog) {
+        int p = frame - prog_frames(e->prog) + 1;
+        if (from < 0 || p < from)
+            from = p;
+    }
+    return from;
+}
+
+void eng_set_history_start(eng_engine *e, int first)
+{
+    e->history_start = first > 0 ? first : 0;
+    e->next_frame = -1; /* the next frame rebuilds its history from there */
+}
+
+int eng_stateful(const eng_engine *e)
+{
+    return e->temporal || e->prog;
+}
+
 eng_result eng_render_frame(eng_engine *e, int frame, eng_error *err)
 {
     if (frame < 0 || frame >= e->seq->frame_count)
         return eng_fail(err, ENG_ERR_INVALID, "%s: frame %d outside 0..%d", e->seq->path, frame, e->seq->frame_count - 1);
+    const int window = e->settings.temporal_window;
     if ((e->temporal || e->prog) && !e->silent && frame != e->next_frame) {
-        /* Frame i's temporal (or progressive) result depends on every earlier frame: asked for
-         * frames out of order (e.g. record --resume), rebuild the history from frame 0 without
-         * announcing, so the result is the same as in an uninterrupted run. */
-        if (e->temporal)
-            pass_temporal_reset(e->temporal);
-        if (e->prog)
-            prog_reset(e->prog);
+        /* Frame i's temporal (or progressive) result depends on every earlier frame (since the
+         * last temporal_window boundary): asked for frames out of order (e.g. record --resume,
+         * or a shard's first frame), rebuild the history from frame 0 (or the window's start,
+         * or eng_set_history_start's frame) without announcing, so the result is the same as
+         * in an uninterrupted run (for a shard: as one whose history began there). */
+        int from = frame >= e->history_start ? e->history_start : 0;
+        if (window > 0 && frame / window * window > from)
+            from = frame / window * window;
+        history_reset(e, from);
         e->silent = 1;
-        for (int k = 0; k < frame; k++) {
+        for (int k = from; k < frame; k++) {
             eng_result r = eng_render_frame(e, k, err);
             if (r != ENG_OK) {
                 e->silent = 0;
@@ -1081,6 +1123,10 @@ eng_result eng_render_frame(eng_engine *e, int frame, eng_error *err)
         }
         e->silent = 0;
     }
+    /* temporal_window: every state restarts at a multiple of the window (a bounded history,
+     * so that a shard's warm-up of at most window - 1 frames reproduces it bit for bit). */
+    if ((e->temporal || e->prog) && window > 0 && frame % window == 0)
+        history_reset(e, frame);
     double t = seq_frame_time(e->seq, frame);
     memset(&e->stats, 0, sizeof e->stats);
     e->stats.frame = frame;
@@ -1280,6 +1326,7 @@ eng_result eng_render_frame(eng_engine *e, int frame, eng_error *err)
                         frame, gle);
     add_time(e, "readback", e->readback_ms);
     e->next_frame = frame + 1;
+    e->stats.history_from = history_from(e, frame);
     for (int i = 0; i < e->listener_count && !e->silent; i++)
         if (e->listeners[i].frame_end && e->listeners[i].frame_end(e->listeners[i].user, &e->stats) != 0)
             return eng_fail(err, ENG_ERR_ABORTED, "frame %d: a listener failed to finish the frame", frame);

@@ -160,7 +160,7 @@ static eng_result parse_settings(parser *P, const cJSON *obj, eng_settings *s)
                                        "atrous_detail", "atrous_gamma", "kernel_scaling", "progressive", "boundary",
                                        "specular", "specular_depth",
                                        "photon_trace", "multi_image_maps", "multi_image_size",
-                                       "multi_image_miss", "multi_image_compare", "capture_compression", NULL};
+                                       "multi_image_miss", "multi_image_compare", "capture_compression", "temporal_window", NULL};
     char v[80];
     eng_result r;
     if (!cJSON_IsObject(obj))
@@ -273,6 +273,9 @@ static eng_result parse_settings(parser *P, const cJSON *obj, eng_settings *s)
             return bad(P, "settings.temporal_alpha: %s is out of range (0, 1)", show(it, v, sizeof v));
         s->temporal_alpha = (float)d;
     }
+    if ((it = cJSON_GetObjectItemCaseSensitive(obj, "temporal_window")) &&
+        (r = get_int(P, it, "settings.temporal_window", 0, 1000000, &s->temporal_window)))
+        return r;
     if ((it = cJSON_GetObjectItemCaseSensitive(obj, "atrous_iterations")) &&
         (r = get_int(P, it, "settings.atrous_iterations", 0, 8, &s->atrous_iterations)))
         return r;

@@ -10,7 +10,8 @@ PKGS=(build-essential cmake pkg-config git
       libplplot-dev plplot-driver-cairo
       chromium libxml2-utils
       clang libclang-rt-14-dev libomp-14-dev valgrind
-      libsdl2-dev libsdl2-ttf-dev fonts-dejavu-core xvfb xauth xdotool imagemagick)
+      libsdl2-dev libsdl2-ttf-dev fonts-dejavu-core xvfb xauth xdotool imagemagick
+      slurm-wlm munge)
 missing=()
 for p in "${PKGS[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

@@ -8,7 +8,7 @@ SEQ=$SRC/scenes/cornell-box/cornell-box-ci.json
 fail() { echo "FAIL: $*"; exit 1; }
 rm -rf "$WORK"; mkdir -p "$WORK"
 
-for c in record replay bless check info export; do
+for c in record replay bless check info export merge; do
   "$ISPM" $c --help > "$WORK/help.txt" || fail "$c --help exited $?"
   grep -q "usage: ispm $c" "$WORK/help.txt" || fail "$c --help prints no usage"
 done
@@ -74,4 +74,24 @@ display() { digests "$1" | grep -A1 '"final.display"' | grep digest; }
 diff <(display "$WORK/zip") <(display "$WORK/display") > /dev/null ||
   fail "--capture: final.display differs from the full run's"
 "$ISPM" record "$WORK/zip.json" -o "$WORK/bad" --capture 'a,,b' 2> /dev/null; [ $? -eq 2 ] || fail "--capture a,,b must exit 2"
+# Frame shards (issue 20; e2e_slurm.sh runs them through Slurm): bad ranges are bad arguments;
+# two shards of the run above merge into a run bit-exact against it.
+for a in "--frames 3-1" "--frames 2-8" "--frames x" "--shard 2/2" "--shard 1/9" "--warmup 1" "--frames 1-2 --warmup -1"; do
+  "$ISPM" record "$SEQ" -o "$WORK/bad-shard" $a --quiet 2> "$WORK/shard.err"; rc=$?
+  [ $rc -eq 2 ] && [ "$(wc -l < "$WORK/shard.err")" -eq 1 ] || { cat "$WORK/shard.err"; fail "record $a: exit $rc, want 2 and one line"; }
+done
+"$ISPM" merge -o "$WORK/m" > /dev/null 2>&1; [ $? -eq 2 ] || fail "merge without shards must exit 2"
+"$ISPM" record "$SEQ" -o "$WORK/shard-0" --frames 0-3 --quiet || fail "record --frames 0-3"
+"$ISPM" record "$SEQ" -o "$WORK/shard-1" --shard 1/2 --warmup 2 --overlap 2 --quiet || fail "record --shard 1/2"
+grep -q '"warmup":[[:space:]]*2' "$WORK/shard-1/manifest.json" || fail "the shard's manifest lacks its warm-up"
+"$ISPM" merge "$WORK/shard-1" -o "$WORK/merged" 2> "$WORK/merge.err"; [ $? -eq 2 ] || fail "merge of a gap must exit 2"
+grep -q "frames 0-3 are in no shard" "$WORK/merge.err" || { cat "$WORK/merge.err"; fail "merge: no gap named"; }
+[ ! -e "$WORK/merged/manifest.json" ] || fail "a refused merge left a manifest"
+"$ISPM" merge "$WORK/shard-1" "$WORK/shard-0" -o "$WORK/merged" > /dev/null || fail "merge"
+"$ISPM" replay "$WORK/merged" --golden "$WORK/run" > "$WORK/merged.out" || { cat "$WORK/merged.out"; fail "replay of the merged run"; }
+grep -qE "0 failed, 0 warned, 0 within tolerance, ([0-9]+) bit-exact \(\1 buffers, 8 frames\)" "$WORK/merged.out" ||
+  { cat "$WORK/merged.out"; fail "merged run not bit-exact against the one-machine run"; }
+# The manifests differ only in timings, the command line and the shards' provenance.
+stable() { grep -vE '"(ms|command)":' "$1/manifest.json" | awk '/^\t"shards":/ { skip = 1 } /^\t"frames":/ { skip = 0 } !skip'; }
+diff <(stable "$WORK/run") <(stable "$WORK/merged") > "$WORK/merged.diff" || { head -20 "$WORK/merged.diff"; fail "merged manifest differs"; }
 echo "e2e_cli: ok"
