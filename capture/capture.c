@@ -82,6 +82,9 @@ typedef struct cap_frame {
     float trace_centres[ENG_MAX_TRACE_MAPS][3];
     eng_trace_counts trace;
     int history_from; /* eng_frame_stats.history_from (recorded in shards only) */
+    /* The lights' shadow views (eng_frame_stats.lights), for ispm lineage. */
+    int light_count;
+    eng_light_record lights[ENG_MAX_LIGHT_RECORDS];
 } cap_frame;
 
 /* A buffer of the frame in progress: its record and its pixel copy. */
@@ -686,6 +689,9 @@ static int on_frame_end(void *user, const eng_frame_stats *stats)
     memcpy(f->trace_centres, stats->trace_centres, sizeof f->trace_centres);
     f->trace = stats->trace;
     f->history_from = stats->history_from;
+    f->light_count = stats->light_count < 0 ? 0
+                   : stats->light_count > ENG_MAX_LIGHT_RECORDS ? ENG_MAX_LIGHT_RECORDS : stats->light_count;
+    memcpy(f->lights, stats->lights, sizeof f->lights);
     /* The pending list moves into the job; the next frame starts a new one. */
     j->count = c->pending_count;
     j->bufs = c->pending;
@@ -757,6 +763,37 @@ static cJSON *jfloat(float f)
     return cJSON_CreateNumber((double)f);
 }
 
+static cJSON *jfloats(const float *v, int n)
+{
+    cJSON *a = jok(cJSON_CreateArray());
+    for (int i = 0; i < n; i++)
+        jpush(a, jfloat(v[i]));
+    return a;
+}
+
+/* "lights": per light its shadow views (eng_light_record): type, position, direction, texel,
+ * far, view_proj per face. */
+static cJSON *lights_json(const cap_frame *f)
+{
+    static const char *const types[] = {"point", "spot", "directional"};
+    cJSON *arr = jok(cJSON_CreateArray());
+    for (int l = 0; l < f->light_count; l++) {
+        const eng_light_record *r = &f->lights[l];
+        cJSON *o = jok(cJSON_CreateObject());
+        jadd(o, "type", cJSON_CreateString(types[r->type >= 0 && r->type <= 2 ? r->type : 0]));
+        jadd(o, "position", jfloats(r->position, 3));
+        jadd(o, "direction", jfloats(r->direction, 3));
+        jadd(o, "texel", jfloat(r->texel));
+        jadd(o, "far", jfloat(r->far_value));
+        cJSON *vps = jok(cJSON_CreateArray());
+        for (int k = 0; k < r->faces && k < 6; k++)
+            jpush(vps, jfloats(r->view_proj[k], 16));
+        jadd(o, "view_proj", vps);
+        jpush(arr, o);
+    }
+    return arr;
+}
+
 static cJSON *jpair(double a, double b)
 {
     cJSON *arr = jok(cJSON_CreateArray());
@@ -791,6 +828,8 @@ static cJSON *frame_json(const cap_frame *f, int index)
         jpush(eye, jfloat(f->eye[i]));
     jadd(cam, "eye", eye);
     jadd(o, "camera", cam);
+    if (f->light_count > 0)
+        jadd(o, "lights", lights_json(f));
     if (f->photons_emitted) {
         /* Photon attrition (ISPM Fig. 10): stored[k] counts photons at bounce index k + 2. */
         cJSON *ph = jok(cJSON_CreateObject());
@@ -1192,6 +1231,10 @@ static eng_result frame_from_json(const char *path, int index, const cJSON *o, c
         for (int b = 0; b < cJSON_GetArraySize(st); b++)
             f->photons_stored[b + 2] = (uint64_t)cJSON_GetArrayItem(st, b)->valuedouble;
     }
+    eng_result lr = eng_light_records_parse(path, cJSON_GetObjectItemCaseSensitive(o, "lights"), &f->light_count,
+                                     f->lights, err);
+    if (lr != ENG_OK)
+        return lr;
     const cJSON *tr = cJSON_GetObjectItemCaseSensitive(o, "photon_trace");
     if (tr) {
         const cJSON *cs = cJSON_GetObjectItemCaseSensitive(tr, "centres");

@@ -34,6 +34,7 @@ static void usage(FILE *f)
             "  check SEQUENCE             record to a temporary run and replay it (for git bisect run)\n"
             "  info RUN                   frames, buffers, settings, provenance, last replay's verdict\n"
             "  export RUN --frame F --buffer NAME -o FILE.png|.exr   one buffer as an image\n"
+            "  lineage RUN --frame F --pixel X,Y [--json]   everything that made one pixel\n"
             "  reference SEQUENCE -o RUN  render ground truth (path tracing + photon mapping) to RUN\n"
             "  bench CONFIG -o OUTDIR     speed vs accuracy of engine settings against a reference run\n"
             "  merge SHARD... -o RUN      frame shards (record --frames) checked and merged into one run\n"
@@ -44,7 +45,7 @@ static void usage(FILE *f)
 static void record_usage(FILE *f)
 {
     fprintf(f,
-            "usage: ispm record SEQUENCE -o RUN [--force | --resume] [--threads N] [--gl osmesa|egl [--gl-device N]] [--capture GLOBS] [--quiet]\n"
+            "usage: ispm record SEQUENCE -o RUN [--force | --resume] [--threads N] [--gl osmesa|egl [--gl-device N]] [--capture GLOBS] [--lineage] [--quiet]\n"
             "                   [--frames A-B | --shard K/N] [--warmup W] [--overlap O]\n"
             "\n"
             "Renders frame i of SEQUENCE at t = i / fps and writes every announced buffer to\n"
@@ -62,6 +63,8 @@ static void record_usage(FILE *f)
             "                     goldens' reference) or egl (no window: Mesa's surfaceless platform,\n"
             "                     or with --gl-device an EGL device such as a GPU); in the manifest\n"
             "      --gl-device N  with --gl egl: EGL device N (EGL_EXT_platform_device, from 0)\n"
+            "      --lineage      also capture photons.origin (each photon's light, bounce-map texel and\n"
+            "                     kernel radius), which ispm lineage needs for the photons of a pixel\n"
             "  -q, --quiet        no per-frame progress\n"
             "      --frames A-B   a shard: frames A..B only (ispm merge joins shards into one run)\n"
             "      --shard K/N    a shard: the K-th (from 0) of N equal parts of the sequence's frames\n"
@@ -235,10 +238,11 @@ static int cmd_record(int argc, char **argv, const char *command_line)
         {"gl", required_argument, NULL, 'G'}, {"gl-device", required_argument, NULL, 'D'},
         {"capture", required_argument, NULL, 'C'},
         {"frames", required_argument, NULL, 'F'}, {"warmup", required_argument, NULL, 'W'},
-        {"overlap", required_argument, NULL, 'O'}, {"shard", required_argument, NULL, 'S'}, {NULL, 0, NULL, 0},
+        {"overlap", required_argument, NULL, 'O'}, {"shard", required_argument, NULL, 'S'}, {"lineage", no_argument, NULL, 'L'},
+        {NULL, 0, NULL, 0},
     };
     const char *out = NULL, *gl = NULL, *capture = NULL;
-    int force = 0, resume = 0, quiet = 0, threads = 0, gl_device = -1, c;
+    int force = 0, resume = 0, quiet = 0, threads = 0, gl_device = -1, lineage = 0, c;
     int shard = 0, first = 0, last = 0, warmup = -1, overlap = -1, shard_k = -1, shard_n = 0;
     while ((c = getopt_long(argc, argv, "o:fj:qrh", opts, NULL)) != -1) {
         switch (c) {
@@ -246,6 +250,7 @@ static int cmd_record(int argc, char **argv, const char *command_line)
         case 'f': force = 1; break;
         case 'r': resume = 1; break;
         case 'q': quiet = 1; break;
+        case 'L': lineage = 1; break;
         case 'j': {
             char *end;
             long v = strtol(optarg, &end, 10);
@@ -369,7 +374,7 @@ static int cmd_record(int argc, char **argv, const char *command_line)
     for (uint32_t w = 0; w < scene->warning_count && w < SCN_MAX_WARNINGS; w++)
         fprintf(stderr, "ispm record: warning: %s\n", scene->warnings[w]);
     eng_desc ed = {.scene = scene, .sequence = seq, .gl = gl, .gl_use_device = gl_device >= 0,
-                   .gl_device = gl_device};
+                   .gl_device = gl_device, .lineage = lineage};
     r = eng_create(&ed, &eng, &err);
     if (r != ENG_OK) {
         fprintf(stderr, "ispm record: %s\n", err.msg);
@@ -614,6 +619,7 @@ int cmd_bench(int argc, char **argv, const char *command_line); /* cmd_bench.c *
 int cmd_check(int argc, char **argv);                           /* cmd_check.c */
 int cmd_info(int argc, char **argv);                            /* cmd_inspect.c */
 int cmd_export(int argc, char **argv);                          /* cmd_inspect.c */
+int cmd_lineage(int argc, char **argv);                         /* cmd_lineage.c */
 
 int main(int argc, char **argv)
 {
@@ -661,6 +667,8 @@ int main(int argc, char **argv)
         return cmd_info(argc, argv);
     if (!strcmp(cmd, "export"))
         return cmd_export(argc, argv);
+    if (!strcmp(cmd, "lineage"))
+        return cmd_lineage(argc, argv);
     fprintf(stderr, "ispm: unknown command '%s'\n", cmd);
     usage(stderr);
     return EXIT_INPUT;

@@ -516,6 +516,35 @@ typedef struct eng_trace_counts {
     uint64_t agree;     /* ... and the multi-image hit is on the same draw within 1 cm */
 } eng_trace_counts;
 
+/* One light's shadow views as the direct pass used them: type (0 point, 1 spot, 2
+ * directional, as shaders/shadow_pcf.glsl), position, direction, the world size of a shadow
+ * texel (per metre of distance for point and spot lights: u_shadow_texel), the value of an
+ * empty texel, and per face the view-projection (world → clip, column-major). */
+#define ENG_MAX_LIGHT_RECORDS 8
+typedef struct eng_light_record {
+    int type, faces;
+    float position[3], direction[3];
+    float texel, far_value;
+    float view_proj[6][16];
+} eng_light_record;
+
+/* One photon's contribution to one eye pixel under the CPU kernel every indirect method
+ * shares (gather_kernel.h, lineage_kernel.c in ispm_kernel): photon = photons.map's 14
+ * channels (position, direction, power, normal, density, bounce), radius its kernel radius
+ * r_xy (photons.origin), compression the normal_compression setting; the pixel's surface
+ * point s, normal n, albedo, material (roughness, metallic, transmission, ior) and the eye.
+ * Radiance mode (irradiance 0): rgb = f Φ κ. Irradiance mode: rgb = Φ κ and glossy =
+ * f_glossy Φ κ (glossy may be NULL). Returns 1 when the photon passes every test (it then
+ * counts in <prefix>.count), 0 with rgb = 0 otherwise. */
+int eng_photon_contribution(const float photon[14], float radius, float compression, const float s[3],
+                            const float n[3], const float albedo[3], const float mat[4], const float eye[3],
+                            int irradiance, float rgb[3], float glossy[3]);
+
+/* A manifest frame's "lights" (a cJSON array, or NULL: none) into lights (count set); an
+ * invalid entry is ENG_ERR_INVALID naming path (light_record.c, in ispm_core). */
+eng_result eng_light_records_parse(const char *path, const void *json, int *count, eng_light_record *lights,
+                                   eng_error *err);
+
 typedef struct eng_frame_stats {
     int frame;
     double time;
@@ -542,6 +571,10 @@ typedef struct eng_frame_stats {
      * boundary, a progressive global restart, or where the history of a shard was rebuilt
      * from). -1: nothing in the engine carries state from frame to frame at these settings. */
     int history_from;
+    /* The lights' shadow views of this frame (pass_shadow.c light_views, pass_direct.c), so
+     * tools can find the shadow-map texel an eye pixel was tested against (ispm lineage). */
+    int light_count;
+    eng_light_record lights[ENG_MAX_LIGHT_RECORDS];
 } eng_frame_stats;
 
 /* A listener sees every announced buffer. Any callback may be NULL. A non-zero return
@@ -566,6 +599,10 @@ typedef struct eng_desc {
      * without it Mesa's surfaceless platform. */
     const char *gl;
     int gl_use_device, gl_device;
+    /* 1: also announce photons.origin (each photon's light, face, bounce-map texel and kernel
+     * radius: ispm lineage, ispm record --lineage). Off by default so that runs keep their
+     * buffers. */
+    int lineage;
 } eng_desc;
 
 #define ENG_GL_DEFAULT "osmesa"

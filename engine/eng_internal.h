@@ -185,6 +185,9 @@ void pass_shadow_destroy(pass_shadow *p);
 typedef struct pass_direct pass_direct;
 eng_result pass_direct_create(int width, int height, pass_direct **out, eng_error *err);
 /* extra[l]: light l's shadow-method map (shadow.h; the blocker map of a light with a size). */
+/* World size of one shadow texel of light l (u_shadow_texel of shadow_pcf.glsl): per metre of
+ * distance for point and spot lights, absolute for directional ones. */
+float pass_direct_shadow_texel(const eng_light_pose *l, const shadow_map *sm, const eng_settings *s);
 const glu_target *pass_direct_run(pass_direct *p, const eng_frame_scene *fs, const glu_target *gbuf,
                                   const shadow_map *const *shadows, const glu_target *const *extra,
                                   const eng_settings *s);
@@ -388,6 +391,11 @@ typedef struct eng_photon {
 typedef struct eng_photon_map {
     size_t count, capacity;
     eng_photon *photons;
+    /* Optional (want_source = 1): per photon the index of the input (bounce-map) photon whose
+     * path stored it, for pixel lineage; source_capacity entries allocated. */
+    int want_source;
+    uint32_t *source;
+    size_t source_capacity;
 } eng_photon_map;
 
 typedef struct eng_trace_settings {

@@ -48,6 +48,8 @@ struct eng_engine {
     light_maps lmaps[8];
     eng_bounce_photon *bounce;
     size_t bounce_count, bounce_capacity;
+    int lineage;            /* eng_desc.lineage: announce photons.origin */
+    float *bounce_origin;   /* with lineage: per bounce photon light, face, texel x, y */
     eng_photon_map pmap;
     float *radius; /* per photon r_xy (indirect.h) */
     size_t radius_capacity;
@@ -215,6 +217,8 @@ eng_result eng_create(const eng_desc *desc, eng_engine **out, eng_error *err)
     eng_engine *e = xcalloc(1, sizeof *e);
     e->scene = s;
     e->seq = q;
+    e->lineage = desc->lineage;
+    e->pmap.want_source = desc->lineage;
     e->settings = q->settings;
     eng_settings_defaults(&e->settings);
     e->width = q->width;
@@ -387,6 +391,7 @@ void eng_destroy(eng_engine *e)
     rmap_destroy(&e->rmaps);
     photon_map_free(&e->pmap);
     free(e->bounce);
+    free(e->bounce_origin);
     free(e->radius);
     free(e->aniso);
     prog_destroy(e->prog);
@@ -606,6 +611,26 @@ static const char *const CH_PHOTON[] = {"position.X", "position.Y", "position.Z"
                                         "normal.Y", "normal.Z", "density", "bounce"};
 static const char *const CH_Y[] = {"Y"};
 
+/* Light l's shadow views into this frame's stats (eng_light_record), with the texel size
+ * pass_direct.c gives the shaders. */
+static void record_light(eng_engine *e, uint32_t l, const shadow_map *sm)
+{
+    if (l >= ENG_MAX_LIGHT_RECORDS)
+        return;
+    const eng_light_pose *lp = &e->fs.lights[l];
+    eng_light_record *r = &e->stats.lights[l];
+    r->type = lp->type == SCN_LIGHT_POINT ? 0 : lp->type == SCN_LIGHT_SPOT ? 1 : 2;
+    r->faces = sm->faces;
+    memcpy(r->position, lp->position, sizeof r->position);
+    memcpy(r->direction, lp->direction, sizeof r->direction);
+    r->texel = pass_direct_shadow_texel(lp, sm, &e->settings);
+    r->far_value = sm->far_value;
+    for (int f = 0; f < sm->faces && f < 6; f++)
+        memcpy(r->view_proj[f], sm->view_proj[f], sizeof r->view_proj[f]);
+    if ((int)l + 1 > e->stats.light_count)
+        e->stats.light_count = (int)l + 1;
+}
+
 /* Runs light l's shadow method after its shadow map (shadow.h), timed as the method's pass,
  * and announces the map it returns per face as shadow.light<l>[.face<f>].<buffer>. */
 static eng_result shadow_method_pass(eng_engine *e, int frame, uint32_t l, const shadow_map *sm,
@@ -709,6 +734,8 @@ static eng_result light_passes(eng_engine *e, int frame, const eng_rmap_frame *r
     if (need > e->bounce_capacity) {
         free(e->bounce);
         e->bounce = eng_xmalloc(need * sizeof *e->bounce);
+        free(e->bounce_origin);
+        e->bounce_origin = e->lineage ? eng_xmalloc(need * 4 * sizeof(float)) : NULL;
         e->bounce_capacity = need;
     }
     e->bounce_count = 0;
@@ -752,6 +779,13 @@ static eng_result light_passes(eng_engine *e, int frame, const eng_rmap_frame *r
                 bounce[8 * i + 7] = dir[4 * i + 3];
                 if (pos[4 * i + 3] == 0.0f || (pw[4 * i] <= 0.0f && pw[4 * i + 1] <= 0.0f && pw[4 * i + 2] <= 0.0f))
                     continue;
+                if (e->bounce_origin) {
+                    float *o = e->bounce_origin + 4 * e->bounce_count;
+                    o[0] = (float)l;
+                    o[1] = (float)f;
+                    o[2] = (float)(i % (size_t)size);
+                    o[3] = (float)(i / (size_t)size);
+                }
                 eng_bounce_photon *b = &e->bounce[e->bounce_count++];
                 memcpy(b->position, pos + 4 * i, 3 * sizeof(float));
                 memcpy(b->direction, dir + 4 * i, 3 * sizeof(float));
@@ -798,6 +832,36 @@ static int announce_photon_map(eng_engine *e, int frame)
         d[13] = (float)p->bounce;
     }
     int rc = announce(e, frame, "photons.map", PHOTON_ROW, rows, 14, CH_PHOTON, img);
+    free(img);
+    return rc;
+}
+
+/* photons.origin (with eng_desc.lineage): per photons.map pixel the light, face and texel
+ * (x, y, top row first as bounce.light<i>[.face<f>]) of the bounce-map photon whose path stored
+ * it, and its kernel radius r_xy this frame (ind_photon_radii), so ispm lineage can recompute
+ * every photon's contribution with the engine's kernel. Unused pixels hold light −1. */
+static int announce_photon_origin(eng_engine *e, int frame)
+{
+    static const char *const CH_ORIGIN[] = {"light", "face", "texel.X", "texel.Y", "radius"};
+    if (!e->lineage || !seq_wants(e->seq, "photons.origin"))
+        return 0;
+    size_t n = e->pmap.count;
+    int rows = (int)((n + PHOTON_ROW - 1) / PHOTON_ROW);
+    if (rows < 1)
+        rows = 1;
+    size_t px = (size_t)rows * PHOTON_ROW;
+    float *img = eng_xmalloc(px * 5 * sizeof(float));
+    for (size_t i = 0; i < px; i++) {
+        float *d = img + 5 * i;
+        if (i < n) {
+            memcpy(d, e->bounce_origin + 4 * (size_t)e->pmap.source[i], 4 * sizeof(float));
+            d[4] = e->radius[i];
+        } else {
+            d[0] = -1.0f;
+            d[1] = d[2] = d[3] = d[4] = 0.0f;
+        }
+    }
+    int rc = announce(e, frame, "photons.origin", PHOTON_ROW, rows, 5, CH_ORIGIN, img);
     free(img);
     return rc;
 }
@@ -1154,6 +1218,7 @@ eng_result eng_render_frame(eng_engine *e, int frame, eng_error *err)
         add_time(e, "shadow", now_ms() - t0);
         if (!maps[l])
             return eng_fail(err, ENG_ERR_GL, "frame %d: cannot allocate the shadow map of light %u", frame, l);
+        record_light(e, l, maps[l]);
         for (int f = 0; f < maps[l]->faces; f++) {
             char name[64];
             if (maps[l]->faces > 1)
@@ -1206,6 +1271,8 @@ eng_result eng_render_frame(eng_engine *e, int frame, eng_error *err)
         e->stats.photons_truncated = tstats.truncated;
         if (announce_photon_map(e, frame))
             return eng_fail(err, ENG_ERR_ABORTED, "frame %d: capture failed at photons.map", frame);
+        if (announce_photon_origin(e, frame))
+            return eng_fail(err, ENG_ERR_ABORTED, "frame %d: capture failed at photons.origin", frame);
     }
 
     /* Eye G-buffer. */

@@ -52,6 +52,17 @@ static GLint loc(GLuint prog, const char *fmt, int i)
     return glGetUniformLocation(prog, name);
 }
 
+float pass_direct_shadow_texel(const eng_light_pose *l, const shadow_map *sm, const eng_settings *s)
+{
+    /* World size of one shadow texel: per unit distance for perspective views, absolute for
+     * the directional ortho box (whose far value is its depth = 2·half-width). */
+    if (l->type == SCN_LIGHT_POINT)
+        return 2.0f / (float)s->shadow_map_size;
+    if (l->type == SCN_LIGHT_SPOT)
+        return 2.0f * tanf(shadow_spot_half_angle(l->outer_cone)) / (float)s->shadow_map_size;
+    return sm->far_value / (float)s->shadow_map_size;
+}
+
 const glu_target *pass_direct_run(pass_direct *p, const eng_frame_scene *fs, const glu_target *gbuf,
                                   const shadow_map *const *shadows, const glu_target *const *extra,
                                   const eng_settings *s)
@@ -73,15 +84,7 @@ const glu_target *pass_direct_run(pass_direct *p, const eng_frame_scene *fs, con
         glUniform3fv(loc(g, "u_light_direction[%d]", i), 1, l->direction);
         glUniform3fv(loc(g, "u_light_scale[%d]", i), 1, l->radiance_scale);
         glUniform3f(loc(g, "u_light_params[%d]", i), l->range, cosf(l->inner_cone), cosf(l->outer_cone));
-        /* World size of one shadow texel: per unit distance for perspective views, absolute
-         * for the directional ortho box (whose far value is its depth = 2·half-width). */
-        float texel;
-        if (type == 0)
-            texel = 2.0f / (float)s->shadow_map_size;
-        else if (type == 1)
-            texel = 2.0f * tanf(shadow_spot_half_angle(l->outer_cone)) / (float)s->shadow_map_size;
-        else
-            texel = sm->far_value / (float)s->shadow_map_size;
+        float texel = pass_direct_shadow_texel(l, sm, s);
         glUniform1f(loc(g, "u_shadow_texel[%d]", i), texel);
         for (int f = 0; f < sm->faces; f++)
             glUniformMatrix4fv(loc(g, "u_shadow_view_proj[%d]", i * 6 + f), 1, GL_FALSE, sm->view_proj[f]);

@@ -232,6 +232,15 @@ eng_result photon_trace_with(const pt_tracer *tr, const eng_frame_scene *fs, con
             oom = 1;
         }
     }
+    if (!oom && out->want_source && total > out->source_capacity) {
+        uint32_t *src = realloc(out->source, total * sizeof *src);
+        if (src) {
+            out->source = src;
+            out->source_capacity = total;
+        } else {
+            oom = 1;
+        }
+    }
     if (oom) {
         for (int t = 0; t < threads; t++)
             free(bufs[t].p);
@@ -244,6 +253,8 @@ eng_result photon_trace_with(const pt_tracer *tr, const eng_frame_scene *fs, con
         if (paths[i].count == 0)
             continue; /* out->photons may still be NULL when nothing was stored */
         memcpy(out->photons + at, bufs[paths[i].thread].p + paths[i].at, paths[i].count * sizeof(eng_photon));
+        for (size_t k = 0; out->want_source && k < paths[i].count; k++)
+            out->source[at + k] = (uint32_t)i;
         at += paths[i].count;
     }
     out->count = total;
@@ -279,5 +290,6 @@ void photon_map_free(eng_photon_map *m)
     if (!m)
         return;
     free(m->photons);
+    free(m->source);
     memset(m, 0, sizeof *m);
 }

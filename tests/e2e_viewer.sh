@@ -6,7 +6,10 @@
 # black and one against a run with one changed pixel that shows exactly that spot, the A/B flip
 # showing the same pixels, the help overlay's text, the probe panel following the cursor, the
 # photon map (p) as cyan/yellow/magenta points over the image that vanish again, the ꟻLIP heat
-# map (e) of a changed pixel, live view of a run whose frames land after the viewer started. Also
+# map (e) of a changed pixel, live view of a run whose frames land after the viewer started; pixel
+# lineage: a pinned lit floor pixel's shadow texel is itself lit (its stored distance beyond the
+# pixel's, from --dump-probe) and p pressed twice draws only that pixel's photons, fewer than the
+# map's. Also
 # the command-line contract: --help, and one line plus exit 2 for a missing or incomplete run,
 # exit 1 without a display. The regions come from viewer/main.c's fixed layout at 1280x800:
 # buffer list x<260, probe panel x>=920, timeline and status below y=752; a 160x160 buffer is
@@ -50,7 +53,7 @@ expect_error 2 "$WORK/missing" "$VIEW" "$GOLDEN" --golden "$WORK/missing"
 expect_error 1 "no display" env -u DISPLAY -u WAYLAND_DISPLAY -u SDL_VIDEODRIVER "$VIEW" "$GOLDEN"
 
 # ---- a run, and a copy with one pixel of frame 1's gbuffer.position changed
-"$ISPM" record "$SEQ" -o "$WORK/run" --quiet || fail "record exited $?"
+"$ISPM" record "$SEQ" -o "$WORK/run" --quiet --lineage || fail "record exited $?"
 cp -r "$WORK/run" "$WORK/run2"
 "$MUTATE" "$WORK/run2" 1 gbuffer.position 80 80 X add 5 || fail "mutate exited $?"
 "$MUTATE" "$WORK/run2" 1 final.display 80 80 R add 0.5 || fail "mutate exited $?"
@@ -127,7 +130,7 @@ grep -q '"camera"' "$WORK/run/manifest.json" || fail "the recorded run has no ca
 keys p; shot photons
 c0=$(cyan f0); c1=$(cyan photons)
 gt "$c1" "$((c0 + 1000))" || fail "photons (p): cyan point pixels $c0 -> $c1, want 1000 more"
-keys p; shot photons_off
+keys p p; shot photons_off
 [ "$(differ f0 photons_off $IMAGE)" = 0 ] || fail "photons off: the image is not as before"
 keys Right; shot f1
 gt "$(differ f0 f1 $IMG)" 100 || fail "next frame: the image did not change"
@@ -239,5 +242,27 @@ same_as live4 live4b || fail "live: after going back to frame 4 the view moved w
 cp "$WORK/run/manifest.json" "$LIVE/"
 keys End
 until_shot live7 same_as live7 done7 || fail "live: End after the manifest landed is not frame 7"
+keys q
+wait $VPID || fail "viewer exited $? after q"
+
+# ---- session 3: pixel lineage of a lit floor pixel, (10, 150) of frame 1
+start_viewer "$WORK/run" --frame 1 --dump-probe "$WORK/probe.txt"
+xdotool mousemove --sync 303 666 click 1; sleep 0.4
+xdotool mousemove --sync 640 792; sleep 0.5
+shot lin_base
+[ -s "$WORK/probe.txt" ] || fail "lineage: no probe dump after pinning a pixel"
+grep -q '^frame 1 eye 10 150$' "$WORK/probe.txt" || { cat "$WORK/probe.txt"; fail "lineage: not pixel (10, 150) of frame 1"; }
+read -r _ _ _ tx ty _ stored _ compared _ distance _ tol _ lit <<< "$(grep '^shadow 0 ' "$WORK/probe.txt")"
+[ "$lit" = 1 ] && gt "$stored" "$distance" ||
+  fail "lineage: the floor pixel's shadow texel ($tx, $ty) is not lit: stored $stored, distance $distance, lit $lit"
+read -r _ mine _ total <<< "$(grep '^photons ' "$WORK/probe.txt")"
+gt "$mine" 0 && gt "$total" "$mine" || fail "lineage: $mine of $total photons contribute"
+keys p; shot lin_all
+keys p; shot lin_mine
+keys p; shot lin_off
+all_px=$(differ lin_base lin_all $IMAGE); mine_px=$(differ lin_base lin_mine $IMAGE)
+gt "$mine_px" 0 || fail "lineage: p p draws no contributing photons"
+gt "$all_px" "$mine_px" || fail "lineage: the contributing photons ($mine_px pixels) are not fewer than the map's ($all_px)"
+[ "$(differ lin_base lin_off $IMAGE)" = 0 ] || fail "lineage: a third p does not hide the photons"
 keys q
 echo "viewer e2e: ok"

@@ -332,7 +332,7 @@ START_TEST(gather_is_bit_identical_for_any_thread_count)
         ck_assert(out[0][4 * i + 3] == gc->data[i]);
     }
     /* An empty map gathers nothing. */
-    eng_photon_map empty = {0, 0, NULL};
+    eng_photon_map empty = {0};
     eng_error err;
     ck_assert(kd_gather(&empty, SIZE, SIZE, g.pos, g.nrm, g.alb, g.mat, eye, &s, out[1], &err) == ENG_OK);
     for (int i = 0; i < SIZE * SIZE * 4; i++)

@@ -216,7 +216,7 @@ static eng_photon photon(float x, float y, float z, float len, float cos_theta, 
 START_TEST(each_kernel_scaling_on_a_hand_made_map)
 {
     eng_photon ph[6];
-    eng_photon_map map = {6, 6, ph};
+    eng_photon_map map = {.count = 6, .capacity = 6, .photons = ph};
     eng_settings s;
     memset(&s, 0, sizeof s);
     eng_settings_defaults(&s);
@@ -305,7 +305,7 @@ START_TEST(radii_do_not_depend_on_threads)
     eng_photon *ph = malloc(M * sizeof *ph);
     for (int i = 0; i < M; i++)
         ph[i] = photon(uni() * 4 - 2, uni() * 4 - 2, -1 - uni() * 3, uni() * 6, 0.1f + 0.9f * uni(), uni() * 0.01f);
-    eng_photon_map map = {M, M, ph};
+    eng_photon_map map = {.count = M, .capacity = M, .photons = ph};
     eng_frame_scene fs;
     eng_light_pose light;
     make_scene(&fs, &light);

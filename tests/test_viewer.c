@@ -376,6 +376,8 @@ START_TEST(photon_projection)
     ck_assert_int_eq(s.photons, 0);
     ck_assert_int_eq(view_state_apply(&s, VIEW_ACT_TOGGLE_PHOTONS), 1);
     ck_assert_int_eq(s.photons, 1);
+    view_state_apply(&s, VIEW_ACT_TOGGLE_PHOTONS); /* the probed pixel's photons only */
+    ck_assert_int_eq(s.photons, 2);
     view_state_apply(&s, VIEW_ACT_TOGGLE_PHOTONS);
     ck_assert_int_eq(s.photons, 0);
 }
@@ -398,6 +400,59 @@ START_TEST(run_errors)
 }
 END_TEST
 
+/* The probe's lineage (view_lineage.c): which eye pixel a probe stands for, the contributing
+ * photons' points and weights, the panel's lines. */
+START_TEST(lineage_probe)
+{
+    float d[4 * 4 * 3] = {0};
+    eng_buffer eye = make_buffer(4, 4, 3, RGB_NAMES, d), half = make_buffer(2, 2, 3, RGB_NAMES, d);
+    eng_buffer light = make_buffer(4, 4, 3, RGB_NAMES, d);
+    eye.name = "final.display";
+    half.name = "upsample.level1";
+    light.name = "shadow.light0.face2";
+    int x, y;
+    ck_assert(view_lineage_eye_pixel(&eye, 4, 4, 3, 1, &x, &y));
+    ck_assert_int_eq(x, 3);
+    ck_assert_int_eq(y, 1);
+    ck_assert(view_lineage_eye_pixel(&half, 4, 4, 1, 0, &x, &y)); /* covers eye pixels 2..3 x 0..1 */
+    ck_assert_int_eq(x, 3);
+    ck_assert_int_eq(y, 1);
+    ck_assert(!view_lineage_eye_pixel(&light, 4, 4, 1, 1, &x, &y));
+    ck_assert(!view_lineage_eye_pixel(&eye, 4, 4, 4, 0, &x, &y));
+
+    /* Two contributing photons, one twice the other's luminance; identity camera. */
+    lin_photon ph[2];
+    memset(ph, 0, sizeof ph);
+    ph[0].position[0] = 0.5f; /* NDC (0.5, 0): image (75 %, 50 %) */
+    ph[1].position[1] = -0.5f;
+    for (int c = 0; c < 3; c++) {
+        ph[0].contribution[c] = 1.0f;
+        ph[1].contribution[c] = 2.0f;
+    }
+    lin_result r;
+    memset(&r, 0, sizeof r);
+    r.covered = r.has_photons = 1;
+    r.photon_count = 2;
+    r.map_photons = 10;
+    r.photons = ph;
+    float vp[16] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
+    view_point pts[2];
+    float w[2];
+    ck_assert_int_eq(view_lineage_points(&r, vp, 100, 100, pts, w, 2), 2);
+    ck_assert_float_eq_tol(pts[0].x, 75.0f, 1e-4f);
+    ck_assert_float_eq_tol(pts[0].y, 50.0f, 1e-4f);
+    ck_assert_float_eq_tol(pts[1].y, 75.0f, 1e-4f);
+    ck_assert_float_eq_tol(w[0], 0.5f, 1e-6f);
+    ck_assert_float_eq_tol(w[1], 1.0f, 1e-6f);
+    ck_assert_uint_eq(view_contribution_colour(1.0f), 0xffffffu);
+    ck_assert_uint_ne(view_contribution_colour(0.0f), view_contribution_colour(1.0f));
+    static char lines[8][VIEW_LINEAGE_LINE];
+    int n = view_lineage_lines(&r, lines, 8);
+    ck_assert_int_eq(n, 1);
+    ck_assert_ptr_nonnull(strstr(lines[0], "2 of 10"));
+}
+END_TEST
+
 int main(void)
 {
     Suite *s = suite_create("viewer");
@@ -412,6 +467,7 @@ int main(void)
     tcase_add_test(model, state_actions);
     tcase_add_test(model, layout_and_probe);
     tcase_add_test(model, photon_projection);
+    tcase_add_test(model, lineage_probe);
     suite_add_tcase(s, model);
     TCase *run = tcase_create("run");
     tcase_add_test(run, run_lazy_cache);

@@ -49,7 +49,8 @@ static const char *const HELP[] = {
     "click image     pin pixel for the series",
     "click timeline  go to frame",
     "p               photons as points over eye-sized buffers:",
-    "                bounce 2 cyan, 3 yellow, 4+ magenta",
+    "                bounce 2 cyan, 3 yellow, 4+ magenta; again:",
+    "                only the probed pixel's, red to white by share",
     "e               FLIP heat map vs the second run (colour)",
     "h or F1         this help; q or Esc quits",
 };
@@ -80,15 +81,27 @@ typedef struct app {
     view_flip_cache flip;
     unsigned live_last;            /* live view (view_live.c): last look for new frames */
     char live_err[512];
+    /* Pixel lineage (view_lineage.c): the run's manifest, the probed pixel's lineage this
+     * redraw, the contributing photons' weights, and where --dump-probe writes it. */
+    lin_manifest lm;
+    int lm_ok;
+    lin_result lr;
+    int lr_ok, lr_frame, lr_x, lr_y, dumped_frame, dumped_x, dumped_y;
+    float *weights;
+    size_t weights_cap;
+    const char *probe_dump;
 } app;
 
 static void usage(FILE *f)
 {
     fprintf(f, "usage: ispm-view RUN [--golden DIR] [--frame N] [--buffer NAME] [--size WxH] [--list]\n"
+               "                [--dump-probe FILE]\n"
                "Interactive viewer for a recorded run: every buffer of every frame, channels,\n"
                "exposure, false colour, NaN/Inf overlay, comparison with a golden or second run\n"
                "(A/B flip, absolute/relative/signed difference), pixel probe. Press h in the\n"
-               "window for the keys. --list prints frame 0's buffers and exits.\n"
+               "window for the keys. --list prints frame 0's buffers and exits. The probe shows the\n"
+               "pixel's lineage (every buffer at its own coordinate, shadow texels through the light's\n"
+               "matrices); --dump-probe FILE also writes it to FILE whenever the probed pixel changes.\n"
                "Exit: 0 ok, 1 no display, 2 bad arguments or unreadable run.\n");
 }
 
@@ -314,6 +327,58 @@ static void draw_series(app *ap, int x, int y, int w, int h)
     text(ap, x, y + h + 2, 0x909090, w, line);
 }
 
+/* The probed pixel's lineage in the probe panel from y; returns the next line's y. */
+static int draw_lineage_lines(app *ap, int x0, int y, int y_max)
+{
+    static char lines[512][VIEW_LINEAGE_LINE];
+    int n = view_lineage_lines(&ap->lr, lines, 512);
+    for (int i = 0; i < n && y + ap->line_h <= y_max; i++)
+        text_wrapped(ap, x0 + 6, &y, RIGHT_W - 12, y_max, i < ap->lr.shadow_count + 1 ? 0x80ffc0 : 0xd0d0d0,
+                     lines[i]);
+    return y;
+}
+
+/* Computes ap->lr, the lineage of the eye pixel the probe (hover, else pin) stands for on the
+ * shown buffer a, and writes it to --dump-probe's file when the pixel changed. */
+static void update_lineage(app *ap, const eng_buffer *bufs, int count, const eng_buffer *a)
+{
+    lin_result_free(&ap->lr);
+    ap->lr_ok = 0;
+    int px = ap->hover ? ap->hover_x : ap->pin_x, py = ap->hover ? ap->hover_y : ap->pin_y;
+    int eye_w, eye_h;
+    view_run_resolution(ap->a, &eye_w, &eye_h);
+    if (!ap->lm_ok || !a || !(ap->hover || ap->pinned) || ap->s.frame >= ap->lm.frame_count ||
+        !view_lineage_eye_pixel(a, eye_w, eye_h, px, py, &ap->lr_x, &ap->lr_y))
+        return;
+    lin_frame fr = {bufs, count, &ap->lm, &ap->lm.frames[ap->s.frame]};
+    eng_error err;
+    if (lin_pixel(&fr, ap->lr_x, ap->lr_y, &ap->lr, &err) != ENG_OK)
+        return;
+    ap->lr_ok = 1;
+    ap->lr_frame = ap->s.frame;
+    if (!ap->probe_dump || (ap->dumped_frame == ap->lr_frame && ap->dumped_x == ap->lr_x && ap->dumped_y == ap->lr_y))
+        return;
+    static char lines[512][VIEW_LINEAGE_LINE];
+    int n = view_lineage_lines(&ap->lr, lines, 512);
+    FILE *f = fopen(ap->probe_dump, "w");
+    if (!f)
+        return;
+    fprintf(f, "frame %d eye %d %d\n", ap->lr_frame, ap->lr_x, ap->lr_y);
+    for (int i = 0; i < ap->lr.shadow_count; i++) {
+        const lin_shadow *sh = &ap->lr.shadows[i];
+        fprintf(f, "shadow %d texel %d %d stored %.9g compared %.9g distance %.9g tolerance %.9g lit %d\n", sh->light,
+                sh->texel[0], sh->texel[1], (double)sh->stored, (double)sh->compared, (double)sh->distance,
+                (double)sh->tolerance, sh->lit);
+    }
+    fprintf(f, "photons %d of %d\n", ap->lr.photon_count, ap->lr.map_photons);
+    for (int i = 0; i < n; i++)
+        fprintf(f, "%s\n", lines[i]);
+    fclose(f);
+    ap->dumped_frame = ap->lr_frame;
+    ap->dumped_x = ap->lr_x;
+    ap->dumped_y = ap->lr_y;
+}
+
 static void draw_right(app *ap, int w, int h, const eng_buffer *bufs, int count,
                        const eng_buffer *bcur)
 {
@@ -328,9 +393,13 @@ static void draw_right(app *ap, int w, int h, const eng_buffer *bufs, int count,
                      "probe: move the cursor over the image");
     } else {
         snprintf(line, sizeof line, "probe (%d, %d)%s", px, py, ap->hover ? "" : " pinned");
+        if (ap->lr_ok)
+            snprintf(line + strlen(line), sizeof line - strlen(line), "  eye (%d, %d)", ap->lr_x, ap->lr_y);
         text(ap, x0 + 6, y, 0xffffff, RIGHT_W - 12, line);
         y += ap->line_h;
-        for (int i = 0; i < count && y + ap->line_h <= list_max; i++) {
+        if (ap->lr_ok)
+            y = draw_lineage_lines(ap, x0, y, list_max);
+        for (int i = 0; i < count && !ap->lr_ok && y + ap->line_h <= list_max; i++) {
             view_probe_line(&bufs[i], px, py, line, sizeof line);
             text_wrapped(ap, x0 + 6, &y, RIGHT_W - 12, list_max,
                          i == ap->s.buffer ? 0xffff80 : 0xd0d0d0, line);
@@ -394,6 +463,35 @@ static void draw_help(app *ap, int w, int h)
         text(ap, x + 12, y + 10 + i * ap->line_h, i == 0 ? 0xffff80 : 0xffffff, bw - 24, HELP[i]);
 }
 
+/* p pressed twice: only the photons that contribute to the probed pixel (ap->lr), 5x5 points
+ * coloured by their share, largest drawn last; the count goes to note. ap->points holds at
+ * least the map's photons. */
+static void draw_contributors(app *ap, const float vp[16], int eye_w, int eye_h, const eng_buffer *a,
+                              view_rect dst, char *note, size_t n)
+{
+    if (!ap->lr_ok || !ap->lr.has_photons) {
+        snprintf(note, n, "  | photons of a pixel: %s",
+                 !ap->lr_ok ? "probe a surface pixel (hover or click)"
+                            : ap->lr.why ? ap->lr.why : "none");
+        return;
+    }
+    if (ap->weights_cap < ap->points_cap) {
+        free(ap->weights);
+        ap->weights = malloc(ap->points_cap * sizeof *ap->weights);
+        ap->weights_cap = ap->weights ? ap->points_cap : 0;
+    }
+    int cap = (int)(ap->weights_cap < ap->points_cap ? ap->weights_cap : ap->points_cap);
+    int shown = view_lineage_points(&ap->lr, vp, eye_w, eye_h, ap->points, ap->weights, cap);
+    for (int i = 0; i < shown; i++) {
+        int sx = dst.x + (int)floorf(ap->points[i].x * (float)dst.w / (float)a->width);
+        int sy = dst.y + (int)floorf(ap->points[i].y * (float)dst.h / (float)a->height);
+        uint32_t c = view_contribution_colour(ap->weights[i]);
+        fill(ap, sx - 2, sy - 2, 5, 5, c, 255);
+    }
+    snprintf(note, n, "  | photons of (%d, %d): %d of %d contribute (%d in view)", ap->lr_x, ap->lr_y,
+             ap->lr.photon_count, ap->lr.map_photons, shown);
+}
+
 /* Draws the frame's photon map as points over the image a drawn at dst (clip already set),
  * and appends the photon count, or why there are no points, to note. */
 static void draw_photons(app *ap, const eng_buffer *bufs, int count, const eng_buffer *a,
@@ -426,6 +524,10 @@ static void draw_photons(app *ap, const eng_buffer *bufs, int count, const eng_b
         ap->points = malloc(need * sizeof *ap->points);
         ap->rects = malloc(need * sizeof *ap->rects);
         ap->points_cap = ap->points && ap->rects ? need : 0;
+    }
+    if (ap->s.photons == 2) {
+        draw_contributors(ap, vp, eye_w, eye_h, a, dst, note + len, n - len);
+        return;
     }
     int total = 0;
     int shown = view_project_photons(map, vp, eye_w, eye_h, ap->points, (int)ap->points_cap, &total);
@@ -486,6 +588,8 @@ static void redraw(app *ap)
     const char *why = NULL;
     char note[1200] = "";
     view_rect area = image_area(ap);
+    lin_result_free(&ap->lr); /* it borrows the frame's buffers: recomputed below */
+    ap->lr_ok = 0;
     if (!ap->series_valid)
         compute_series(ap);
     if (view_run_frame(ap->a, ap->s.frame, &bufs, &count, &err) != ENG_OK) {
@@ -533,6 +637,7 @@ static void redraw(app *ap)
                 fill(ap, cx - 6, cy, 13, 1, 0xffff00, 255);
                 fill(ap, cx, cy - 6, 1, 13, 0xffff00, 255);
             }
+            update_lineage(ap, bufs, count, a);
             if (ap->s.photons)
                 draw_photons(ap, bufs, count, a, dst, note, sizeof note);
             SDL_RenderSetClipRect(ap->ren, NULL);
@@ -706,6 +811,7 @@ static int fail_sdl(const char *what)
 int main(int argc, char **argv)
 {
     const char *run_dir = NULL, *golden = NULL, *buffer = NULL;
+    const char *probe_dump = NULL;
     int frame = 0, win_w = 1280, win_h = 800, list = 0;
     for (int i = 1; i < argc; i++) {
         const char *arg = argv[i];
@@ -714,6 +820,8 @@ int main(int argc, char **argv)
             return 0;
         } else if (!strcmp(arg, "--list")) {
             list = 1;
+        } else if (!strcmp(arg, "--dump-probe") && i + 1 < argc) {
+            probe_dump = argv[++i];
         } else if (!strcmp(arg, "--golden") && i + 1 < argc) {
             golden = argv[++i];
         } else if (!strcmp(arg, "--frame") && i + 1 < argc) {
@@ -741,6 +849,8 @@ int main(int argc, char **argv)
     memset(&ap, 0, sizeof ap);
     ap.a_dir = run_dir;
     ap.b_dir = golden;
+    ap.probe_dump = probe_dump;
+    ap.dumped_frame = -1;
     eng_error err;
     if (view_run_open(run_dir, 8, &ap.a, &err) != ENG_OK) {
         fprintf(stderr, "ispm-view: %s\n", err.msg);
@@ -778,6 +888,7 @@ int main(int argc, char **argv)
         view_run_close(ap.b);
         return 0;
     }
+    ap.lm_ok = lin_manifest_read(run_dir, &ap.lm, &err) == ENG_OK; /* without it, the plain probe */
     view_state_init(&ap.s, view_run_frame_count(ap.a), 0, ap.b != NULL);
     view_state_set_frame(&ap.s, frame);
     snprintf(ap.buffer_name, sizeof ap.buffer_name, "%s", buffer ? buffer : "final.display");
@@ -890,6 +1001,9 @@ out:
     view_flip_cache_free(&ap.flip);
     free(ap.pixels);
     free(ap.points);
+    free(ap.weights);
+    lin_result_free(&ap.lr);
+    lin_manifest_free(&ap.lm);
     free(ap.rects);
     view_run_close(ap.a);
     view_run_close(ap.b);

@@ -376,7 +376,7 @@ int view_state_apply(view_state *s, view_action a)
         s->zoom /= 1.25f;
         return 1;
     case VIEW_ACT_HELP: s->help = !s->help; return 1;
-    case VIEW_ACT_TOGGLE_PHOTONS: s->photons = !s->photons; return 1;
+    case VIEW_ACT_TOGGLE_PHOTONS: s->photons = (s->photons + 1) % 3; return 1;
     case VIEW_ACT_QUIT: s->quit = 1; return 0;
     }
     return 0;

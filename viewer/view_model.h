@@ -20,6 +20,7 @@
 #include <stdint.h>
 
 #include "eng.h"
+#include "lineage.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -144,7 +145,8 @@ typedef struct view_state {
     int has_b;         /* a second run is open: compare and flip allowed */
     view_display d;
     int playing, help, quit;
-    int photons;       /* draw the frame's photon map as points over eye-sized buffers */
+    int photons;       /* p cycles: 0 none, 1 the frame's photon map as points over eye-sized
+                        * buffers, 2 only the photons that contribute to the probed pixel */
     float zoom;        /* 1 = fit to the image area */
 } view_state;
 
@@ -286,6 +288,27 @@ typedef struct view_flip_cache {
  * colour buffer or b is missing or of another size (out untouched). */
 int view_flip_render(view_flip_cache *c, int frame, const eng_buffer *a, const eng_buffer *b, uint8_t *out);
 void view_flip_cache_free(view_flip_cache *c);
+/* ---------------------------------------------------------------- pixel lineage (view_lineage.c) */
+
+/* The eye pixel a probe at (px, py) of the shown buffer stands for: the same pixel on eye-sized
+ * buffers, the scaled one on subsampled levels. Returns 0 for light-space buffers (shadow,
+ * lightgbuffer, bounce), photon maps and probes outside the buffer. */
+int view_lineage_eye_pixel(const eng_buffer *shown, int eye_w, int eye_h, int px, int py, int *ex, int *ey);
+
+/* The probe panel's lines for a pixel's lineage (replay/lineage.h): the shadow test per light
+ * (map, texel, stored against compared value, verdict), the photons that contribute and their
+ * sum, then every buffer at its own coordinate. Writes at most max lines; returns how many. */
+#define VIEW_LINEAGE_LINE 256
+int view_lineage_lines(const lin_result *r, char (*out)[VIEW_LINEAGE_LINE], int max);
+
+/* The photons that contribute to the pixel projected into the eye image as view_project_photons
+ * does, with weight[i] = the luminance of point i's contribution over the largest one (0..1).
+ * Returns the points written (at most cap). */
+int view_lineage_points(const lin_result *r, const float view_proj[16], int img_w, int img_h, view_point *out,
+                        float *weight, int cap);
+
+/* The point colour (0xRRGGBB) for a contribution weight in 0..1: dark red to white. */
+uint32_t view_contribution_colour(float t);
 
 #ifdef __cplusplus
 }
