@@ -102,12 +102,15 @@ typedef struct scn_material {
     float ior;           /* KHR_materials_ior, default 1.5 */
     float emissive[3];   /* emissiveFactor × KHR_materials_emissive_strength (W/m²/sr) */
     int double_sided;
-    /* Textures (glTF §3.9): base colour is used by every pass (scn_base_color_at); the
-     * others are parsed and kept for the passes that will read them (emissive: the
-     * specular/emission work, issue 14). */
+    /* Textures (glTF §3.9): base colour and metallicRoughness are used by every pass
+     * (scn_base_color_at, rt_hit); emissive by the eye G-buffer (gbuffer.emission) and at
+     * CPU hits (rt_hit.emissive_tex); occlusion by the eye G-buffer, on indirect light in
+     * the composite; normal is loaded but not applied yet (no tangent frames). */
     scn_texref base_color_tex, metallic_roughness_tex, normal_tex, occlusion_tex, emissive_tex;
     scn_alpha_mode alpha_mode;
     float alpha_cutoff; /* default 0.5 */
+    /* occlusionTexture.strength: indirect light × (1 + strength·(R − 1)) (glTF §3.9.3) */
+    float occlusion_strength;
 } scn_material;
 
 /* One triangle list. Positions and normals in the mesh's object space, 3 floats per vertex.
@@ -122,13 +125,32 @@ typedef struct scn_primitive {
     float *texcoords[2];  /* TEXCOORD_0/1, 2 floats per vertex, or NULL */
     float *colors;        /* COLOR_0 as linear RGBA, 4 floats per vertex, or NULL */
     int32_t material;     /* index into materials, or -1 for the glTF default material */
+    /* Skinning (glTF §3.7.3): JOINTS_0 (indices into the drawing node's skin joints) and
+     * WEIGHTS_0, 4 per vertex, or NULL. */
+    uint32_t *joints;
+    float *weights;
+    /* Morph targets (glTF §3.7.2.2): target_count × vertex_count × 3 POSITION and NORMAL
+     * deltas (NULL where no target has that attribute; a target without it adds 0). */
+    uint32_t target_count;
+    float *target_positions, *target_normals;
+    int flat; /* normals were computed flat by the loader: deformation recomputes them */
 } scn_primitive;
 
 typedef struct scn_mesh {
     char name[SCN_NAME_MAX];
     uint32_t first_primitive; /* into scn_scene.primitives */
     uint32_t primitive_count;
+    uint32_t weight_count; /* morph targets of its primitives (all have the same number) */
+    float *weights;        /* mesh.weights, or zeros: the default morph weights */
 } scn_mesh;
+
+/* A glTF skin: joint nodes (scene node indices) and their inverse bind matrices
+ * (column-major, identity where the file gives none). */
+typedef struct scn_skin {
+    uint32_t joint_count;
+    int32_t *joints;
+    float *inverse_bind;
+} scn_skin;
 
 typedef struct scn_camera {
     char name[SCN_NAME_MAX];
@@ -159,6 +181,8 @@ typedef struct scn_node {
     int32_t mesh;   /* -1 none */
     int32_t camera; /* -1 none */
     int32_t light;  /* -1 none */
+    int32_t skin;   /* -1 none (only with a mesh) */
+    uint32_t weight_first; /* its morph weights in scn_scene.weights (its mesh's weight_count) */
     /* Rest pose. If has_matrix, matrix is used and TRS ignored (glTF forbids animating it). */
     int has_matrix;
     float matrix[16];
@@ -167,7 +191,7 @@ typedef struct scn_node {
     float scale[3];
 } scn_node;
 
-typedef enum scn_anim_path { SCN_PATH_TRANSLATION = 0, SCN_PATH_ROTATION, SCN_PATH_SCALE } scn_anim_path;
+typedef enum scn_anim_path { SCN_PATH_TRANSLATION = 0, SCN_PATH_ROTATION, SCN_PATH_SCALE, SCN_PATH_WEIGHTS } scn_anim_path;
 typedef enum scn_interp { SCN_INTERP_LINEAR = 0, SCN_INTERP_STEP, SCN_INTERP_CUBICSPLINE } scn_interp;
 
 typedef struct scn_channel {
@@ -179,6 +203,7 @@ typedef struct scn_channel {
     /* key_count × comps floats (comps = 3, or 4 for rotation); for CUBICSPLINE
      * key_count × 3 × comps laid out (in-tangent, value, out-tangent) per key as in glTF. */
     float *values;
+    uint32_t comps; /* SCN_PATH_WEIGHTS: the node's morph weight count (others: 3, rotation 4) */
 } scn_channel;
 
 typedef struct scn_animation {
@@ -200,6 +225,8 @@ typedef struct scn_scene {
     uint32_t light_count;     scn_light *lights;
     uint32_t animation_count; scn_animation *animations;
     uint32_t texture_count;   scn_texture *textures;
+    uint32_t skin_count;      scn_skin *skins;
+    uint32_t weight_count;    float *weights; /* every node's rest morph weights (scn_node.weight_first) */
     char digest[40];          /* hex XXH3-128 of the .gltf file and its buffers */
     /* What was skipped or is suspicious but not fatal (an unused orthographic camera, a
      * POINTS primitive, an unknown optional extension, no light at all): one line each,
@@ -232,7 +259,23 @@ void scn_destroy(scn_scene *scene);
  * clamped at their ends (no looping). world must hold node_count*16 floats. */
 void scn_evaluate(const scn_scene *scene, double t, float *world);
 
-/* Samples one channel at time t into out (3 or 4 floats). Rotation results are normalised;
+/* Morph weights of every node at time t (scene->weight_count floats into weights: the rest
+ * weights, then the "weights" channels of every animation). */
+void scn_evaluate_weights(const scn_scene *scene, double t, float *weights);
+
+/* Whether node's mesh deforms (a skin, or morph targets). */
+int scn_node_deforms(const scn_scene *scene, uint32_t node);
+
+/* Primitive prim of node's mesh deformed (deform.c): morph targets with the node's weights
+ * (weights as scn_evaluate_weights gives them), then the skin with joint matrices
+ * world(joint) · inverseBind from world (scn_evaluate). Writes vertex_count × 3 positions and
+ * unit normals; returns 1 if they are in world space (skinned: glTF ignores the node's own
+ * transform), 0 if in the node's object space (morph only). Double arithmetic, one rounding
+ * per output: the same bits whatever the thread count. */
+int scn_deform(const scn_scene *scene, uint32_t node, uint32_t prim, const float *world, const float *weights,
+               float *positions, float *normals);
+
+/* Samples one channel at time t into out (ch->comps floats). Rotation results are normalised;
  * LINEAR rotation uses slerp (shortest arc). Exposed for tests. */
 void scn_sample_channel(const scn_channel *ch, double t, float *out);
 

@@ -79,7 +79,7 @@ void glu_pass_draw_to(const glu_pass *p, const glu_target *t);
 
 /* ---------------------------------------------------------------- scene as drawn */
 
-typedef struct eng_gpu_prim {
+typedef struct eng_gpu_prim { /* vertex attribute 5: the previous frame's position */
     GLuint vao, vbo_pos, vbo_nrm, ibo;
     GLuint vbo_uv[2], vbo_col; /* TEXCOORD_0/1 (location 2, 3), COLOR_0 (4); 0 where absent */
     GLsizei index_count;
@@ -91,7 +91,17 @@ typedef struct eng_draw {
     int32_t material;  /* -1 = default material */
     float world[16];
     float prev_world[16];
+    const struct eng_gpu_prim *gpu; /* the primitive's buffers, or this draw's deformed copy */
+    /* A skinned or morphed draw (deform_gl.c): its vertices this frame in the space `world`
+     * maps from (world space, world = identity, when skinned); NULL: the primitive's own. */
+    const float *positions, *normals;
 } eng_draw;
+
+/* The object-space positions of draw d (deformed or the primitive's). */
+static inline const float *eng_draw_positions(const scn_scene *s, const eng_draw *d)
+{
+    return d->positions ? d->positions : s->primitives[d->primitive].positions;
+}
 
 typedef struct eng_view {
     float view[16], proj[16], view_proj[16];
@@ -119,6 +129,17 @@ typedef struct eng_frame_scene {
     eng_light_pose *lights;
     float bounds_min[3], bounds_max[3]; /* world AABB of all geometry this frame */
 } eng_frame_scene;
+
+/* Skinned and morphed draws (deform_gl.c, issue 17): per deformed draw its own vertex
+ * buffers (positions, normals, previous positions) beside the primitive's texcoords, colours
+ * and indices. eng_deform_pose runs after the draws are set for the frame: it deforms each
+ * on the CPU at t and at tp (scn_deform), points the draw at the result and at its buffers,
+ * sets world/prev_world to identity for skinned ones, and uploads the vertices. */
+typedef struct eng_deform eng_deform;
+eng_deform *eng_deform_create(const scn_scene *s, const eng_gpu_prim *gpu);
+void eng_deform_pose(eng_deform *d, eng_frame_scene *fs, const float *world, const float *prev_world, double t,
+                     double tp);
+void eng_deform_destroy(eng_deform *d); /* accepts NULL; needs the GL context current */
 
 /* malloc that ends the process with a message when out of memory (engine.c). */
 void *eng_xmalloc(size_t size);
@@ -313,6 +334,9 @@ eng_result pass_composite_create(int width, int height, pass_composite **out, en
 const glu_target *pass_composite_run(pass_composite *p, GLuint direct_tex, GLuint indirect_tex,
                                      GLuint specular_tex, GLuint emission_tex, GLuint translucent_tex, const eng_settings *s);
 void pass_composite_destroy(pass_composite *p);
+/* Indirect light × the A of tex (the eye G-buffer's attachment 5: occlusion textures) from now
+ * on; 0: not multiplied (scenes without an occlusion texture). */
+void pass_composite_set_occlusion(pass_composite *p, GLuint tex);
 
 /* ---------------------------------------------------------------- GL context (glctx.c) */
 
@@ -432,6 +456,9 @@ typedef struct rt_hit {
     /* What roughness and metallic are multiplied by here: the metallicRoughness texture's
      * G and B (glTF §3.9.2); 1 without one. */
     float roughness_tex, metallic_tex;
+    /* What emissiveFactor is multiplied by here: the emissive texture's RGB (sRGB-decoded,
+     * glTF §3.9.3); 1 without one. */
+    float emissive_tex[3];
 } rt_hit;
 
 typedef struct eng_rt eng_rt;

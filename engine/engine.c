@@ -66,7 +66,7 @@ struct eng_engine {
      * G-buffer's material id, uploaded for the composite. */
     int emissive;
     ind_cpu_target emission;
-    float *emission_rgba, *emission_rgb, *emission_id;
+    float *emission_rgba, *emission_rgb;
     /* Reconstruction filters (DESIGN.md step 7), on when any of splat_subsample > 1,
      * temporal, atrous_iterations is set: G-buffers at 1/2^l resolution (gbuffer_lo[l-1]),
      * upsampling to level l (upsample[l]), temporal accumulation, À-Trous, BSDF resolve. */
@@ -93,6 +93,7 @@ struct eng_engine {
     int listener_count;
     eng_listener listeners[ENG_MAX_LISTENERS];
     float *world, *prev_world;
+    eng_deform *deform; /* skinned and morphed draws (deform_gl.c) */
     eng_frame_scene fs;
     float *scratch;
     size_t scratch_capacity;
@@ -129,6 +130,8 @@ scn_material eng_material_at(const scn_scene *scene, const rt_hit *hit)
         m.base_color[c] *= hit->base_tex[c];
     m.roughness *= hit->roughness_tex;
     m.metallic *= hit->metallic_tex;
+    for (int c = 0; c < 3; c++)
+        m.emissive[c] *= hit->emissive_tex[c];
     return m;
 }
 
@@ -163,6 +166,10 @@ static void upload_scene(eng_engine *e)
         glBufferData(GL_ARRAY_BUFFER, (GLsizeiptr)(p->vertex_count * 3 * sizeof(float)), p->positions, GL_STATIC_DRAW);
         glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, 0, NULL);
         glEnableVertexAttribArray(0);
+        /* The previous frame's position (gbuffer.vert.glsl): the same for a rigid primitive,
+         * whose motion comes from prev_world; deform_gl.c's own buffer for a deformed one. */
+        glVertexAttribPointer(5, 3, GL_FLOAT, GL_FALSE, 0, NULL);
+        glEnableVertexAttribArray(5);
         glGenBuffers(1, &g->vbo_nrm);
         glBindBuffer(GL_ARRAY_BUFFER, g->vbo_nrm);
         glBufferData(GL_ARRAY_BUFFER, (GLsizeiptr)(p->vertex_count * 3 * sizeof(float)), p->normals, GL_STATIC_DRAW);
@@ -207,6 +214,7 @@ static void upload_scene(eng_engine *e)
         glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, wraps[t->wrap_t]);
     }
     glBindTexture(GL_TEXTURE_2D, 0);
+    e->deform = eng_deform_create(s, e->gpu);
 }
 
 eng_result eng_create(const eng_desc *desc, eng_engine **out, eng_error *err)
@@ -313,7 +321,6 @@ eng_result eng_create(const eng_desc *desc, eng_engine **out, eng_error *err)
         size_t n = (size_t)e->width * (size_t)e->height;
         e->emission_rgba = xcalloc(n * 4, sizeof(float));
         e->emission_rgb = xcalloc(n * 3, sizeof(float));
-        e->emission_id = xcalloc(n, sizeof(float));
         r = ind_cpu_target_create(&e->emission, e->width, e->height, 0, err);
         if (r != ENG_OK)
             e->emissive = 0;
@@ -376,6 +383,7 @@ void eng_destroy(eng_engine *e)
         pass_gbuffer_destroy(e->gbuffer);
         if (e->textures)
             glDeleteTextures((GLsizei)e->scene->texture_count, e->textures);
+        eng_deform_destroy(e->deform);
         if (e->gpu)
             for (uint32_t i = 0; i < e->scene->primitive_count; i++) {
                 glDeleteBuffers(1, &e->gpu[i].vbo_pos);
@@ -406,7 +414,6 @@ void eng_destroy(eng_engine *e)
     free(e->textures);
     free(e->emission_rgba);
     free(e->emission_rgb);
-    free(e->emission_id);
     free(e->gpu);
     free(e->world);
     free(e->prev_world);
@@ -494,15 +501,21 @@ static void pose_frame(eng_engine *e, int frame)
                 dr->material = s->primitives[dr->primitive].material;
                 memcpy(dr->world, w, sizeof dr->world);
                 memcpy(dr->prev_world, e->prev_world + 16 * (size_t)i, sizeof dr->prev_world);
-                const scn_primitive *p = &s->primitives[dr->primitive];
-                for (uint32_t v = 0; v < p->vertex_count; v++) {
-                    float q[3];
-                    m4_transform_point(w, p->positions + 3 * v, q);
-                    for (int c = 0; c < 3; c++) {
-                        fs->bounds_min[c] = fminf(fs->bounds_min[c], q[c]);
-                        fs->bounds_max[c] = fmaxf(fs->bounds_max[c], q[c]);
-                    }
-                }
+                dr->gpu = &e->gpu[dr->primitive];
+                dr->positions = dr->normals = NULL;
+            }
+        }
+    }
+    eng_deform_pose(e->deform, fs, e->world, e->prev_world, t, tp);
+    for (uint32_t k = 0; k < d; k++) {
+        const eng_draw *dr = &fs->draws[k];
+        const float *pos = eng_draw_positions(s, dr);
+        for (uint32_t v = 0; v < s->primitives[dr->primitive].vertex_count; v++) {
+            float q[3];
+            m4_transform_point(dr->world, pos + 3 * v, q);
+            for (int c = 0; c < 3; c++) {
+                fs->bounds_min[c] = fminf(fs->bounds_min[c], q[c]);
+                fs->bounds_max[c] = fmaxf(fs->bounds_max[c], q[c]);
             }
         }
     }
@@ -1009,20 +1022,18 @@ static eng_result translucent_pass(eng_engine *e, int frame, const glu_target *g
     return ENG_OK;
 }
 
-/* The emitted radiance of the surface each pixel shows (the emissiveFactor × strength of its
- * G-buffer material id), announced as gbuffer.emission; *tex gets the texture the composite
- * adds. Emitters are seen, not light sources: they send no photons and no shadow rays. */
+/* The emitted radiance of the surface each pixel shows (the G-buffer's attachment 5:
+ * emissiveFactor × strength × emissive texture), announced as gbuffer.emission; *tex gets the
+ * texture the composite adds. Emitters are seen, not light sources: they send no photons and no shadow rays. */
 static eng_result emission_pass(eng_engine *e, int frame, const glu_target *gb, GLuint *tex, eng_error *err)
 {
     static const char *const CH_RGB3[] = {"R", "G", "B"};
     double t0 = now_ms();
-    glu_read(gb, 4, 0, 1, (const int[]){1}, e->emission_id);
+    glu_read(gb, 5, 0, 3, (const int[]){0, 1, 2}, e->emission_rgb);
     size_t n = (size_t)gb->width * (size_t)gb->height;
     for (size_t i = 0; i < n; i++) {
-        int32_t id = (int32_t)e->emission_id[i];
-        scn_material m = eng_material_of(e->scene, id);
         for (int c = 0; c < 3; c++)
-            e->emission_rgb[3 * i + (size_t)c] = e->emission_rgba[4 * i + (size_t)c] = id >= 0 ? m.emissive[c] : 0.0f;
+            e->emission_rgba[4 * i + (size_t)c] = e->emission_rgb[3 * i + (size_t)c];
         e->emission_rgba[4 * i + 3] = 1.0f;
     }
     ind_cpu_target_upload(&e->emission, 0, e->emission_rgba);
@@ -1376,7 +1387,12 @@ eng_result eng_render_frame(eng_engine *e, int frame, eng_error *err)
             return r;
     }
 
-    /* Composite and display transform. */
+    /* Composite and display transform; indirect light × occlusion where a material has an
+     * occlusion texture (glTF §3.9.3: it applies to indirect light only). */
+    int occluded = 0;
+    for (uint32_t i = 0; i < e->scene->material_count; i++)
+        occluded |= e->scene->materials[i].occlusion_tex.texture >= 0;
+    pass_composite_set_occlusion(e->composite, occluded ? gb->color[5] : 0);
     t0 = now_ms();
     const glu_target *comp =
         pass_composite_run(e->composite, direct->color[0], indirect_tex, specular_tex, emission_tex,

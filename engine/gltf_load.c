@@ -18,8 +18,9 @@
  *     decoded from the shim, as ordinary accessors); sparse accessors and KHR_mesh_quantization's
  *     integer attributes are read (read_floats_as), sparse index accessors are not;
  *   - textures are decoded to linear RGBA floats (make_texture; base colour and emissive
- *     sRGB-decoded), TEXCOORD_0/1 and COLOR_0 read; skins and morph targets are ignored
- *     (the base mesh at rest is kept), and so are animation channels on "weights";
+ *     sRGB-decoded; occlusionTexture.strength checked to [0, 1]), TEXCOORD_0/1 and COLOR_0 read; skins (JOINTS_0/WEIGHTS_0, inverse
+ *     bind matrices) and morph targets (POSITION/NORMAL deltas, mesh/node weights, "weights"
+ *     channels) are read for deform.c;
  *   - primitives without NORMAL get flat normals, their vertices un-shared; normals are
  *     normalised;
  *   - only nodes reachable from the default scene (else scene 0, else every root) are kept,
@@ -659,6 +660,9 @@ static eng_result load_materials(loader *L)
             (r = load_texref(L, &g->occlusion_texture, 0, where, &d->occlusion_tex)) ||
             (r = load_texref(L, &g->emissive_texture, 1, where, &d->emissive_tex)))
             return r;
+        if ((r = check_unit_range(L, where, "occlusionTexture.strength", g->occlusion_texture.strength)))
+            return r;
+        d->occlusion_strength = (float)g->occlusion_texture.strength;
         d->alpha_mode = SCN_ALPHA_OPAQUE;
         if (g->alpha_mode && strcmp(g->alpha_mode, "MASK") == 0)
             d->alpha_mode = SCN_ALPHA_MASK;
@@ -864,6 +868,38 @@ static eng_result flat_normals(loader *L, scn_primitive *p, const char *where)
         free(*attr[a]);
         *attr[a] = un;
     }
+    if (p->joints) {
+        uint32_t *un = malloc((size_t)n * 4 * sizeof *un);
+        if (!un) {
+            free(pos);
+            free(nrm);
+            return nomem(L, where);
+        }
+        for (uint32_t i = 0; i < n; i++)
+            memcpy(un + (size_t)i * 4, p->joints + (size_t)p->indices[i] * 4, 4 * sizeof *un);
+        free(p->joints);
+        p->joints = un;
+    }
+    float **per_target[3] = {&p->weights, &p->target_positions, &p->target_normals};
+    const size_t tcomps[3] = {4, 3, 3};
+    for (int a = 0; a < 3; a++) {
+        if (!*per_target[a])
+            continue;
+        size_t sets = a == 0 ? 1 : p->target_count;
+        float *un = malloc(sets * n * tcomps[a] * sizeof *un);
+        if (!un) {
+            free(pos);
+            free(nrm);
+            return nomem(L, where);
+        }
+        for (size_t t = 0; t < sets; t++)
+            for (uint32_t i = 0; i < n; i++)
+                memcpy(un + (t * n + i) * tcomps[a],
+                       *per_target[a] + (t * p->vertex_count + p->indices[i]) * tcomps[a], tcomps[a] * sizeof *un);
+        free(*per_target[a]);
+        *per_target[a] = un;
+    }
+    p->flat = 1;
     for (uint32_t i = 0; i < n; i++)
         p->indices[i] = i;
     free(p->positions);
@@ -880,6 +916,112 @@ static int find_attribute(const gls_primitive *g, const char *semantic)
         if (strcmp(g->attributes[a].semantic, semantic) == 0)
             return g->attributes[a].accessor;
     return -2;
+}
+
+/* JOINTS_0 (UNSIGNED_BYTE/SHORT VEC4) and WEIGHTS_0 (FLOAT or normalized UNSIGNED_BYTE/SHORT
+ * VEC4), both or neither; JOINTS_1/WEIGHTS_1 (more than 4 influences) are ignored with a
+ * warning. Joint indices are checked against the skin of each node that draws the mesh
+ * (load_skins). */
+static eng_result load_skin_attributes(loader *L, const gls_primitive *g, scn_primitive *d, const char *where)
+{
+    const gls_model *m = L->m;
+    int ja = find_attribute(g, "JOINTS_0"), wa = find_attribute(g, "WEIGHTS_0");
+    if (find_attribute(g, "JOINTS_1") != -2)
+        scn_warn(L->s, "%s: JOINTS_1/WEIGHTS_1 ignored (4 influences per vertex are used)", where);
+    if (ja == -2 && wa == -2)
+        return ENG_OK;
+    if (ja == -2 || wa == -2)
+        return fail(L, ENG_ERR_INVALID, "%s: %s without %s", where, ja == -2 ? "WEIGHTS_0" : "JOINTS_0",
+                    ja == -2 ? "JOINTS_0" : "WEIGHTS_0");
+    const gls_accessor *aj = &m->accessors[ja], *aw = &m->accessors[wa];
+    if ((aj->component_type != GLS_COMPONENT_UNSIGNED_BYTE && aj->component_type != GLS_COMPONENT_UNSIGNED_SHORT) ||
+        aj->normalized)
+        return fail(L, ENG_ERR_INVALID, "%s JOINTS_0: accessor %d is %s, must be UNSIGNED_BYTE or UNSIGNED_SHORT", where,
+                    ja, component_name(aj->component_type));
+    if (aw->component_type != GLS_COMPONENT_FLOAT &&
+        !((aw->component_type == GLS_COMPONENT_UNSIGNED_BYTE || aw->component_type == GLS_COMPONENT_UNSIGNED_SHORT) &&
+          aw->normalized))
+        return fail(L, ENG_ERR_INVALID, "%s WEIGHTS_0: accessor %d must be FLOAT or normalized UNSIGNED_BYTE/SHORT",
+                    where, wa);
+    char what[160];
+    uint64_t count;
+    float *j = NULL;
+    eng_result r;
+    snprintf(what, sizeof what, "%s JOINTS_0", where);
+    if ((r = read_floats_as(L, ja, what, 4, 1, MAX_PRIMITIVE_VERTICES, &j, &count)))
+        return r;
+    if (count != d->vertex_count) {
+        free(j);
+        return fail(L, ENG_ERR_INVALID, "%s: %llu joints for %u positions", what, (unsigned long long)count,
+                    d->vertex_count);
+    }
+    d->joints = malloc((size_t)count * 4 * sizeof *d->joints);
+    if (!d->joints) {
+        free(j);
+        return nomem(L, what);
+    }
+    for (size_t i = 0; i < count * 4; i++)
+        d->joints[i] = (uint32_t)j[i];
+    free(j);
+    snprintf(what, sizeof what, "%s WEIGHTS_0", where);
+    if ((r = read_floats_as(L, wa, what, 4, 1, MAX_PRIMITIVE_VERTICES, &d->weights, &count)))
+        return r;
+    if (count != d->vertex_count)
+        return fail(L, ENG_ERR_INVALID, "%s: %llu weights for %u positions", what, (unsigned long long)count,
+                    d->vertex_count);
+    for (size_t i = 0; i < count * 4; i++)
+        if (d->weights[i] < 0.0f)
+            return fail(L, ENG_ERR_INVALID, "%s: weight %g of vertex %zu is negative", what, d->weights[i], i / 4);
+    return ENG_OK;
+}
+
+/* Morph targets' POSITION and NORMAL deltas (other target attributes, TANGENT or TEXCOORD,
+ * are ignored), one array of target_count × vertex_count × 3 each. */
+static eng_result load_targets(loader *L, const gls_primitive *g, scn_primitive *d, const char *where)
+{
+    if (g->target_count == 0)
+        return ENG_OK;
+    if (g->target_count > 1024)
+        return fail(L, ENG_ERR_UNSUPPORTED, "%s: %u morph targets, more than the 1024 supported", where,
+                    g->target_count);
+    size_t n = (size_t)d->vertex_count * 3;
+    d->target_count = g->target_count;
+    static const char *const sem[2] = {"POSITION", "NORMAL"};
+    float **dst[2] = {&d->target_positions, &d->target_normals};
+    for (uint32_t t = 0; t < g->target_count; t++) {
+        const gls_target *gt = &g->targets[t];
+        for (int a = 0; a < 2; a++) {
+            int acc = -2;
+            for (uint32_t k = 0; k < gt->attribute_count; k++)
+                if (strcmp(gt->attributes[k].semantic, sem[a]) == 0)
+                    acc = gt->attributes[k].accessor;
+            if (acc == -2)
+                continue;
+            char what[160];
+            uint64_t count;
+            float *v = NULL;
+            snprintf(what, sizeof what, "%s targets[%u] %s", where, t, sem[a]);
+            if (acc < 0 || (uint32_t)acc >= L->m->accessor_count)
+                return fail(L, ENG_ERR_INVALID, "%s: accessor %d out of range (%u accessors)", what, acc,
+                            L->m->accessor_count);
+            /* Quantized deltas may be normalized or not (KHR_mesh_quantization); read as written. */
+            eng_result r = read_floats_as(L, acc, what, 3, 1, MAX_PRIMITIVE_VERTICES, &v, &count);
+            if (r)
+                return r;
+            if (count != d->vertex_count) {
+                free(v);
+                return fail(L, ENG_ERR_INVALID, "%s: %llu deltas for %u positions", what, (unsigned long long)count,
+                            d->vertex_count);
+            }
+            if (!*dst[a] && !(*dst[a] = calloc(n * g->target_count, sizeof(float)))) {
+                free(v);
+                return nomem(L, what);
+            }
+            memcpy(*dst[a] + t * n, v, n * sizeof(float));
+            free(v);
+        }
+    }
+    return ENG_OK;
 }
 
 /* *skip: the primitive is valid glTF that draws nothing here (points, lines, strips, fans,
@@ -970,6 +1112,9 @@ static eng_result load_primitive(loader *L, const gls_primitive *g, scn_primitiv
                         d->vertex_count);
     }
 
+    if ((r = load_skin_attributes(L, g, d, where)) || (r = load_targets(L, g, d, where)))
+        return r;
+
     if (g->indices >= 0) {
         snprintf(what, sizeof what, "%s indices", where);
         if ((r = read_indices(L, g->indices, what, d->vertex_count, &d->indices, &count)))
@@ -1026,10 +1171,26 @@ static eng_result load_meshes(loader *L)
             eng_result r = load_primitive(L, &g->primitives[p], dp, where, &skip);
             if (r)
                 return r;
-            if (skip)
+            if (skip) {
                 s->primitive_count--; /* nothing was allocated */
-            else
-                d->primitive_count++;
+                continue;
+            }
+            if (d->primitive_count > 0 && dp->target_count != d->weight_count)
+                return fail(L, ENG_ERR_INVALID, "%s: %u morph targets, but the mesh's primitive 0 has %u", where,
+                            dp->target_count, d->weight_count);
+            d->weight_count = dp->target_count;
+            d->primitive_count++;
+        }
+        if (g->weights.len && g->weights.len != d->weight_count)
+            return fail(L, ENG_ERR_INVALID, "meshes[%u]: %u weights for %u morph targets", i, g->weights.len,
+                        d->weight_count);
+        if (!all_finite(g->weights.v, g->weights.len))
+            return fail(L, ENG_ERR_INVALID, "meshes[%u]: a weight is not finite", i);
+        if (d->weight_count) {
+            if (!(d->weights = calloc(d->weight_count, sizeof *d->weights)))
+                return nomem(L, "mesh weights");
+            for (uint32_t k = 0; k < g->weights.len; k++)
+                d->weights[k] = (float)g->weights.v[k];
         }
     }
     return ENG_OK;
@@ -1043,6 +1204,15 @@ static eng_result check_node(loader *L, uint32_t i)
     const gls_node *g = &m->nodes[i];
     if (g->mesh < -1 || g->mesh >= (int)m->mesh_count)
         return fail(L, ENG_ERR_INVALID, "node %u: mesh %d out of range (%u meshes)", i, g->mesh, m->mesh_count);
+    if (g->skin < -1 || g->skin >= (int)m->skin_count)
+        return fail(L, ENG_ERR_INVALID, "node %u: skin %d out of range (%u skins)", i, g->skin, m->skin_count);
+    if (g->weights.len) {
+        uint32_t want = g->mesh >= 0 ? L->s->meshes[g->mesh].weight_count : 0;
+        if (g->weights.len != want)
+            return fail(L, ENG_ERR_INVALID, "node %u: %u weights for %u morph targets", i, g->weights.len, want);
+        if (!all_finite(g->weights.v, g->weights.len))
+            return fail(L, ENG_ERR_INVALID, "node %u: a weight is not finite", i);
+    }
     if (g->camera < -1 || g->camera >= (int)m->camera_count)
         return fail(L, ENG_ERR_INVALID, "node %u: camera %d out of range (%u cameras)", i, g->camera,
                     m->camera_count);
@@ -1080,6 +1250,7 @@ static void fill_node(const gls_node *g, scn_node *d)
     d->mesh = g->mesh;
     d->camera = g->camera;
     d->light = g->has_light ? (int32_t)g->light.value : -1;
+    d->skin = g->mesh >= 0 ? g->skin : -1;
     for (int k = 0; k < 16; k++)
         d->matrix[k] = (k % 5 == 0) ? 1.0f : 0.0f;
     d->translation[0] = d->translation[1] = d->translation[2] = 0.0f;
@@ -1237,6 +1408,129 @@ done:
     return r;
 }
 
+/* ---------------------------------------------------------------- skins, morph weights */
+
+/* Skins (glTF §3.7.3): joints remapped to the kept nodes, inverse bind matrices (MAT4 FLOAT,
+ * at least one per joint) or identities. A skin whose joints are not all in the scene played
+ * is dropped with a warning (its meshes stay at rest); a JOINTS_0 index past a skin's joints
+ * in a mesh a node draws with it is invalid. */
+static eng_result load_skins(loader *L, const int32_t *remap)
+{
+    const gls_model *m = L->m;
+    scn_scene *s = L->s;
+    s->skins = calloc(m->skin_count ? m->skin_count : 1, sizeof *s->skins);
+    if (!s->skins)
+        return nomem(L, "skins");
+    s->skin_count = m->skin_count;
+    unsigned char *usable = calloc(m->skin_count ? m->skin_count : 1, 1);
+    if (!usable)
+        return nomem(L, "skins");
+    eng_result r = ENG_OK;
+    for (uint32_t i = 0; i < m->skin_count && !r; i++) {
+        const gls_skin *g = &m->skins[i];
+        scn_skin *d = &s->skins[i];
+        char where[48];
+        snprintf(where, sizeof where, "skins[%u]", i);
+        if (g->joint_count == 0 || g->joint_count > 65536) {
+            r = fail(L, ENG_ERR_INVALID, "%s: %u joints (must be 1..65536)", where, g->joint_count);
+            break;
+        }
+        d->joints = malloc(g->joint_count * sizeof *d->joints);
+        d->inverse_bind = malloc((size_t)g->joint_count * 16 * sizeof *d->inverse_bind);
+        if (!d->joints || !d->inverse_bind) {
+            r = nomem(L, where);
+            break;
+        }
+        d->joint_count = g->joint_count;
+        usable[i] = 1;
+        for (uint32_t j = 0; j < g->joint_count; j++) {
+            int n = g->joints[j];
+            if (n < 0 || (uint32_t)n >= m->node_count) {
+                r = fail(L, ENG_ERR_INVALID, "%s: joint %d out of range (%u nodes)", where, n, m->node_count);
+                break;
+            }
+            d->joints[j] = remap[n];
+            if (remap[n] < 0 && usable[i]) {
+                scn_warn(s, "%s: joint node %d is not in the scene played; the skin is ignored", where, n);
+                usable[i] = 0;
+            }
+        }
+        for (uint32_t j = 0; j < g->joint_count * 16u; j++)
+            d->inverse_bind[j] = j % 16 % 5 == 0 ? 1.0f : 0.0f;
+        if (r || g->inverse_bind_matrices == -1)
+            continue;
+        const gls_accessor *a = NULL;
+        const unsigned char *base = NULL;
+        uint64_t stride = 0;
+        char what[96];
+        snprintf(what, sizeof what, "%s inverseBindMatrices", where);
+        if ((r = use_accessor(L, g->inverse_bind_matrices, what, GLS_TYPE_MAT4, GLS_COMPONENT_FLOAT, 0, &a, &base,
+                              &stride)))
+            break;
+        if (a->count < g->joint_count) {
+            r = fail(L, ENG_ERR_INVALID, "%s: %llu matrices for %u joints", what, (unsigned long long)a->count,
+                     g->joint_count);
+            break;
+        }
+        for (uint32_t j = 0; base && j < g->joint_count; j++)
+            memcpy(d->inverse_bind + (size_t)j * 16, base + j * stride, 16 * sizeof(float));
+        for (uint32_t j = 0; j < g->joint_count * 16u && !r; j++)
+            if (!isfinite(d->inverse_bind[j]))
+                r = fail(L, ENG_ERR_INVALID, "%s: matrix %u is not finite", what, j / 16);
+    }
+    for (uint32_t k = 0; k < s->node_count && !r; k++) {
+        scn_node *n = &s->nodes[k];
+        if (n->skin < 0)
+            continue;
+        if (!usable[n->skin]) {
+            n->skin = -1;
+            continue;
+        }
+        const scn_mesh *me = &s->meshes[n->mesh];
+        for (uint32_t p = 0; p < me->primitive_count && !r; p++) {
+            const scn_primitive *pr = &s->primitives[me->first_primitive + p];
+            for (size_t v = 0; pr->joints && v < (size_t)pr->vertex_count * 4; v++)
+                if (pr->joints[v] >= s->skins[n->skin].joint_count) {
+                    r = fail(L, ENG_ERR_INVALID, "node %d: mesh %d vertex %zu uses joint %u, skin %d has %u joints",
+                             n->source, n->mesh, v / 4, pr->joints[v], n->skin, s->skins[n->skin].joint_count);
+                    break;
+                }
+        }
+    }
+    free(usable);
+    return r;
+}
+
+/* Each kept node with a morphed mesh gets its slots in s->weights: node.weights, else
+ * mesh.weights, else zeros (glTF §3.7.2.2). */
+static eng_result load_node_weights(loader *L)
+{
+    scn_scene *s = L->s;
+    uint64_t total = 0;
+    for (uint32_t k = 0; k < s->node_count; k++)
+        if (s->nodes[k].mesh >= 0)
+            total += s->meshes[s->nodes[k].mesh].weight_count;
+    if (total > UINT32_MAX / 4)
+        return fail(L, ENG_ERR_UNSUPPORTED, "%llu morph weights", (unsigned long long)total);
+    s->weights = calloc(total ? (size_t)total : 1, sizeof *s->weights);
+    if (!s->weights)
+        return nomem(L, "morph weights");
+    uint32_t at = 0;
+    for (uint32_t k = 0; k < s->node_count; k++) {
+        scn_node *n = &s->nodes[k];
+        n->weight_first = at;
+        if (n->mesh < 0)
+            continue;
+        const scn_mesh *me = &s->meshes[n->mesh];
+        const gls_node *g = &L->m->nodes[n->source];
+        for (uint32_t w = 0; w < me->weight_count; w++)
+            s->weights[at + w] = g->weights.len ? (float)g->weights.v[w] : me->weights[w];
+        at += me->weight_count;
+    }
+    s->weight_count = at;
+    return ENG_OK;
+}
+
 /* ---------------------------------------------------------------- animations */
 
 static eng_result load_channel(loader *L, const gls_animation *ga, uint32_t a, uint32_t c, const int32_t *remap,
@@ -1261,11 +1555,19 @@ static eng_result load_channel(loader *L, const gls_animation *ga, uint32_t a, u
     else if (strcmp(g->path, "scale") == 0)
         d->path = SCN_PATH_SCALE;
     else if (strcmp(g->path, "weights") == 0)
-        return ENG_OK; /* morph targets are not supported; the base mesh stays */
+        d->path = SCN_PATH_WEIGHTS;
     else
         return fail(L, ENG_ERR_INVALID, "%s: target path \"%s\" is not translation, rotation, scale or weights",
                     where, g->path);
-    if (m->nodes[g->target_node].matrix.len == 16)
+    d->comps = d->path == SCN_PATH_ROTATION ? 4 : 3;
+    if (d->path == SCN_PATH_WEIGHTS) {
+        int mesh = m->nodes[g->target_node].mesh;
+        d->comps = mesh >= 0 ? L->s->meshes[mesh].weight_count : 0;
+        if (d->comps == 0) {
+            scn_warn(L->s, "%s: \"weights\" of node %d, which has no morph targets; ignored", where, g->target_node);
+            return ENG_OK;
+        }
+    } else if (m->nodes[g->target_node].matrix.len == 16)
         return fail(L, ENG_ERR_INVALID, "%s: node %d has a matrix, which glTF forbids animating", where,
                     g->target_node);
 
@@ -1297,11 +1599,12 @@ static eng_result load_channel(loader *L, const gls_animation *ga, uint32_t a, u
     if (d->interp == SCN_INTERP_CUBICSPLINE && d->key_count < 2)
         return fail(L, ENG_ERR_INVALID, "%s: CUBICSPLINE needs at least 2 keys", swhere);
 
-    uint32_t comps = d->path == SCN_PATH_ROTATION ? 4 : 3;
-    uint64_t per_key = d->interp == SCN_INTERP_CUBICSPLINE ? 3 : 1;
+    uint32_t weights = d->path == SCN_PATH_WEIGHTS;
+    uint32_t comps = weights ? 1 : d->comps; /* weights: SCALAR, comps per key */
+    uint64_t per_key = (d->interp == SCN_INTERP_CUBICSPLINE ? 3 : 1) * (weights ? d->comps : 1);
     snprintf(what, sizeof what, "%s output", swhere);
-    /* Rotation keys may be normalized integers (glTF §3.11), other keys only with
-     * KHR_mesh_quantization; both read through convert. */
+    /* Rotation and weight keys may be normalized integers (glTF §3.11), other keys only with
+     * KHR_mesh_quantization; all read through convert. */
     if ((r = read_floats_as(L, gs->output, what, comps, 1, MAX_KEYS * 3, &d->values, &nout)))
         return r;
     if (nout != n * per_key)
@@ -1415,7 +1718,7 @@ static eng_result build(loader *L, const char *bytes, size_t len)
     int32_t *remap = malloc((n ? n : 1) * sizeof *remap);
     if (!remap)
         return nomem(L, "nodes");
-    if (!(r = load_nodes(L, remap)))
+    if (!(r = load_nodes(L, remap)) && !(r = load_skins(L, remap)) && !(r = load_node_weights(L)))
         r = load_animations(L, remap);
     free(remap);
     if (r)
@@ -1508,7 +1811,19 @@ void scn_destroy(scn_scene *s)
         free(s->primitives[i].texcoords[0]);
         free(s->primitives[i].texcoords[1]);
         free(s->primitives[i].colors);
+        free(s->primitives[i].joints);
+        free(s->primitives[i].weights);
+        free(s->primitives[i].target_positions);
+        free(s->primitives[i].target_normals);
     }
+    for (uint32_t i = 0; i < s->mesh_count; i++)
+        free(s->meshes[i].weights);
+    for (uint32_t i = 0; i < s->skin_count; i++) {
+        free(s->skins[i].joints);
+        free(s->skins[i].inverse_bind);
+    }
+    free(s->skins);
+    free(s->weights);
     for (uint32_t i = 0; i < s->texture_count; i++)
         free(s->textures[i].texels);
     free(s->textures);

@@ -64,6 +64,9 @@ struct gls_impl {
     std::vector<gls_accessor> accessors;
     std::vector<std::vector<gls_attribute>> attributes; /* one per primitive */
     std::vector<std::vector<gls_primitive>> primitives; /* one per mesh */
+    std::vector<std::vector<gls_attribute>> target_attributes; /* one per morph target */
+    std::vector<std::vector<gls_target>> targets;              /* one per primitive */
+    std::vector<gls_skin> skins;
     std::vector<gls_mesh> meshes;
     std::vector<gls_node> nodes;
     std::vector<gls_camera> cameras;
@@ -246,6 +249,7 @@ gls_texinfo texinfo(gls_impl &g, int index, int texcoord, const tinygltf::Extens
     std::memset(&t, 0, sizeof t);
     t.index = index;
     t.texcoord = texcoord;
+    t.strength = 1.0;
     t.rotation = ext_number(ext, "KHR_texture_transform", "rotation", &t.has_transform);
     t.transform_texcoord = ext_number(ext, "KHR_texture_transform", "texCoord", nullptr);
     auto it = ext.find("KHR_texture_transform");
@@ -322,20 +326,38 @@ void build_view(gls_impl &g)
             for (const auto &kv : p.attributes)
                 attrs.push_back({kv.first.c_str(), kv.second});
             g.attributes.push_back(std::move(attrs));
+            for (const auto &t : p.targets) {
+                std::vector<gls_attribute> ta;
+                for (const auto &kv : t)
+                    ta.push_back({kv.first.c_str(), kv.second});
+                g.target_attributes.push_back(std::move(ta));
+            }
+        }
+    size_t tk = 0;
+    for (const tinygltf::Mesh &mesh : m.meshes)
+        for (const tinygltf::Primitive &p : mesh.primitives) {
+            std::vector<gls_target> ts;
+            for (size_t t = 0; t < p.targets.size(); t++, tk++)
+                ts.push_back({static_cast<uint32_t>(g.target_attributes[tk].size()), g.target_attributes[tk].data()});
+            g.targets.push_back(std::move(ts));
         }
     size_t k = 0;
     for (const tinygltf::Mesh &mesh : m.meshes) {
         std::vector<gls_primitive> prims;
         for (const tinygltf::Primitive &p : mesh.primitives) {
+            const std::vector<gls_target> &ts = g.targets[k];
             const std::vector<gls_attribute> &attrs = g.attributes[k++];
             prims.push_back({p.mode, p.indices, p.material, static_cast<uint32_t>(attrs.size()),
-                             attrs.data(), static_cast<uint32_t>(p.targets.size())});
+                             attrs.data(), static_cast<uint32_t>(ts.size()), ts.data()});
         }
         g.primitives.push_back(std::move(prims));
     }
     for (size_t i = 0; i < m.meshes.size(); i++)
         g.meshes.push_back({m.meshes[i].name.c_str(), static_cast<uint32_t>(g.primitives[i].size()),
-                            g.primitives[i].data()});
+                            g.primitives[i].data(), doubles(m.meshes[i].weights)});
+    for (const tinygltf::Skin &sk : m.skins)
+        g.skins.push_back({sk.name.c_str(), sk.inverseBindMatrices, sk.skeleton,
+                           static_cast<uint32_t>(sk.joints.size()), sk.joints.data()});
 
     for (const tinygltf::Node &n : m.nodes) {
         gls_node c;
@@ -350,6 +372,7 @@ void build_view(gls_impl &g)
         c.rotation = doubles(n.rotation);
         c.scale = doubles(n.scale);
         c.matrix = doubles(n.matrix);
+        c.weights = doubles(n.weights);
         g.nodes.push_back(c);
     }
     for (const tinygltf::Camera &c : m.cameras)
@@ -373,6 +396,7 @@ void build_view(gls_impl &g)
         c.normal_texture = texinfo(g, mat.normalTexture.index, mat.normalTexture.texCoord, mat.normalTexture.extensions);
         c.occlusion_texture = texinfo(g, mat.occlusionTexture.index, mat.occlusionTexture.texCoord,
                                       mat.occlusionTexture.extensions);
+        c.occlusion_texture.strength = mat.occlusionTexture.strength;
         c.emissive_texture = texinfo(g, mat.emissiveTexture.index, mat.emissiveTexture.texCoord,
                                      mat.emissiveTexture.extensions);
         c.alpha_mode = mat.alphaMode.c_str();
@@ -455,6 +479,8 @@ void build_view(gls_impl &g)
     v.animations = g.animations.data();
     v.scene_count = static_cast<uint32_t>(g.scenes.size());
     v.scenes = g.scenes.data();
+    v.skin_count = static_cast<uint32_t>(g.skins.size());
+    v.skins = g.skins.data();
     v.default_scene = m.defaultScene;
     v.extensions_required_count = static_cast<uint32_t>(g.ext_required.size());
     v.extensions_required = g.ext_required.data();

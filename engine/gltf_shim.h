@@ -88,6 +88,11 @@ typedef struct gls_attribute {
     int accessor;
 } gls_attribute;
 
+typedef struct gls_target { /* one morph target: its attributes (POSITION, NORMAL, ...) */
+    uint32_t attribute_count;
+    const gls_attribute *attributes;
+} gls_target;
+
 typedef struct gls_primitive {
     int mode; /* 4 (TRIANGLES) when absent */
     int indices;
@@ -95,13 +100,23 @@ typedef struct gls_primitive {
     uint32_t attribute_count;
     const gls_attribute *attributes;
     uint32_t target_count; /* morph targets */
+    const gls_target *targets;
 } gls_primitive;
 
 typedef struct gls_mesh {
     const char *name;
     uint32_t primitive_count;
     const gls_primitive *primitives;
+    gls_doubles weights; /* default morph weights */
 } gls_mesh;
+
+typedef struct gls_skin {
+    const char *name;
+    int inverse_bind_matrices; /* accessor, -1: identities */
+    int skeleton;
+    uint32_t joint_count;
+    const int *joints;
+} gls_skin;
 
 typedef struct gls_node {
     const char *name;
@@ -111,6 +126,7 @@ typedef struct gls_node {
     uint32_t child_count;
     const int *children;
     gls_doubles translation, rotation, scale, matrix;
+    gls_doubles weights; /* morph weights overriding the mesh's */
 } gls_node;
 
 typedef struct gls_camera {
@@ -138,6 +154,7 @@ typedef struct gls_texinfo {
     gls_doubles offset, scale; /* transform: [0,0] and [1,1] where absent (len 0) */
     gls_number rotation;
     gls_number transform_texcoord;
+    double strength; /* occlusionTexture.strength (1 for the others) */
 } gls_texinfo;
 
 typedef struct gls_image {
@@ -207,6 +224,7 @@ typedef struct gls_model {
     uint32_t tex_sampler_count; const gls_tex_sampler *tex_samplers;
     uint32_t animation_count;   const gls_animation *animations;
     uint32_t scene_count;       const gls_scene *scenes;
+    uint32_t skin_count;        const gls_skin *skins;
     int default_scene; /* -1: the file names none */
     uint32_t extensions_required_count;
     const char *const *extensions_required;

@@ -405,9 +405,12 @@ static void bind_texref(GLuint prog, const eng_frame_scene *fs, const eng_gpu_pr
 
 void eng_bind_material(GLuint prog, const eng_frame_scene *fs, const eng_draw *d, const scn_material *m)
 {
-    const eng_gpu_prim *g = &fs->gpu[d->primitive];
+    const eng_gpu_prim *g = d->gpu;
     glUniform1i(glGetUniformLocation(prog, "u_has_color"), g->vbo_col != 0);
     glUniform1f(glGetUniformLocation(prog, "u_alpha_cutoff"), m->alpha_mode == SCN_ALPHA_MASK ? m->alpha_cutoff : -1.0f);
     bind_texref(prog, fs, g, &m->base_color_tex, "u_base", ENG_BASE_TEX_UNIT);
     bind_texref(prog, fs, g, &m->metallic_roughness_tex, "u_mr", ENG_BASE_TEX_UNIT + 1);
+    bind_texref(prog, fs, g, &m->emissive_tex, "u_em", ENG_BASE_TEX_UNIT + 2);
+    bind_texref(prog, fs, g, &m->occlusion_tex, "u_occ", ENG_BASE_TEX_UNIT + 3);
+    glUniform1f(glGetUniformLocation(prog, "u_occ_strength"), m->occlusion_strength);
 }

@@ -9,6 +9,7 @@
 
 struct pass_composite {
     glu_pass pass;
+    GLuint occlusion_tex; /* 0: indirect light not multiplied */
 };
 
 eng_result pass_composite_create(int width, int height, pass_composite **out, eng_error *err)
@@ -29,8 +30,14 @@ eng_result pass_composite_create(int width, int height, pass_composite **out, en
     glUniform1i(glGetUniformLocation(g, "u_specular"), 2);
     glUniform1i(glGetUniformLocation(g, "u_emission"), 3);
     glUniform1i(glGetUniformLocation(g, "u_translucent"), 4);
+    glUniform1i(glGetUniformLocation(g, "u_occlusion"), 5);
     *out = p;
     return ENG_OK;
+}
+
+void pass_composite_set_occlusion(pass_composite *p, GLuint tex)
+{
+    p->occlusion_tex = tex;
 }
 
 const glu_target *pass_composite_run(pass_composite *p, GLuint direct_tex, GLuint indirect_tex,
@@ -53,6 +60,9 @@ const glu_target *pass_composite_run(pass_composite *p, GLuint direct_tex, GLuin
     glActiveTexture(GL_TEXTURE4);
     glBindTexture(GL_TEXTURE_2D, translucent_tex);
     glUniform1i(glGetUniformLocation(g, "u_has_translucent"), translucent_tex ? 1 : 0);
+    glActiveTexture(GL_TEXTURE5);
+    glBindTexture(GL_TEXTURE_2D, p->occlusion_tex);
+    glUniform1i(glGetUniformLocation(g, "u_has_occlusion"), p->occlusion_tex ? 1 : 0);
     glActiveTexture(GL_TEXTURE0);
     glUniform1f(glGetUniformLocation(g, "u_exposure"), s->exposure);
     glu_pass_draw(&p->pass);

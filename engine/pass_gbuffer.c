@@ -1,8 +1,8 @@
 /* pass_gbuffer.c — the eye G-buffer (ISPM 003_… §3, step "render the G-buffer from the eye";
  * §4.1 Table 1 lists what later passes read from it). One rasterisation of every draw into
- * five RGBA32F targets: world position, world normal, albedo, material parameters, and eye
+ * six RGBA32F targets: world position, world normal, albedo, material parameters, eye
  * depth + material id + screen-space motion vector (from the previous frame's object and
- * camera transforms; zero on frame 0). Owns its program and targets. */
+ * camera transforms, or deformed poses; zero on frame 0), and emitted radiance. Owns its program and targets. */
 #include "eng_internal.h"
 
 #include <stdlib.h>
@@ -11,7 +11,7 @@ struct pass_gbuffer {
     glu_target target;
     GLuint program;
     GLint u_world, u_prev_world, u_normal_matrix, u_view, u_view_proj, u_prev_view_proj, u_prev_view;
-    GLint u_eye, u_base_color, u_material, u_material_id, u_double_sided, u_viewport;
+    GLint u_eye, u_base_color, u_material, u_material_id, u_double_sided, u_viewport, u_emissive;
 };
 
 eng_result pass_gbuffer_create(int width, int height, pass_gbuffer **out, eng_error *err)
@@ -22,7 +22,7 @@ eng_result pass_gbuffer_create(int width, int height, pass_gbuffer **out, eng_er
         return eng_fail(err, ENG_ERR_NOMEM, "gbuffer: out of memory");
     eng_result r = glu_program("gbuffer.vert.glsl", "gbuffer.frag.glsl", &p->program, err);
     if (r == ENG_OK)
-        r = glu_target_create(&p->target, 5, width, height, 0, err);
+        r = glu_target_create(&p->target, 6, width, height, 0, err);
     if (r != ENG_OK) {
         pass_gbuffer_destroy(p);
         return r;
@@ -41,6 +41,7 @@ eng_result pass_gbuffer_create(int width, int height, pass_gbuffer **out, eng_er
     p->u_material_id = glGetUniformLocation(g, "u_material_id");
     p->u_double_sided = glGetUniformLocation(g, "u_double_sided");
     p->u_viewport = glGetUniformLocation(g, "u_viewport");
+    p->u_emissive = glGetUniformLocation(g, "u_emissive");
     *out = p;
     return ENG_OK;
 }
@@ -55,6 +56,7 @@ const glu_target *pass_gbuffer_run(pass_gbuffer *p, const eng_frame_scene *fs)
     for (int i = 0; i < 4; i++)
         glClearBufferfv(GL_COLOR, i, zero);
     glClearBufferfv(GL_COLOR, 4, misc);
+    glClearBufferfv(GL_COLOR, 5, zero);
     const float one = 1.0f;
     glClearBufferfv(GL_DEPTH, 0, &one);
     glEnable(GL_DEPTH_TEST);
@@ -80,13 +82,14 @@ const glu_target *pass_gbuffer_run(pass_gbuffer *p, const eng_frame_scene *fs)
         glUniform4f(p->u_material, m.roughness, m.metallic, m.transmission, m.ior);
         glUniform1f(p->u_material_id, (float)d->material);
         glUniform1i(p->u_double_sided, m.double_sided ? 1 : 0);
+        glUniform3fv(p->u_emissive, 1, m.emissive);
         eng_bind_material(p->program, fs, d, &m);
         /* glTF: single-sided materials are culled from behind. */
         if (m.double_sided)
             glDisable(GL_CULL_FACE);
         else
             glEnable(GL_CULL_FACE);
-        const eng_gpu_prim *g = &fs->gpu[d->primitive];
+        const eng_gpu_prim *g = d->gpu;
         glBindVertexArray(g->vao);
         glDrawElements(GL_TRIANGLES, g->index_count, GL_UNSIGNED_INT, NULL);
     }

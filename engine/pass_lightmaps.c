@@ -87,7 +87,7 @@ static void draw_scene(const pass_lightmaps *p, const eng_frame_scene *fs)
         glUniform4fv(u_base, 1, m.base_color);
         glUniform4f(u_mat, m.roughness, m.metallic, m.transmission, m.ior);
         eng_bind_material(p->gprog, fs, d, &m);
-        const eng_gpu_prim *g = &fs->gpu[d->primitive];
+        const eng_gpu_prim *g = d->gpu;
         glBindVertexArray(g->vao);
         glDrawElements(GL_TRIANGLES, g->index_count, GL_UNSIGNED_INT, NULL);
     }

@@ -150,7 +150,7 @@ const shadow_map *pass_shadow_run(pass_shadow *p, const eng_frame_scene *fs, uin
                 continue; /* translucent: pass_translucent.c */
             glUniform4fv(glGetUniformLocation(p->program, "u_base_color"), 1, m.base_color);
             eng_bind_material(p->program, fs, d, &m);
-            const eng_gpu_prim *g = &fs->gpu[d->primitive];
+            const eng_gpu_prim *g = d->gpu;
             glBindVertexArray(g->vao);
             glDrawElements(GL_TRIANGLES, g->index_count, GL_UNSIGNED_INT, NULL);
         }

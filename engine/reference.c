@@ -425,9 +425,10 @@ static void bounds_sphere(const eng_frame_scene *fs, int delta_only, float centr
         if (delta_only && !has_delta(&m))
             continue;
         const scn_primitive *p = &fs->scene->primitives[d->primitive];
+        const float *pos = eng_draw_positions(fs->scene, d);
         for (uint32_t v = 0; v < p->vertex_count; v++) {
             float q[3];
-            m4_transform_point(d->world, p->positions + 3 * v, q);
+            m4_transform_point(d->world, pos + 3 * v, q);
             for (int c = 0; c < 3; c++) {
                 lo[c] = fminf(lo[c], q[c]);
                 hi[c] = fmaxf(hi[c], q[c]);

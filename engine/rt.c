@@ -2,7 +2,8 @@
  * CPU). One triangle geometry per drawn primitive instance, in world space. Geometry whose
  * world matrix did not change since the last frame is left alone; geometry that moved is
  * re-transformed in place and refit (RTC_BUILD_QUALITY_REFIT), so a static scene costs one
- * build for the whole run.
+ * build for the whole run. Skinned and morphed draws (deform_gl.c) bring their own vertices,
+ * deformed on the CPU each frame: they are re-posed every frame and refit the same way.
  *
  * Each geometry also keeps its world-space vertex normals (object normals through the
  * inverse transpose, m4_normal_matrix), re-posed with the positions, so rt_intersect can
@@ -113,15 +114,19 @@ static int same_matrix(const float a[16], const float b[16])
     return memcmp(a, b, 16 * sizeof(float)) == 0;
 }
 
-static void pose(rt_geom *g, const scn_primitive *p, const float world[16])
+/* Draw d's vertices (the primitive's, or this frame's deformed ones) at its world matrix. */
+static void pose(rt_geom *g, const scn_primitive *p, const eng_draw *d)
 {
+    const float *world = d->world;
+    const float *positions = d->positions ? d->positions : p->positions;
+    const float *normals = d->normals ? d->normals : p->normals;
     float *v = rtcGetGeometryBufferData(g->geom, RTC_BUFFER_TYPE_VERTEX, 0);
     for (uint32_t i = 0; i < p->vertex_count; i++)
-        m4_transform_point(world, p->positions + 3 * i, v + 4 * i);
+        m4_transform_point(world, positions + 3 * i, v + 4 * i);
     float nm[9];
     m4_normal_matrix(nm, world);
     for (uint32_t i = 0; i < p->vertex_count; i++) {
-        const float *o = p->normals + 3 * i;
+        const float *o = normals + 3 * i;
         float *w = g->normals + 3 * i;
         for (int r = 0; r < 3; r++)
             w[r] = nm[r] * o[0] + nm[3 + r] * o[1] + nm[6 + r] * o[2];
@@ -179,7 +184,7 @@ void rt_update(eng_rt *rt, const eng_frame_scene *fs)
                 rtcSetGeometryIntersectFilterFunction(g->geom, mask_filter);
                 rtcSetGeometryOccludedFilterFunction(g->geom, mask_filter);
             }
-            pose(g, p, fs->draws[i].world);
+            pose(g, p, &fs->draws[i]);
             if (rt_is_blend(rt->scene, g->material)) {
                 if (!rt->blend_scene) {
                     rt->blend_scene = rtcNewScene(rt->device);
@@ -198,8 +203,9 @@ void rt_update(eng_rt *rt, const eng_frame_scene *fs)
     int changed = 0;
     for (uint32_t i = 0; i < rt->geom_count && i < fs->draw_count; i++) {
         rt_geom *g = &rt->geoms[i];
-        if (!same_matrix(g->world, fs->draws[i].world)) {
-            pose(g, &rt->scene->primitives[g->primitive], fs->draws[i].world);
+        /* Deformed draws (skins, morph targets) change their vertices every frame. */
+        if (!same_matrix(g->world, fs->draws[i].world) || fs->draws[i].positions) {
+            pose(g, &rt->scene->primitives[g->primitive], &fs->draws[i]);
             changed = 1;
         }
     }
@@ -340,6 +346,10 @@ static int intersect_in(const eng_rt *rt, RTCScene scene, int lamps, const float
         hit->roughness_tex = mr[1];
         hit->metallic_tex = mr[2];
     }
+    hit->emissive_tex[0] = hit->emissive_tex[1] = hit->emissive_tex[2] = 1.0f;
+    if (g->material >= 0 && (uint32_t)g->material < rt->scene->material_count &&
+        scn_texref_at(rt->scene, &rt->scene->materials[g->material].emissive_tex, p, rh.hit.primID, u, v, mr))
+        memcpy(hit->emissive_tex, mr, sizeof hit->emissive_tex);
     return 1;
 }
 

@@ -74,9 +74,10 @@ static void slerp(const float *af, const float *bf, double u, double out[4])
 void scn_sample_channel(const scn_channel *ch, double t, float *out)
 {
     assert(ch->key_count >= 1);
-    const uint32_t comps = ch->path == SCN_PATH_ROTATION ? 4 : 3;
+    const uint32_t comps = ch->path == SCN_PATH_ROTATION ? 4 : ch->path == SCN_PATH_WEIGHTS ? ch->comps : 3;
     const uint32_t n = ch->key_count;
     const int cubic = ch->interp == SCN_INTERP_CUBICSPLINE;
+    const int rotation = ch->path == SCN_PATH_ROTATION;
     /* Value of key k: for CUBICSPLINE each key stores (in-tangent, value, out-tangent). */
 #define VALUE(k) (ch->values + ((size_t)(k) * (cubic ? 3 : 1) + (cubic ? 1 : 0)) * comps)
     double r[4] = {0.0, 0.0, 0.0, 0.0};
@@ -88,6 +89,10 @@ void scn_sample_channel(const scn_channel *ch, double t, float *out)
         hold = VALUE(n - 1);
     }
     if (hold) {
+        if (!rotation) {
+            memcpy(out, hold, comps * sizeof *out);
+            return;
+        }
         for (uint32_t c = 0; c < comps; c++)
             r[c] = hold[c];
     } else {
@@ -104,37 +109,33 @@ void scn_sample_channel(const scn_channel *ch, double t, float *out)
         const double dt = t1 - t0;
         const double u = (t - t0) / dt;
         const float *v0 = VALUE(lo), *v1 = VALUE(lo + 1);
-        switch (ch->interp) {
-        case SCN_INTERP_STEP:
-            for (uint32_t c = 0; c < comps; c++)
-                r[c] = v0[c];
-            break;
-        case SCN_INTERP_LINEAR:
-            if (ch->path == SCN_PATH_ROTATION)
-                slerp(v0, v1, u, r);
-            else
-                for (uint32_t c = 0; c < comps; c++)
-                    r[c] = (double)v0[c] + ((double)v1[c] - (double)v0[c]) * u;
-            break;
-        case SCN_INTERP_CUBICSPLINE: {
-            const float *out0 = v0 + comps; /* out-tangent of key lo */
-            const float *in1 = v1 - comps;  /* in-tangent of key lo+1 */
+        if (rotation && ch->interp == SCN_INTERP_LINEAR) {
+            slerp(v0, v1, u, r);
+        } else {
+            /* Component by component (any count: morph weights), each rounded once. */
             const double u2 = u * u, u3 = u2 * u;
             const double h00 = 2.0 * u3 - 3.0 * u2 + 1.0, h10 = u3 - 2.0 * u2 + u;
             const double h01 = -2.0 * u3 + 3.0 * u2, h11 = u3 - u2;
-            for (uint32_t c = 0; c < comps; c++)
-                r[c] = h00 * v0[c] + h10 * dt * out0[c] + h01 * v1[c] + h11 * dt * in1[c];
-            break;
-        }
+            const float *out0 = v0 + comps; /* CUBICSPLINE: out-tangent of key lo */
+            const float *in1 = v1 - comps;  /* in-tangent of key lo+1 */
+            for (uint32_t c = 0; c < comps; c++) {
+                double x;
+                switch (ch->interp) {
+                case SCN_INTERP_STEP: x = v0[c]; break;
+                case SCN_INTERP_LINEAR: x = (double)v0[c] + ((double)v1[c] - (double)v0[c]) * u; break;
+                default: x = h00 * v0[c] + h10 * dt * out0[c] + h01 * v1[c] + h11 * dt * in1[c]; break;
+                }
+                if (rotation)
+                    r[c] = x;
+                else
+                    out[c] = (float)x;
+            }
+            if (!rotation)
+                return;
         }
     }
 #undef VALUE
-    if (ch->path == SCN_PATH_ROTATION) {
-        normalise_quat(r, out);
-    } else {
-        for (uint32_t c = 0; c < comps; c++)
-            out[c] = (float)r[c];
-    }
+    normalise_quat(r, out);
 }
 
 /* local = T·R·S, column-major. */
@@ -179,6 +180,7 @@ void scn_evaluate(const scn_scene *scene, double t, float *world)
             case SCN_PATH_TRANSLATION: scn_sample_channel(ch, t, slot); break;
             case SCN_PATH_ROTATION: scn_sample_channel(ch, t, slot + 3); break;
             case SCN_PATH_SCALE: scn_sample_channel(ch, t, slot + 7); break;
+            case SCN_PATH_WEIGHTS: break; /* scn_evaluate_weights */
             }
         }
     }
@@ -211,6 +213,29 @@ void scn_evaluate(const scn_scene *scene, double t, float *world)
                 slot[c * 4 + r] = (float)acc;
             }
     }
+}
+
+void scn_evaluate_weights(const scn_scene *scene, double t, float *weights)
+{
+    if (scene->weight_count)
+        memcpy(weights, scene->weights, scene->weight_count * sizeof *weights);
+    for (uint32_t a = 0; a < scene->animation_count; a++) {
+        const scn_animation *an = &scene->animations[a];
+        for (uint32_t c = 0; c < an->channel_count; c++) {
+            const scn_channel *ch = &an->channels[c];
+            if (ch->path != SCN_PATH_WEIGHTS)
+                continue;
+            const scn_node *n = &scene->nodes[ch->node];
+            assert(n->mesh >= 0 && scene->meshes[n->mesh].weight_count == ch->comps);
+            scn_sample_channel(ch, t, weights + n->weight_first);
+        }
+    }
+}
+
+int scn_node_deforms(const scn_scene *scene, uint32_t node)
+{
+    const scn_node *n = &scene->nodes[node];
+    return n->mesh >= 0 && (n->skin >= 0 || scene->meshes[n->mesh].weight_count > 0);
 }
 
 int32_t scn_find_node(const scn_scene *scene, const char *name)

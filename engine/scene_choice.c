@@ -102,6 +102,8 @@ static eng_result add_lights(const seq_sequence *q, scn_scene *s, eng_error *err
         d->parent = -1;
         d->mesh = -1;
         d->camera = -1;
+        d->skin = -1;
+        d->weight_first = s->weight_count;
         d->light = (int32_t)(s->light_count + i);
         for (int k = 0; k < 16; k++)
             d->matrix[k] = (k % 5 == 0) ? 1.0f : 0.0f;

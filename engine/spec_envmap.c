@@ -104,9 +104,10 @@ static void find_objects(envmap_state *st, const eng_frame_scene *fs)
             o->hi[c] = -INFINITY;
         }
         const scn_primitive *p = &fs->scene->primitives[fs->draws[i].primitive];
+        const float *pos = eng_draw_positions(fs->scene, &fs->draws[i]);
         for (uint32_t v = 0; v < p->vertex_count; v++) {
             float q[3];
-            m4_transform_point(fs->draws[i].world, p->positions + 3 * v, q);
+            m4_transform_point(fs->draws[i].world, pos + 3 * v, q);
             for (int c = 0; c < 3; c++) {
                 o->lo[c] = fminf(o->lo[c], q[c]);
                 o->hi[c] = fmaxf(o->hi[c], q[c]);

@@ -254,7 +254,7 @@ static void trace_tree(const spec_tracer *t, spec_ray *stack, int top, uint32_t 
         scn_material hm = eng_material_of(scene, h.material);
         const float hwi[3] = {-r.dir[0], -r.dir[1], -r.dir[2]};
         for (int c = 0; c < 3; c++) /* an emitter seen in the mirror (not a light source) */
-            radiance[c] += r.thr[c] * hm.emissive[c];
+            radiance[c] += r.thr[c] * (hm.emissive[c] * h.emissive_tex[c]);
         /* The scattering normal: the interpolated one unless it puts wi on the other side
          * than the true surface does (photon_trace.c's and reference.c's rule). */
         const float *hn = (dot3(h.geom_normal, hwi) >= 0.0f) == (dot3(h.normal, hwi) >= 0.0f) ? h.normal

@@ -252,7 +252,7 @@ END_TEST
 
 static scn_channel channel(scn_anim_path path, scn_interp interp, uint32_t n, float *times, float *values)
 {
-    scn_channel c = {0, path, interp, n, times, values};
+    scn_channel c = {0, path, interp, n, times, values, 0};
     return c;
 }
 

@@ -202,6 +202,104 @@ START_TEST(gbuffer_albedo_checker)
 }
 END_TEST
 
+/* The checker as an emissive texture (emissiveFactor (1, 0.5, 2), exact multipliers): every
+ * pixel's gbuffer.emission is the factor times exactly one sRGB-decoded texel, in the
+ * quadrant the albedo test finds it; the CPU lookup a photon or reference path makes at a
+ * hit (scn_texref_at, rt_hit.emissive_tex) gives the same texel. */
+START_TEST(gbuffer_emission_texture)
+{
+    mkdir(WORK, 0777);
+    FILE *f = fopen(WORK "/emissive.gltf", "w");
+    ck_assert_ptr_nonnull(f);
+    fprintf(f,
+            "{\"asset\":{\"version\":\"2.0\"},\"scenes\":[{\"nodes\":[0]}],\"nodes\":[{\"mesh\":0}],%s"
+            "\"images\":[{\"uri\":\"%s\"}],"
+            "\"materials\":[{\"emissiveTexture\":{\"index\":0},\"emissiveFactor\":[1,0.5,2],"
+            "\"pbrMetallicRoughness\":{\"metallicFactor\":0}},{}]}",
+            QUAD_PARTS, CHECKER_PNG);
+    ck_assert_int_eq(fclose(f), 0);
+    grab g[] = {{"gbuffer.emission", NULL, 0, 0, 0}, {NULL, NULL, 0, 0, 0}};
+    scn_scene *s = NULL;
+    eng_engine *e =
+        render_one("{\"scene\": \"emissive.gltf\", \"frames\": 1, \"fps\": 1, \"resolution\": [32, 32],"
+                   " \"camera\": {\"keys\": [{\"time\": 0, \"position\": [0, 3, 0], \"target\": [0, 0, 0]}],"
+                   " \"up\": [0, 0, -1], \"yfov_deg\": 30}, \"lights\": [{\"type\": \"point\", \"position\": [0, 2, 0]}],"
+                   " \"settings\": {\"shadow_map_size\": 64, \"photon_count\": 64, \"threads\": 2},"
+                   " \"capture\": [\"gbuffer.emission\"]}",
+                   g, 1, &s);
+    ck_assert_ptr_nonnull(g[0].data);
+    float want[4][4];
+    checker_texels(want);
+    const float factor[3] = {1.0f, 0.5f, 2.0f};
+    for (int y = 0; y < 32; y++)
+        for (int x = 0; x < 32; x++) {
+            const float *p = g[0].data + ((size_t)y * 32 + x) * g[0].channels;
+            int q = (y >= 16) * 2 + (x >= 16);
+            for (int k = 0; k < 3; k++)
+                ck_assert_msg(p[k] == factor[k] * want[q][k], "pixel (%d,%d) channel %d: %.9g, want %.9g", x, y, k,
+                              p[k], factor[k] * want[q][k]);
+        }
+    /* On the CPU: triangle 0 (vertices 0 2 1, uv (0,0) (1,1) (1,0)) at barycentrics
+     * (0.1, 0.1) of vertices 2 and 1 is uv (0.2, 0.1): the top-left texel. */
+    float c[4];
+    ck_assert(scn_texref_at(s, &s->materials[0].emissive_tex, &s->primitives[0], 0, 0.1f, 0.1f, c));
+    for (int k = 0; k < 3; k++)
+        ck_assert_float_eq(c[k], want[0][k]);
+    eng_destroy(e);
+    scn_destroy(s);
+    free(g[0].data);
+}
+END_TEST
+
+/* The red wall over the floor of photons_carry_texture_colour, the floor with the checker as
+ * its occlusion texture (linear R: 1, 0, 0, 128/255 by quadrant) at strength 0.5: the
+ * composite is direct + indirect × (1 + 0.5·(R − 1)) at every pixel (glTF §3.9.3: occlusion
+ * darkens indirect light only), with indirect light in every quadrant. */
+START_TEST(occlusion_darkens_indirect_only)
+{
+    mkdir(WORK, 0777);
+    FILE *f = fopen(WORK "/occlusion.gltf", "w");
+    ck_assert_ptr_nonnull(f);
+    fprintf(f,
+            "{\"asset\":{\"version\":\"2.0\"},\"scenes\":[{\"nodes\":[0,1]}],"
+            "\"nodes\":[{\"mesh\":1},{\"mesh\":0,\"translation\":[-1,1,0],"
+            "\"rotation\":[0,0,-0.70710678,0.70710678]}],%s"
+            "\"images\":[{\"uri\":\"%s\"}],"
+            "\"materials\":[{\"pbrMetallicRoughness\":{\"metallicFactor\":0},\"doubleSided\":true},"
+            "{\"occlusionTexture\":{\"index\":0,\"strength\":0.5},\"pbrMetallicRoughness\":{\"metallicFactor\":0}}]}",
+            QUAD_PARTS, CHECKER_PNG);
+    ck_assert_int_eq(fclose(f), 0);
+    grab g[] = {{"direct.radiance", NULL, 0, 0, 0}, {"indirect.radiance", NULL, 0, 0, 0},
+                {"composite.radiance", NULL, 0, 0, 0}, {NULL, NULL, 0, 0, 0}};
+    render_one("{\"scene\": \"occlusion.gltf\", \"frames\": 1, \"fps\": 1, \"resolution\": [32, 32],"
+               " \"camera\": {\"keys\": [{\"time\": 0, \"position\": [0, 3, 0], \"target\": [0, 0, 0]}],"
+               " \"up\": [0, 0, -1], \"yfov_deg\": 30},"
+               " \"lights\": [{\"type\": \"point\", \"position\": [0, 1.5, 0], \"intensity\": 5}],"
+               " \"settings\": {\"shadow_map_size\": 128, \"photon_count\": 4096, \"threads\": 2,"
+               " \"kernel_radius\": 0.3}, \"capture\": [\"direct.radiance\", \"indirect.radiance\", \"composite.radiance\"]}",
+               g, 0, NULL);
+    const float red[4] = {1.0f, 0.0f, 0.0f, 128.0f / 255.0f};
+    double lit[4] = {0, 0, 0, 0};
+    for (int y = 0; y < 32; y++)
+        for (int x = 0; x < 32; x++) {
+            int q = (y >= 16) * 2 + (x >= 16);
+            float o = 1.0f + 0.5f * (red[q] - 1.0f);
+            size_t at = ((size_t)y * 32 + x) * 3;
+            for (int k = 0; k < 3; k++) {
+                float d = g[0].data[at + k], i = g[1].data[at + k], c = g[2].data[at + k];
+                float want = d + i * o;
+                ck_assert_msg(fabsf(c - want) <= 1e-6f * fmaxf(1.0f, fabsf(want)),
+                              "pixel (%d,%d) channel %d: composite %.9g, want %.9g + %.9g × %g", x, y, k, c, d, i, o);
+                lit[q] += i;
+            }
+        }
+    for (int q = 0; q < 4; q++)
+        ck_assert_msg(lit[q] > 0.0, "no indirect light in quadrant %d", q);
+    for (int k = 0; k < 3; k++)
+        free(g[k].data);
+}
+END_TEST
+
 /* A red-textured wall (white factor) beside a white floor, out of the camera's view: the
  * floor's indirect light is red, which it could only be through the texture. */
 START_TEST(photons_carry_texture_colour)
@@ -282,6 +380,8 @@ static Suite *texture_suite(void)
     TCase *tc = tcase_create("texture");
     tcase_add_test(tc, decode_and_sample_cpu);
     tcase_add_test(tc, gbuffer_albedo_checker);
+    tcase_add_test(tc, gbuffer_emission_texture);
+    tcase_add_test(tc, occlusion_darkens_indirect_only);
     tcase_add_test(tc, photons_carry_texture_colour);
     tcase_add_test(tc, alpha_mask_everywhere);
     tcase_set_timeout(tc, 120);

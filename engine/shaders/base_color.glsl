@@ -13,6 +13,33 @@ uniform sampler2D u_mr_tex;   // metallicRoughness: G roughness, B metallic (glT
 uniform int u_mr_tex_on;
 uniform int u_mr_uv_set;
 uniform mat3 u_mr_uv_xf;
+uniform sampler2D u_em_tex;   // emissive (sRGB-decoded): emission = emissiveFactor × texture (glTF §3.9.3)
+uniform int u_em_tex_on;
+uniform int u_em_uv_set;
+uniform mat3 u_em_uv_xf;
+
+uniform sampler2D u_occ_tex;  // occlusion: R, scaled by strength (glTF §3.9.3)
+uniform int u_occ_tex_on;
+uniform int u_occ_uv_set;
+uniform mat3 u_occ_uv_xf;
+uniform float u_occ_strength;
+
+// What indirect light is multiplied by: 1 + strength·(occlusion − 1); 1 without a texture.
+float occlusion()
+{
+    if (u_occ_tex_on != 1)
+        return 1.0;
+    float o = texture(u_occ_tex, (u_occ_uv_xf * vec3(u_occ_uv_set == 1 ? v_uv1 : v_uv0, 1.0)).xy).r;
+    return 1.0 + u_occ_strength * (o - 1.0);
+}
+
+// Emitted radiance: the factor (× KHR_materials_emissive_strength) times the emissive texture.
+vec3 emission(vec3 factor)
+{
+    if (u_em_tex_on == 1)
+        factor *= texture(u_em_tex, (u_em_uv_xf * vec3(u_em_uv_set == 1 ? v_uv1 : v_uv0, 1.0)).xy).rgb;
+    return factor;
+}
 
 // (roughness, metallic, transmission, ior) with the metallicRoughness texture applied.
 vec4 material_params(vec4 m)

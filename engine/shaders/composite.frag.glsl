@@ -13,6 +13,8 @@ uniform int u_has_emission;
 uniform sampler2D u_translucent; // premultiplied RGBA of the alphaMode BLEND surfaces (pass_translucent.c)
 uniform int u_has_translucent;
 uniform float u_exposure;
+uniform sampler2D u_occlusion; // gbuffer attachment 5: A = occlusion (glTF §3.9.3), indirect only
+uniform int u_has_occlusion;
 
 layout(location = 0) out vec4 o_radiance;
 layout(location = 1) out vec4 o_display;
@@ -28,7 +30,9 @@ void main()
 {
     ivec2 px = ivec2(gl_FragCoord.xy);
     vec3 l = texelFetch(u_direct, px, 0).rgb;
-    if (u_has_indirect == 1)
+    if (u_has_indirect == 1 && u_has_occlusion == 1)
+        l += texelFetch(u_indirect, px, 0).rgb * texelFetch(u_occlusion, px, 0).a;
+    else if (u_has_indirect == 1)
         l += texelFetch(u_indirect, px, 0).rgb;
     if (u_has_specular == 1)
         l += texelFetch(u_specular, px, 0).rgb;

@@ -7,6 +7,8 @@
 //   2 albedo (baseColorFactor times texture and COLOR_0, linear; base_color.glsl)
 //   3 roughness, metallic, transmission, ior
 //   4 eye depth (metres along the view axis), material id, motion x, motion y
+//   5 emitted radiance RGB (emissiveFactor × strength × emissive texture; base_color.glsl),
+//     A what indirect light is multiplied by (occlusion texture; 1 without)
 // Motion is in pixels from this pixel to where the same surface point was in the previous
 // frame, x to the right and y downward (image rows, top row first).
 in vec3 v_position;
@@ -26,12 +28,14 @@ uniform vec4 u_material;
 uniform float u_material_id;
 uniform int u_double_sided;
 uniform vec2 u_viewport;
+uniform vec3 u_emissive;
 
 layout(location = 0) out vec4 o_position;
 layout(location = 1) out vec4 o_normal;
 layout(location = 2) out vec4 o_albedo;
 layout(location = 3) out vec4 o_material;
 layout(location = 4) out vec4 o_misc;
+layout(location = 5) out vec4 o_emission;
 
 void main()
 {
@@ -47,4 +51,5 @@ void main()
     o_albedo = vec4(albedo.rgb, albedo.a);
     o_material = material_params(u_material);
     o_misc = vec4(v_eye_depth, u_material_id, motion);
+    o_emission = vec4(emission(u_emissive), occlusion());
 }

@@ -7,6 +7,9 @@ layout(location = 1) in vec3 a_normal;
 layout(location = 2) in vec2 a_uv0;   // TEXCOORD_0 (base_color.glsl)
 layout(location = 3) in vec2 a_uv1;   // TEXCOORD_1
 layout(location = 4) in vec4 a_color; // COLOR_0
+// The previous frame's object-space position: a_position for rigid primitives (their motion
+// is in u_prev_world), the previous deformed pose for skinned and morphed ones (deform_gl.c).
+layout(location = 5) in vec3 a_prev_position;
 
 uniform mat4 u_world;
 uniform mat4 u_prev_world;
@@ -35,7 +38,7 @@ void main()
     v_uv1 = a_uv1;
     v_color = a_color;
     v_clip = u_view_proj * wp;
-    vec4 prev_wp = u_prev_world * vec4(a_position, 1.0);
+    vec4 prev_wp = u_prev_world * vec4(a_prev_position, 1.0);
     v_prev_clip = u_prev_view_proj * prev_wp;
     v_prev_eye_depth = -(u_prev_view * prev_wp).z;
     v_eye_depth = -(u_view * wp).z;
