@@ -38,6 +38,7 @@ static void usage(FILE *f)
             "  reference SEQUENCE -o RUN  render ground truth (path tracing + photon mapping) to RUN\n"
             "  bench CONFIG -o OUTDIR     speed vs accuracy of engine settings against a reference run\n"
             "  merge SHARD... -o RUN      frame shards (record --frames) checked and merged into one run\n"
+            "  tracebench SEQUENCE        photon-trace rays/s against raw Embree rtcIntersect1 on the same rays\n"
             "\n"
             "Run 'ispm <command> --help' for a command's options and exit codes.\n");
 }
@@ -620,6 +621,7 @@ int cmd_check(int argc, char **argv);                           /* cmd_check.c *
 int cmd_info(int argc, char **argv);                            /* cmd_inspect.c */
 int cmd_export(int argc, char **argv);                          /* cmd_inspect.c */
 int cmd_lineage(int argc, char **argv);                         /* cmd_lineage.c */
+int cmd_tracebench(int argc, char **argv);                      /* cmd_tracebench.c */
 
 int main(int argc, char **argv)
 {
@@ -669,6 +671,8 @@ int main(int argc, char **argv)
         return cmd_export(argc, argv);
     if (!strcmp(cmd, "lineage"))
         return cmd_lineage(argc, argv);
+    if (!strcmp(cmd, "tracebench"))
+        return cmd_tracebench(argc, argv);
     fprintf(stderr, "ispm: unknown command '%s'\n", cmd);
     usage(stderr);
     return EXIT_INPUT;

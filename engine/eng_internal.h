@@ -556,4 +556,31 @@ eng_result kd_gather(const eng_photon_map *map, int w, int h, const float *posit
                      const float *albedo, const float *material, const float eye[3], const eng_settings *s,
                      float *out, eng_error *err);
 
+/* ---------------------------------------------------------------- trace bench (trace_bench.c) */
+
+/* What the photon trace of one frame gets (eng_render_frame's arguments to it). */
+typedef struct eng_trace_inputs {
+    const eng_rt *rt;
+    const eng_frame_scene *fs;
+    const eng_random_maps *rm;
+    const eng_bounce_photon *in;
+    size_t count;
+    eng_trace_settings settings;
+} eng_trace_inputs;
+/* Poses frame `frame`, renders its light G-buffers and bounce maps (announced to the listeners
+ * as in eng_render_frame) and fills out with the photon trace's inputs, valid until the next
+ * frame. ENG_ERR_INVALID for a frame outside the sequence or without indirect light. */
+eng_result eng_frame_trace_inputs(eng_engine *e, int frame, eng_trace_inputs *out, eng_error *err);
+/* n rays of RT_RAW_FLOATS floats each (org xyz, dir xyz, tnear; tfar = ∞) cast with nothing but
+ * Embree against the scene rt_intersect sees (no lamps, no hit attributes), statically shared
+ * among `threads` OpenMP threads: width 1 rtcIntersect1 ray by ray (the raw rate the photon
+ * trace is measured against), width 4 rtcIntersect4 on packets of 4 consecutive rays. Returns
+ * the hit count; out (n entries, may be NULL) gets each ray's Embree result. */
+#define RT_RAW_FLOATS 7
+typedef struct rt_raw_hit {
+    float t, u, v, ng[3]; /* tfar after the call, barycentrics, unnormalised geometric normal */
+    unsigned geom, prim;  /* RTC_INVALID_GEOMETRY_ID: no hit */
+} rt_raw_hit;
+uint64_t rt_cast_raw(const eng_rt *rt, const float *rays, size_t n, int threads, int width, rt_raw_hit *out);
+
 #endif

@@ -1442,3 +1442,28 @@ int eng_occluded(eng_engine *e, const float a[3], const float b[3])
     }
     return rt_occluded(e->rt, a, b);
 }
+
+eng_result eng_frame_trace_inputs(eng_engine *e, int frame, eng_trace_inputs *out, eng_error *err)
+{
+    memset(out, 0, sizeof *out);
+    if (frame < 0 || frame >= e->seq->frame_count)
+        return eng_fail(err, ENG_ERR_INVALID, "%s: frame %d outside 0..%d", e->seq->path, frame, e->seq->frame_count - 1);
+    if (!e->method)
+        return eng_fail(err, ENG_ERR_INVALID, "%s: no photon trace with \"indirect\": \"none\"", e->seq->path);
+    pose_frame(e, frame);
+    rt_update(e->rt, &e->fs);
+    eng_rmap_frame rf;
+    rmap_frame(&e->settings, frame, &rf);
+    eng_result r = light_passes(e, frame, &rf, err);
+    if (r != ENG_OK)
+        return r;
+    out->rt = e->rt;
+    out->fs = &e->fs;
+    out->rm = &e->rmaps;
+    out->in = e->bounce;
+    out->count = e->bounce_count;
+    eng_trace_settings ts = {e->settings.bounces, e->settings.threads, rf.salt, rf.stratified,
+                             {rf.offset[0], rf.offset[1], rf.offset[2], rf.offset[3]}};
+    out->settings = ts;
+    return ENG_OK;
+}

@@ -25,6 +25,7 @@
 
 #include <embree3/rtcore.h>
 #include <math.h>
+#include <stddef.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -288,24 +289,30 @@ int rt_lamp_hit(const eng_rt *rt, const float org[3], const float dir[3], float 
     return best;
 }
 
+/* A single ray org + t·dir, t in [tnear, tfar], with no hit yet. */
+static void ray_init(struct RTCRayHit *rh, const float org[3], const float dir[3], float tnear, float tfar)
+{
+    memset(rh, 0, sizeof *rh);
+    rh->ray.org_x = org[0];
+    rh->ray.org_y = org[1];
+    rh->ray.org_z = org[2];
+    rh->ray.dir_x = dir[0];
+    rh->ray.dir_y = dir[1];
+    rh->ray.dir_z = dir[2];
+    rh->ray.tnear = tnear;
+    rh->ray.tfar = tfar;
+    rh->ray.mask = 0xFFFFFFFFu;
+    rh->hit.geomID = RTC_INVALID_GEOMETRY_ID;
+    rh->hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+}
+
 static int intersect_in(const eng_rt *rt, RTCScene scene, int lamps, const float org[3], const float dir[3],
                         float tnear, float tfar, rt_hit *hit)
 {
     struct RTCIntersectContext ctx;
     rtcInitIntersectContext(&ctx);
     struct RTCRayHit rh;
-    memset(&rh, 0, sizeof rh);
-    rh.ray.org_x = org[0];
-    rh.ray.org_y = org[1];
-    rh.ray.org_z = org[2];
-    rh.ray.dir_x = dir[0];
-    rh.ray.dir_y = dir[1];
-    rh.ray.dir_z = dir[2];
-    rh.ray.tnear = tnear;
-    rh.ray.tfar = tfar;
-    rh.ray.mask = 0xFFFFFFFFu;
-    rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-    rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+    ray_init(&rh, org, dir, tnear, tfar);
     rtcIntersect1(scene, &ctx, &rh);
     int found = rh.hit.geomID != RTC_INVALID_GEOMETRY_ID && rh.hit.geomID < rt->geom_count;
     float tl;
@@ -380,4 +387,73 @@ void rt_destroy(eng_rt *rt)
     if (rt->device)
         rtcReleaseDevice(rt->device);
     free(rt);
+}
+
+static void raw_result(rt_raw_hit *out, float t, float u, float v, const float ng[3], unsigned geom, unsigned prim)
+{
+    if (!out)
+        return;
+    out->t = t;
+    out->u = u;
+    out->v = v;
+    memcpy(out->ng, ng, sizeof out->ng);
+    out->geom = geom;
+    out->prim = prim;
+}
+
+uint64_t rt_cast_raw(const eng_rt *rt, const float *rays, size_t n, int threads, int width, rt_raw_hit *out)
+{
+    uint64_t hits = 0;
+    if (width == 4) {
+        /* Packets of 4 consecutive rays (rtcIntersect4, SOA). */
+        const ptrdiff_t packets = (ptrdiff_t)((n + 3) / 4);
+#pragma omp parallel for schedule(static) num_threads(threads > 0 ? threads : 1) reduction(+ : hits)
+        for (ptrdiff_t k = 0; k < packets; k++) {
+            struct RTCIntersectContext ctx;
+            rtcInitIntersectContext(&ctx);
+            RTC_ALIGN(16) struct RTCRayHit4 rh;
+            memset(&rh, 0, sizeof rh);
+            RTC_ALIGN(16) int valid[4];
+            for (int j = 0; j < 4; j++) {
+                size_t i = 4 * (size_t)k + (size_t)j;
+                valid[j] = i < n ? -1 : 0;
+                const float *r = rays + RT_RAW_FLOATS * (i < n ? i : n - 1);
+                rh.ray.org_x[j] = r[0];
+                rh.ray.org_y[j] = r[1];
+                rh.ray.org_z[j] = r[2];
+                rh.ray.dir_x[j] = r[3];
+                rh.ray.dir_y[j] = r[4];
+                rh.ray.dir_z[j] = r[5];
+                rh.ray.tnear[j] = r[6];
+                rh.ray.tfar[j] = INFINITY;
+                rh.ray.mask[j] = 0xFFFFFFFFu;
+                rh.hit.geomID[j] = RTC_INVALID_GEOMETRY_ID;
+                rh.hit.instID[0][j] = RTC_INVALID_GEOMETRY_ID;
+            }
+            rtcIntersect4(valid, rt->rtscene, &ctx, &rh);
+            for (int j = 0; j < 4; j++) {
+                size_t i = 4 * (size_t)k + (size_t)j;
+                if (i >= n)
+                    break;
+                hits += rh.hit.geomID[j] != RTC_INVALID_GEOMETRY_ID;
+                const float ng[3] = {rh.hit.Ng_x[j], rh.hit.Ng_y[j], rh.hit.Ng_z[j]};
+                raw_result(out ? out + i : NULL, rh.ray.tfar[j], rh.hit.u[j], rh.hit.v[j], ng, rh.hit.geomID[j],
+                           rh.hit.primID[j]);
+            }
+        }
+        return hits;
+    }
+#pragma omp parallel for schedule(static) num_threads(threads > 0 ? threads : 1) reduction(+ : hits)
+    for (ptrdiff_t i = 0; i < (ptrdiff_t)n; i++) {
+        const float *r = rays + RT_RAW_FLOATS * (size_t)i;
+        struct RTCIntersectContext ctx;
+        rtcInitIntersectContext(&ctx);
+        struct RTCRayHit rh;
+        ray_init(&rh, r, r + 3, r[6], INFINITY);
+        rtcIntersect1(rt->rtscene, &ctx, &rh);
+        hits += rh.hit.geomID != RTC_INVALID_GEOMETRY_ID;
+        const float ng[3] = {rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z};
+        raw_result(out ? out + i : NULL, rh.ray.tfar, rh.hit.u, rh.hit.v, ng, rh.hit.geomID, rh.hit.primID);
+    }
+    return hits;
 }

@@ -8,7 +8,7 @@ SEQ=$SRC/scenes/cornell-box/cornell-box-ci.json
 fail() { echo "FAIL: $*"; exit 1; }
 rm -rf "$WORK"; mkdir -p "$WORK"
 
-for c in record replay bless check info export merge lineage; do
+for c in record replay bless check info export merge lineage tracebench; do
   "$ISPM" $c --help > "$WORK/help.txt" || fail "$c --help exited $?"
   grep -q "usage: ispm $c" "$WORK/help.txt" || fail "$c --help prints no usage"
 done
@@ -132,4 +132,12 @@ done
 [ "$(grep -c '^  frame [0-9]* pixel' "$WORK/lineage.txt")" -ge 4 ] || fail "lineage: the floor point is not followed through the frames"
 "$ISPM" lineage "$WORK/run" --frame 9 --pixel 10,150 > /dev/null 2>&1; [ $? -eq 2 ] || fail "lineage: frame 9 must exit 2"
 "$ISPM" lineage "$WORK/run" --frame 1 --pixel 160,0 > /dev/null 2>&1; [ $? -eq 2 ] || fail "lineage: pixel outside must exit 2"
+# tracebench (issue 22 item 4): measures, checks the trace's map against the ray-by-ray trace
+# and rtcIntersect4 against rtcIntersect1; bad arguments exit 2.
+"$ISPM" tracebench "$SEQ" --repeats 1 --photons 2048 > "$WORK/tb.txt" || { cat "$WORK/tb.txt"; fail "tracebench"; }
+grep -q "Mrays/s" "$WORK/tb.txt" && grep -q "ratio" "$WORK/tb.txt" || fail "tracebench prints no rates"
+grep -q "ray-by-ray trace: yes" "$WORK/tb.txt" || { cat "$WORK/tb.txt"; fail "tracebench: the map differs"; }
+grep -q "bit-identical to rtcIntersect1" "$WORK/tb.txt" || { cat "$WORK/tb.txt"; fail "tracebench: packets differ"; }
+"$ISPM" tracebench "$SEQ" --repeats 0 > /dev/null 2>&1; [ $? -eq 2 ] || fail "tracebench --repeats 0 must exit 2"
+"$ISPM" tracebench "$WORK/missing.json" > /dev/null 2>&1; [ $? -eq 2 ] || fail "tracebench of a missing sequence must exit 2"
 echo "e2e_cli: ok"
