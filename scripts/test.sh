@@ -27,6 +27,7 @@ if [ "${SANITIZE:-1}" != 0 ]; then
   # memcheck (valgrind cannot run ASan binaries), e2e_viewer (a GUI timing test of the same
   # code test_viewer covers; under ASan its screenshots race the slower first frame),
   # e2e_stability (25 stress sequences through the same record/replay code e2e_regression and
-  # the method e2e tests run here; 145 s under ASan, which would take the command past 20 min).
-  (cd "$SAN_DIR" && CRASH_KILLS=2 ctest --output-on-failure --timeout 900 -E 'fuzz_smoke|memcheck|e2e_viewer|e2e_stability' "$@")
+  # the method e2e tests run here; 145 s under ASan, which would take the command past 20 min),
+  # e2e_slurm (a second Slurm cluster for the same record and merge code that e2e_cli runs here).
+  (cd "$SAN_DIR" && CRASH_KILLS=2 ctest --output-on-failure --timeout 900 -E 'fuzz_smoke|memcheck|e2e_viewer|e2e_stability|e2e_slurm' "$@")
 fi
