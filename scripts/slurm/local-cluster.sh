@@ -4,12 +4,14 @@
 #   eval "$(scripts/slurm/local-cluster.sh start DIR)"   # exports SLURM_CONF; DIR must be empty or absent
 #   sbatch ...; squeue ...
 #   scripts/slurm/local-cluster.sh stop DIR              # stops its daemons by their PIDs
-# It runs its own munged (own key, socket folder mode 0755, pid, log and seed files in DIR),
+# It runs its own munged (own key, pid, log and seed files in DIR; its socket in a mode-0755
+# folder /tmp/ispm-munge.XXXXXX, since munged refuses a socket below any folder that not all
+# may enter, as DIR can be, e.g. under a mktemp -d or /root; DIR/munge.sockdir names it),
 # `slurmctld -D -c` and `slurmd -D -N localhost` with a minimal DIR/slurm.conf (linuxproc
 # process tracking, no task plugin, select/cons_tres, one node with this machine's CPUs,
 # kill_invalid_depend so that a failed job cancels the jobs that depend on it, state and
 # spool in DIR, ports from PORT_BASE, default a free pair near 20000 + PID). Nothing outside
-# DIR is touched; no system daemon is used. Exit 77 (with the reason) when it cannot start
+# DIR but the socket folder is touched (stop removes it); no system daemon is used. Exit 77 (with the reason) when it cannot start
 # a cluster here: not root, or a missing binary.
 set -u
 cmd=${1:-}; DIR=${2:-}
@@ -24,6 +26,11 @@ stop() {
     kill -9 "$pid" 2>/dev/null
     rm -f "$DIR/$name.pid"
   done
+  if [ -f "$DIR/munge.sockdir" ]; then
+    sock=$(cat "$DIR/munge.sockdir")
+    case $sock in /tmp/ispm-munge.*) rm -rf "$sock" ;; esac
+    rm -f "$DIR/munge.sockdir"
+  fi
 }
 
 if [ "$cmd" = stop ]; then stop; exit 0; fi
@@ -36,8 +43,11 @@ done
 PATH=$PATH:/usr/sbin
 mkdir -p "$DIR" && DIR=$(cd "$DIR" && pwd)
 [ -z "$(ls -A "$DIR")" ] || { echo "local-cluster: $DIR is not empty" >&2; exit 2; }
-mkdir -p "$DIR/munge" "$DIR/state" "$DIR/spool" "$DIR/log"
-chmod 0755 "$DIR" "$DIR/munge"
+mkdir -p "$DIR/state" "$DIR/spool" "$DIR/log"
+SOCKDIR=$(mktemp -d /tmp/ispm-munge.XXXXXX) || { echo "local-cluster: cannot make a socket folder in /tmp" >&2; exit 1; }
+chmod 0755 "$SOCKDIR"
+echo "$SOCKDIR" > "$DIR/munge.sockdir"
+SOCKET=$SOCKDIR/munge.socket
 chmod 0700 "$DIR/state"
 head -c 1024 /dev/urandom > "$DIR/munge.key" && chmod 0400 "$DIR/munge.key"
 
@@ -45,7 +55,7 @@ free_port() { ! (exec 3<>"/dev/tcp/127.0.0.1/$1") 2>/dev/null; }
 port=${PORT_BASE:-$((20000 + ($$ % 20000) * 2))}
 while ! free_port "$port" || ! free_port $((port + 1)); do port=$((port + 2)); done
 
-munged -F --socket="$DIR/munge/munge.socket" --key-file="$DIR/munge.key" --pid-file="$DIR/munged.pidfile" \
+munged -F --socket="$SOCKET" --key-file="$DIR/munge.key" --pid-file="$DIR/munged.pidfile" \
   --log-file="$DIR/log/munged.log" --seed-file="$DIR/munged.seed" > "$DIR/log/munged.out" 2>&1 &
 echo $! > "$DIR/munged.pid"
 cat > "$DIR/slurm.conf" <<CONF
@@ -56,7 +66,7 @@ SlurmdPort=$((port + 1))
 SlurmUser=root
 SlurmdUser=root
 AuthType=auth/munge
-AuthInfo=socket=$DIR/munge/munge.socket
+AuthInfo=socket=$SOCKET
 CredType=cred/munge
 StateSaveLocation=$DIR/state
 SlurmdSpoolDir=$DIR/spool
@@ -84,7 +94,13 @@ PartitionName=local Nodes=localhost Default=YES MaxTime=INFINITE State=UP
 CONF
 : > "$DIR/plugstack.conf"
 export SLURM_CONF=$DIR/slurm.conf
-for _ in $(seq 50); do [ -S "$DIR/munge/munge.socket" ] && break; sleep 0.1; done
+for _ in $(seq 50); do [ -S "$SOCKET" ] && break; sleep 0.1; done
+if [ ! -S "$SOCKET" ]; then
+  echo "local-cluster: munged did not start; $DIR/log/munged.out:" >&2
+  tail -n 5 "$DIR/log/munged.out" >&2
+  stop
+  exit 1
+fi
 slurmctld -D -c -f "$SLURM_CONF" > "$DIR/log/slurmctld.out" 2>&1 &
 echo $! > "$DIR/slurmctld.pid"
 slurmd -D -N localhost -f "$SLURM_CONF" > "$DIR/log/slurmd.out" 2>&1 &
