@@ -4,13 +4,17 @@
 # on a short record + replay, tests/memcheck.sh); then build the whole project again in its own
 # folder with AddressSanitizer + UndefinedBehaviorSanitizer and run the same suite there.
 # SANITIZE=0 skips the sanitizer pass. Extra arguments go to both ctest runs.
+# Both passes run two tests at a time (TEST_JOBS, default 2: CI's two cores; most tests leave a
+# core idle in llvmpipe's serial vertex and binning work and in process start). The tests that
+# time something or start daemons are RUN_SERIAL in tests/CMakeLists.txt.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 BUILD_DIR=${BUILD_DIR:-build}
 BUILD_DIR=$BUILD_DIR scripts/setup.sh -DISPM_WERROR=ON
 # setup.sh installed every dependency: a test that would skip for a missing one fails instead.
 export ISPM_REQUIRE_DEPS=1
-(cd "$BUILD_DIR" && ctest --output-on-failure --timeout 900 "$@")
+JOBS=${TEST_JOBS:-2}
+(cd "$BUILD_DIR" && ctest --output-on-failure --timeout 900 -j"$JOBS" "$@")
 
 if [ "${SANITIZE:-1}" != 0 ]; then
   SAN_DIR=${SANITIZE_BUILD_DIR:-$BUILD_DIR-sanitize}
@@ -29,5 +33,5 @@ if [ "${SANITIZE:-1}" != 0 ]; then
   # e2e_stability (25 stress sequences through the same record/replay code e2e_regression and
   # the method e2e tests run here; 145 s under ASan, which would take the command past 20 min),
   # e2e_slurm (a second Slurm cluster for the same record and merge code that e2e_cli runs here).
-  (cd "$SAN_DIR" && CRASH_KILLS=2 ctest --output-on-failure --timeout 900 -E 'fuzz_smoke|memcheck|e2e_viewer|e2e_stability|e2e_slurm' "$@")
+  (cd "$SAN_DIR" && CRASH_KILLS=2 ctest --output-on-failure --timeout 900 -j"$JOBS" -E 'fuzz_smoke|memcheck|e2e_viewer|e2e_stability|e2e_slurm' "$@")
 fi

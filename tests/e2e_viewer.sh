@@ -112,6 +112,14 @@ IMAGE=660x660+260+46          # the whole 160x160 image
 cyan() { convert "$WORK/$1.png" -crop $IMAGE +repage -fx 'r < 0.2 && g > 0.8 && b > 0.8' \
            -format '%[fx:round(mean*w*h)]' info:; }
 gt() { awk -v a="$1" -v b="$2" 'BEGIN { exit !(a > b) }'; }
+# expect SHOT EXPR MESSAGE: screenshots SHOT until EXPR (a shell expression, evaluated after each
+# shot) holds, for up to 15 s, and fails with MESSAGE after that. The viewer answers a key with
+# its next frame, which on a loaded machine (or beside another test) can take seconds, so every
+# check after a key or a click polls instead of trusting a fixed sleep.
+expect() {
+  for _ in $(seq 60); do shot "$1"; eval "$2" && return 0; sleep 0.25; done
+  fail "$3"
+}
 
 # Up presses from final.display (the viewer's first buffer) to gbuffer.position, from the
 # panel's order (--list), which grows as the engine gains passes.
@@ -123,48 +131,50 @@ UPS=$(for _ in $(seq $((i_final - i_pos))); do printf 'Up '; done)
 
 # ---- session 1: the run against the golden
 start_viewer "$WORK/run" --golden "$GOLDEN"
-shot f0
-gt "$(stat f0 $IMG '%[fx:standard_deviation]')" 0.05 || fail "frame 0: the image area is flat"
+expect f0 'gt "$(stat f0 $IMG "%[fx:standard_deviation]")" 0.05' "frame 0: the image area is flat"
 gt "$(mean f0 $IMG)" 0.1 || fail "frame 0: the image area is black"
 grep -q '"camera"' "$WORK/run/manifest.json" || fail "the recorded run has no camera"
-keys p; shot photons
-c0=$(cyan f0); c1=$(cyan photons)
-gt "$c1" "$((c0 + 1000))" || fail "photons (p): cyan point pixels $c0 -> $c1, want 1000 more"
-keys p p; shot photons_off
-[ "$(differ f0 photons_off $IMAGE)" = 0 ] || fail "photons off: the image is not as before"
-keys Right; shot f1
-gt "$(differ f0 f1 $IMG)" 100 || fail "next frame: the image did not change"
+c0=$(cyan f0)
+keys p
+expect photons 'gt "$(cyan photons)" "$((c0 + 1000))"' "photons (p): cyan point pixels not 1000 more than $c0"
+keys p p
+expect photons_off '[ "$(differ f0 photons_off $IMAGE)" = 0 ]' "photons off: the image is not as before"
+keys Right
+expect f1 'gt "$(differ f0 f1 $IMG)" 100' "next frame: the image did not change"
 sat1=$(sat f1)
-keys f; shot f1_false
-sat2=$(sat f1_false)
-gt "$sat2" 0.3 || fail "false colour: saturation $sat2, want > 0.3"
-gt "$sat2" "$(awk -v s="$sat1" 'BEGIN { print s + 0.2 }')" || fail "false colour: saturation $sat1 -> $sat2"
-keys f $UPS; shot position
-read -r r1 g1 b1 <<< "$(rgb f1)"; read -r r2 g2 b2 <<< "$(rgb position)"
-awk -v a="$r1 $g1 $b1" -v b="$r2 $g2 $b2" 'BEGIN { split(a, x); split(b, y); d = 0;
-  for (i = 1; i <= 3; i++) { e = x[i] - y[i]; if (e < 0) e = -e; if (e > d) d = e }; exit !(d > 0.1) }' ||
-  fail "switching to gbuffer.position: mean colour $r1 $g1 $b1 -> $r2 $g2 $b2"
+keys f
+expect f1_false 'gt "$(sat f1_false)" 0.3 && gt "$(sat f1_false)" "$(awk -v s="$sat1" "BEGIN { print s + 0.2 }")"' \
+  "false colour: saturation $sat1 -> not more than 0.3 and 0.2 above"
+keys f $UPS
+# moved: the mean colour of two shots differs by more than 0.1 in some channel.
+moved() {
+  read -r r1 g1 b1 <<< "$(rgb "$1")"; read -r r2 g2 b2 <<< "$(rgb "$2")"
+  awk -v a="$r1 $g1 $b1" -v b="$r2 $g2 $b2" 'BEGIN { split(a, x); split(b, y); d = 0;
+    for (i = 1; i <= 3; i++) { e = x[i] - y[i]; if (e < 0) e = -e; if (e > d) d = e }; exit !(d > 0.1) }'
+}
+expect position 'moved f1 position' "switching to gbuffer.position: the mean colour did not change"
 keys d; shot position_abs
 if [ "$(grep -o '"digest": *"[0-9a-f]*"' "$WORK/run/manifest.json")" = \
      "$(grep -o '"digest": *"[0-9a-f]*"' "$GOLDEN/manifest.json")" ]; then
-  [ "$(maxv position_abs $IMG)" = 0 ] || fail "abs error against an identical golden is not black"
+  expect position_abs '[ "$(maxv position_abs $IMG)" = 0 ]' "abs error against an identical golden is not black"
 else
   echo "note: the run differs from the golden (engine changed?); black-difference check is done on a copy below"
 fi
-keys d d d; shot back
-[ "$(differ position back $IMG)" = 0 ] || fail "cycling the compare modes does not return to the image"
-keys h; shot help
+keys d d d
+expect back '[ "$(differ position back $IMG)" = 0 ]' "cycling the compare modes does not return to the image"
+keys h
+expect help 'gt "$(differ back help $HELPBOX)" 1000' "help overlay: nothing changed"
 bright=$(convert "$WORK/help.png" -crop $HELPBOX +repage -colorspace Gray -threshold 50% -format '%[fx:mean]' info:)
 gt "$bright" 0.02 || fail "help overlay: no text ($bright bright)"
 gt 0.4 "$bright" || fail "help overlay: no dark box ($bright bright)"
-gt "$(differ back help $HELPBOX)" 1000 || fail "help overlay: nothing changed"
-keys h; shot nohelp
-xdotool mousemove --sync 592 378; sleep 0.5; shot probe
-gt "$(differ nohelp probe $RIGHT)" 50 || fail "probe panel did not change under the cursor"
+keys h
+expect nohelp '[ "$(differ back nohelp $HELPBOX)" = 0 ]' "help overlay: a second h does not hide it"
+xdotool mousemove --sync 592 378
+expect probe 'gt "$(differ nohelp probe $RIGHT)" 50' "probe panel did not change under the cursor"
 gt "$(convert "$WORK/probe.png" -crop $RIGHT +repage -colorspace Gray -threshold 50% -format '%[fx:mean]' info:)" 0.01 ||
   fail "probe panel shows no text"
-xdotool mousemove --sync 1265 764 click 1; sleep 0.5; shot last
-gt "$(differ probe last $IMG)" 100 || fail "clicking the timeline's end did not change the frame"
+xdotool mousemove --sync 1265 764 click 1
+expect last 'gt "$(differ probe last $IMG)" 100' "clicking the timeline's end did not change the frame"
 keys q
 for _ in $(seq 30); do kill -0 $VPID 2> /dev/null || break; sleep 0.1; done
 kill -0 $VPID 2> /dev/null && fail "q did not quit"
@@ -175,24 +185,26 @@ start_viewer "$WORK/run" --golden "$WORK/run2" --buffer gbuffer.position
 shot same_a
 keys b; shot same_b
 [ "$(differ same_a same_b $IMG)" = 0 ] || fail "A/B flip: an identical frame of the copy looks different"
-keys b d; shot same
-[ "$(maxv same $IMG)" = 0 ] || fail "abs error of identical frames is not black"
-keys Right; shot spot
-gt "$(stat spot 1x1+592+378 '%[fx:maxima]')" 0.5 || fail "abs error: the changed pixel is not bright"
+keys b d
+expect same '[ "$(maxv same $IMG)" = 0 ]' "abs error of identical frames is not black"
+keys Right
+expect spot 'gt "$(stat spot 1x1+592+378 "%[fx:maxima]")" 0.5' "abs error: the changed pixel is not bright"
 gt 0.01 "$(mean spot $IMG)" || fail "abs error: more than the changed pixel lights up"
-keys d d; shot spot_signed
+keys d d
+expect spot_signed 'gt "$(stat spot_signed 1x1+592+378 "%[fx:b]")" 0.5' "signed difference (run - copy < 0) is not blue"
 read -r r g b <<< "$(stat spot_signed 1x1+592+378 '%[fx:r] %[fx:g] %[fx:b]')"
 gt "$b" 0.5 && gt 0.3 "$r" || fail "signed difference (run - copy < 0) is not blue: $r $g $b"
 # e: the ꟻLIP heat map of final.display (one pixel changed in the copy's frame 1): bright at that
 # pixel, black (0) away from it, and gone again on a second e.
 DOWNS=$(for _ in $(seq $((i_final - i_pos))); do printf 'Down '; done)
-keys d $DOWNS; shot final1
-keys e; shot flip
+keys d $DOWNS
+expect final1 '[ "$(differ spot_signed final1 $IMG)" -gt 100 ]' "d + Down to final.display: the image did not change"
+keys e
+expect flip 'gt "$(differ final1 flip $IMG)" 50' "FLIP heat map (e): the image did not change"
 gt "$(stat flip 1x1+592+378 '%[fx:maxima]')" 0.3 || fail "FLIP heat map: the changed pixel is not bright"
 gt 0.02 "$(mean flip $IMG)" || fail "FLIP heat map: more than the changed pixel's surroundings light up"
-gt "$(differ final1 flip $IMG)" 50 || fail "FLIP heat map (e): the image did not change"
-keys e; shot flip_off
-[ "$(differ final1 flip_off $IMG)" = 0 ] || fail "FLIP heat map off (e): the image is not as before"
+keys e
+expect flip_off '[ "$(differ final1 flip_off $IMG)" = 0 ]' "FLIP heat map off (e): the image is not as before"
 keys q
 
 # ---- session 3: live view. A run being recorded is a folder with run.json and, per frame, an
@@ -232,8 +244,8 @@ shot live1
 land 2 3 4 5
 until_shot live5 same_as live5 done5 || fail "live: frames 2-5 landed, the viewer does not show frame 5"
 gt "$(differ live1 live5 $IMG)" 100 || fail "live: the first frame shown is already frame 5"
-keys Left; shot live4
-same_as live4 done4 || fail "live: Left from the newest did not show frame 4"
+keys Left
+expect live4 'same_as live4 done4' "live: Left from the newest did not show frame 4"
 status_moved() { gt "$(differ live4 live4b 1280x48+0+752)" 0; }
 land 6 7
 until_shot live4b status_moved || fail "live: the timeline and status line did not show the new frames"
@@ -249,20 +261,23 @@ wait $VPID || fail "viewer exited $? after q"
 start_viewer "$WORK/run" --frame 1 --dump-probe "$WORK/probe.txt"
 xdotool mousemove --sync 303 666 click 1; sleep 0.4
 xdotool mousemove --sync 640 792; sleep 0.5
-shot lin_base
-[ -s "$WORK/probe.txt" ] || fail "lineage: no probe dump after pinning a pixel"
+expect lin_base '[ -s "$WORK/probe.txt" ]' "lineage: no probe dump after pinning a pixel"
+# The dump is written before the pinned pixel's frame is drawn: shoot until the screen holds still.
+expect lin_base 'cp "$WORK/lin_base.png" "$WORK/lin_prev.png"; sleep 0.5; shot lin_base; same_as lin_prev lin_base' \
+  "lineage: the screen does not settle after pinning a pixel"
 grep -q '^frame 1 eye 10 150$' "$WORK/probe.txt" || { cat "$WORK/probe.txt"; fail "lineage: not pixel (10, 150) of frame 1"; }
 read -r _ _ _ tx ty _ stored _ compared _ distance _ tol _ lit <<< "$(grep '^shadow 0 ' "$WORK/probe.txt")"
 [ "$lit" = 1 ] && gt "$stored" "$distance" ||
   fail "lineage: the floor pixel's shadow texel ($tx, $ty) is not lit: stored $stored, distance $distance, lit $lit"
 read -r _ mine _ total <<< "$(grep '^photons ' "$WORK/probe.txt")"
 gt "$mine" 0 && gt "$total" "$mine" || fail "lineage: $mine of $total photons contribute"
-keys p; shot lin_all
-keys p; shot lin_mine
-keys p; shot lin_off
-all_px=$(differ lin_base lin_all $IMAGE); mine_px=$(differ lin_base lin_mine $IMAGE)
-gt "$mine_px" 0 || fail "lineage: p p draws no contributing photons"
-gt "$all_px" "$mine_px" || fail "lineage: the contributing photons ($mine_px pixels) are not fewer than the map's ($all_px)"
-[ "$(differ lin_base lin_off $IMAGE)" = 0 ] || fail "lineage: a third p does not hide the photons"
+keys p
+expect lin_all 'gt "$(differ lin_base lin_all $IMAGE)" 0' "lineage: p draws no photons"
+all_px=$(differ lin_base lin_all $IMAGE)
+keys p
+expect lin_mine 'm=$(differ lin_base lin_mine $IMAGE); gt "$m" 0 && gt "$all_px" "$m"' \
+  "lineage: p p draws no contributing photons, or not fewer than the map's ($all_px pixels)"
+keys p
+expect lin_off '[ "$(differ lin_base lin_off $IMAGE)" = 0 ]' "lineage: a third p does not hide the photons"
 keys q
 echo "viewer e2e: ok"
