@@ -56,7 +56,7 @@ static float clamp01(float x)
     return x < 0.0f ? 0.0f : (x > 1.0f ? 1.0f : x);
 }
 
-static void normalize3(float v[3])
+static inline void normalize3(float v[3])
 {
     float l = sqrtf(dot3(v, v));
     if (l > 0.0f) {
@@ -67,7 +67,7 @@ static void normalize3(float v[3])
 }
 
 
-static void to_world(const float local[3], const float n[3], float out[3])
+static inline void to_world(const float local[3], const float n[3], float out[3])
 {
     float t[3], b[3];
     bsdf_basis(n, t, b);
@@ -110,6 +110,13 @@ float bsdf_fresnel_dielectric(float cos_i, float n1, float n2)
 
 int bsdf_stores_photons(const scn_material *m)
 {
+    bsdf_params p;
+    bsdf_params_of(m, &p);
+    return bsdf_stores_photons_params(&p);
+}
+
+int bsdf_stores_photons_params(const bsdf_params *m)
+{
     float metallic = clamp01(m->metallic), transmission = clamp01(m->transmission);
     float diffuse = (1.0f - metallic) * (1.0f - transmission);
     float glossy = m->roughness >= BSDF_MIRROR_ROUGHNESS ? metallic : 0.0f;
@@ -125,7 +132,7 @@ static bsdf_lobe absorbed(float wo[3], float weight[3], float *density_factor)
 }
 
 /* Russian roulette on the lobe weight w (see the opening paragraph). */
-static bsdf_lobe roulette(bsdf_lobe lobe, float u, float weight[3], float wo[3], float *density_factor)
+static inline bsdf_lobe roulette(bsdf_lobe lobe, float u, float weight[3], float wo[3], float *density_factor)
 {
     for (int i = 0; i < 3; i++)
         if (!(weight[i] > 0.0f))
@@ -140,6 +147,14 @@ static bsdf_lobe roulette(bsdf_lobe lobe, float u, float weight[3], float wo[3],
 
 bsdf_lobe bsdf_scatter(const scn_material *m, const float n[3], const float wi[3], float *eta,
                        const bsdf_sample *rnd, float wo[3], float weight[3], float *density_factor)
+{
+    bsdf_params p;
+    bsdf_params_of(m, &p);
+    return bsdf_scatter_params(&p, n, wi, eta, rnd, wo, weight, density_factor);
+}
+
+bsdf_lobe bsdf_scatter_params(const bsdf_params *m, const float n[3], const float wi[3], float *eta,
+                              const bsdf_sample *rnd, float wo[3], float weight[3], float *density_factor)
 {
     const float *u = rnd->u;
     float metallic = clamp01(m->metallic), transmission = clamp01(m->transmission);

@@ -28,7 +28,37 @@ typedef struct bsdf_sample {
     const float *cosdir; /* 4 floats */
 } bsdf_sample;
 
-/* Scatters a photon at a surface point.
+/* What scattering reads of a resolved material (eng_material_at): the photon tracer fills
+ * it per hit from the draw's material and the hit's texture factors (bsdf_params_at), which
+ * costs a few floats instead of a copy of the whole scn_material. */
+typedef struct bsdf_params {
+    float base_color[3];
+    float metallic, roughness, transmission, ior;
+} bsdf_params;
+
+static inline void bsdf_params_of(const scn_material *m, bsdf_params *p)
+{
+    for (int c = 0; c < 3; c++)
+        p->base_color[c] = m->base_color[c];
+    p->metallic = m->metallic;
+    p->roughness = m->roughness;
+    p->transmission = m->transmission;
+    p->ior = m->ior;
+}
+
+/* bsdf_params_of(eng_material_at(scene, h)) with m = eng_material_of(scene, h->material):
+ * the same products eng_material_at forms, so the result is bit-identical. */
+static inline void bsdf_params_at(const scn_material *m, const rt_hit *h, bsdf_params *p)
+{
+    for (int c = 0; c < 3; c++)
+        p->base_color[c] = m->base_color[c] * h->base_tex[c];
+    p->metallic = m->metallic * h->metallic_tex;
+    p->roughness = m->roughness * h->roughness_tex;
+    p->transmission = m->transmission;
+    p->ior = m->ior;
+}
+
+/* Scatters a photon at a surface point (bsdf_scatter_params on bsdf_params_of(m)).
  *   m       resolved material (eng_material_of)
  *   n       unit shading normal of the surface as authored (outward), NOT oriented to wi:
  *           glass uses its side to tell entering from leaving; opaque lobes use the side wi
@@ -43,6 +73,8 @@ typedef struct bsdf_sample {
  * path ends. */
 bsdf_lobe bsdf_scatter(const scn_material *m, const float n[3], const float wi[3], float *eta,
                        const bsdf_sample *rnd, float wo[3], float weight[3], float *density_factor);
+bsdf_lobe bsdf_scatter_params(const bsdf_params *m, const float n[3], const float wi[3], float *eta,
+                              const bsdf_sample *rnd, float wo[3], float weight[3], float *density_factor);
 
 /* Stratified sampling across frames (002_558366c451cd32fd.txt §4.2): a Cranley–Patterson
  * rotation of one event's random numbers, out_u[d] = frac(u[d] + offset[d]), and the
@@ -58,6 +90,7 @@ void bsdf_stratify(const float u[4], const float offset[4], float out_u[4], floa
  * splatted onto that surface's own pixels, where the delta BSDF cannot reflect it toward the
  * eye from any other direction. */
 int bsdf_stores_photons(const scn_material *m);
+int bsdf_stores_photons_params(const bsdf_params *m);
 
 /* Exact unpolarised Fresnel reflectance of a smooth dielectric interface, light arriving in
  * the medium of index n1 at cosine cos_i (>= 0) onto a medium n2; 1 under total internal

@@ -420,6 +420,10 @@ typedef struct eng_photon_map {
     int want_source;
     uint32_t *source;
     size_t source_capacity;
+    /* photon_trace's per-thread photon buffers (photon_trace.c), kept from one trace to the
+     * next so that a frame reuses the last frame's memory; freed by photon_map_free. */
+    struct pt_buf *trace_bufs;
+    int trace_buf_count;
 } eng_photon_map;
 
 typedef struct eng_trace_settings {

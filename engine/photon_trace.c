@@ -23,7 +23,12 @@
  *
  * Determinism across thread counts: a path's photons go to the buffer of the thread that
  * traced it, and the path records where (thread, offset, count); the map is then compacted
- * sequentially in input order, and the statistics are summed sequentially after that.
+ * in input order (runs of consecutive paths, each copied whole), and the statistics are
+ * summed sequentially after that.
+ *
+ * Speed (issue 22 item 4): the random-map entries of an event are prefetched before its ray
+ * is traced, the BSDF reads a bsdf_params rather than a copy of the material, and the
+ * per-thread buffers stay in the map from one trace to the next.
  *
  * Which surface a ray hits next is asked of a tracer (trace_method.h: Embree, rt.c, or the
  * multi-image trace of 004); what happens at the surface is the same for every tracer.
@@ -66,6 +71,12 @@ typedef struct pt_path {
     uint8_t truncated, oom;
 } pt_path;
 
+/* n photons of buffer `thread` from index `from`, going to index `to` of the map. */
+typedef struct pt_run {
+    uint16_t thread;
+    size_t from, to, n;
+} pt_run;
+
 static float dot3(const float a[3], const float b[3])
 {
     return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
@@ -77,8 +88,9 @@ static int has_power(const float p[3])
 }
 
 /* Traces one bounce-map photon, appending its stored photons to buf; fills rec. */
-static void trace_path(const pt_tracer *tr, const scn_scene *scene, const eng_random_maps *rm,
-                       const eng_bounce_photon *bp, const eng_trace_settings *s, pt_buf *buf, pt_path *rec)
+static void trace_path(const pt_tracer *tr, const scn_scene *scene, const scn_material *default_material,
+                       const eng_random_maps *rm, const eng_bounce_photon *bp, const eng_trace_settings *s, pt_buf *buf,
+                       pt_path *rec)
 {
     rec->at = buf->n;
     rec->count = 0;
@@ -105,6 +117,11 @@ static void trace_path(const pt_tracer *tr, const scn_scene *scene, const eng_ra
             rec->truncated = 1;
             break;
         }
+        /* Event k's random numbers sit at a scattered place in maps of a few MB: ask for
+         * them now, so that the memory fetch overlaps the ray instead of following it. */
+        const uint32_t e = (seed + k) & mask;
+        __builtin_prefetch(rm->uniform + 4 * (size_t)e);
+        __builtin_prefetch(rm->cosine + 4 * (size_t)e);
         rt_hit h;
         if (!tr->intersect(tr->state, org, dir, tnear, &h, &buf->counts))
             break;
@@ -114,8 +131,12 @@ static void trace_path(const pt_tracer *tr, const scn_scene *scene, const eng_ra
         float n[3];
         float cg = dot3(h.geom_normal, wi), cs = dot3(h.normal, wi);
         memcpy(n, ((cg >= 0.0f) == (cs >= 0.0f)) ? h.normal : h.geom_normal, sizeof n);
-        scn_material m = eng_material_at(scene, &h);
-        if (bsdf_stores_photons(&m)) {
+        /* eng_material_at's material, reduced to what scattering reads (bsdf_params_at). */
+        bsdf_params m;
+        bsdf_params_at(h.material >= 0 && (uint32_t)h.material < scene->material_count ? &scene->materials[h.material]
+                                                                                        : default_material,
+                       &h, &m);
+        if (bsdf_stores_photons_params(&m)) {
             eng_photon *ph = pt_push(buf);
             if (!ph) {
                 rec->oom = 1;
@@ -135,7 +156,6 @@ static void trace_path(const pt_tracer *tr, const scn_scene *scene, const eng_ra
             if (s->max_bounces > 0 && rec->count == (uint32_t)s->max_bounces)
                 break;
         }
-        uint32_t e = (seed + k) & mask;
         bsdf_sample rnd = {rm->uniform + 4 * (size_t)e, rm->cosine + 4 * (size_t)e};
         float su[4], scd[4];
         if (s->stratified) {
@@ -144,7 +164,7 @@ static void trace_path(const pt_tracer *tr, const scn_scene *scene, const eng_ra
             rnd.cosdir = scd;
         }
         float wo[3], w[3], density;
-        if (bsdf_scatter(&m, n, wi, &eta, &rnd, wo, w, &density) == BSDF_ABSORBED)
+        if (bsdf_scatter_params(&m, n, wi, &eta, &rnd, wo, w, &density) == BSDF_ABSORBED)
             break;
         for (int i = 0; i < 3; i++)
             power[i] *= w[i];
@@ -199,20 +219,32 @@ eng_result photon_trace_with(const pt_tracer *tr, const eng_frame_scene *fs, con
         return eng_fail(err, ENG_ERR_INVALID, "photon trace: random maps not created");
     const int threads = s->threads > 0 ? (s->threads < 1024 ? s->threads : 1024) : 1;
     pt_path *paths = malloc((count ? count : 1) * sizeof *paths);
-    pt_buf *bufs = calloc((size_t)threads, sizeof *bufs);
-    if (!paths || !bufs) {
+    if (paths && out->trace_buf_count < threads) {
+        pt_buf *more = realloc(out->trace_bufs, (size_t)threads * sizeof *more);
+        if (more) {
+            memset(more + out->trace_buf_count, 0, (size_t)(threads - out->trace_buf_count) * sizeof *more);
+            out->trace_bufs = more;
+            out->trace_buf_count = threads;
+        }
+    }
+    if (!paths || out->trace_buf_count < threads) {
         free(paths);
-        free(bufs);
         return eng_fail(err, ENG_ERR_NOMEM, "photon trace: out of memory for %zu photons", count);
     }
+    pt_buf *bufs = out->trace_bufs;
+    for (int t = 0; t < threads; t++) {
+        bufs[t].n = 0;
+        memset(&bufs[t].counts, 0, sizeof bufs[t].counts);
+    }
     const scn_scene *scene = fs->scene;
+    const scn_material default_material = eng_material_of(scene, -1);
 #pragma omp parallel num_threads(threads)
     {
         int t = omp_get_thread_num();
         pt_buf *mine = &bufs[t];
 #pragma omp for schedule(static)
         for (ptrdiff_t i = 0; i < (ptrdiff_t)count; i++) {
-            trace_path(tr, scene, rm, &in[i], s, mine, &paths[i]);
+            trace_path(tr, scene, &default_material, rm, &in[i], s, mine, &paths[i]);
             paths[i].thread = (uint16_t)t;
         }
     }
@@ -242,29 +274,47 @@ eng_result photon_trace_with(const pt_tracer *tr, const eng_frame_scene *fs, con
         }
     }
     if (oom) {
-        for (int t = 0; t < threads; t++)
-            free(bufs[t].p);
-        free(bufs);
         free(paths);
         return eng_fail(err, ENG_ERR_NOMEM, "photon trace: out of memory for %zu stored photons", total);
     }
-    size_t at = 0;
+    /* Compaction in input order. A thread's paths are consecutive in its buffer, and with
+     * schedule(static) a thread traces one consecutive range of inputs, so the map is a few
+     * runs (about one per thread): copied as such, on the threads. */
+    pt_run *runs = NULL;
+    size_t run_count = 0, run_cap = 0, at = 0;
     for (size_t i = 0; i < count; i++) {
         if (paths[i].count == 0)
             continue; /* out->photons may still be NULL when nothing was stored */
-        memcpy(out->photons + at, bufs[paths[i].thread].p + paths[i].at, paths[i].count * sizeof(eng_photon));
+        pt_run *last = run_count ? &runs[run_count - 1] : NULL;
+        if (last && last->thread == paths[i].thread && last->from + last->n == paths[i].at) {
+            last->n += paths[i].count;
+        } else {
+            if (run_count == run_cap) {
+                size_t cap = run_cap ? 2 * run_cap : (size_t)threads + 1;
+                pt_run *r = realloc(runs, cap * sizeof *r);
+                if (!r) {
+                    free(runs);
+                    free(paths);
+                    return eng_fail(err, ENG_ERR_NOMEM, "photon trace: out of memory for %zu stored photons", total);
+                }
+                runs = r;
+                run_cap = cap;
+            }
+            runs[run_count++] = (pt_run){paths[i].thread, paths[i].at, at, paths[i].count};
+        }
         for (size_t k = 0; out->want_source && k < paths[i].count; k++)
             out->source[at + k] = (uint32_t)i;
         at += paths[i].count;
     }
+#pragma omp parallel for schedule(static) num_threads(threads)
+    for (ptrdiff_t r = 0; r < (ptrdiff_t)run_count; r++)
+        memcpy(out->photons + runs[r].to, bufs[runs[r].thread].p + runs[r].from, runs[r].n * sizeof(eng_photon));
+    free(runs);
     out->count = total;
     eng_trace_counts counts;
     memset(&counts, 0, sizeof counts);
-    for (int t = 0; t < threads; t++) {
+    for (int t = 0; t < threads; t++)
         add_counts(&counts, &bufs[t].counts);
-        free(bufs[t].p);
-    }
-    free(bufs);
 
     if (stats) {
         memset(stats, 0, sizeof *stats);
@@ -291,5 +341,8 @@ void photon_map_free(eng_photon_map *m)
         return;
     free(m->photons);
     free(m->source);
+    for (int t = 0; t < m->trace_buf_count; t++)
+        free(m->trace_bufs[t].p);
+    free(m->trace_bufs);
     memset(m, 0, sizeof *m);
 }

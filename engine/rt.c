@@ -40,6 +40,10 @@ typedef struct rt_geom {
     float *normals; /* world space, 3 per vertex, unit (zero where the authored normal is) */
     float world[16];
     int posed;
+    /* What a hit on this draw looks up (rt_geom_lookups): fixed by the material and the
+     * primitive's attributes, so a hit skips the texture and COLOR_0 calls it does not need. */
+    const scn_material *mat; /* NULL: the glTF default material */
+    uint8_t base_lookup, mr_lookup, emissive_lookup;
 } rt_geom;
 
 struct eng_rt {
@@ -115,6 +119,22 @@ static int same_matrix(const float a[16], const float b[16])
     return memcmp(a, b, 16 * sizeof(float)) == 0;
 }
 
+/* Does texture reference r sample anything on p? (scn_texref_at's own test: without a
+ * texture or the texcoords it names, scn_texref_at leaves 1 and returns 0.) */
+static int texref_used(const scn_scene *scene, const scn_texref *r, const scn_primitive *p)
+{
+    return r->texture >= 0 && (uint32_t)r->texture < scene->texture_count && p->texcoords[r->texcoord];
+}
+
+/* Which of intersect_in's per-hit lookups can change its (1, ...) defaults on draw g. */
+static void rt_geom_lookups(rt_geom *g, const scn_scene *scene, const scn_primitive *p)
+{
+    g->mat = g->material >= 0 && (uint32_t)g->material < scene->material_count ? &scene->materials[g->material] : NULL;
+    g->base_lookup = p->colors || (g->mat && texref_used(scene, &g->mat->base_color_tex, p));
+    g->mr_lookup = g->mat && texref_used(scene, &g->mat->metallic_roughness_tex, p);
+    g->emissive_lookup = g->mat && texref_used(scene, &g->mat->emissive_tex, p);
+}
+
 /* Draw d's vertices (the primitive's, or this frame's deformed ones) at its world matrix. */
 static void pose(rt_geom *g, const scn_primitive *p, const eng_draw *d)
 {
@@ -179,6 +199,7 @@ void rt_update(eng_rt *rt, const eng_frame_scene *fs)
             memcpy(idx, p->indices, p->index_count * sizeof(unsigned));
             rtcSetGeometryBuildQuality(g->geom, RTC_BUILD_QUALITY_REFIT);
             g->scene = rt->scene;
+            rt_geom_lookups(g, rt->scene, p);
             if (g->material >= 0 && (uint32_t)g->material < rt->scene->material_count &&
                 rt->scene->materials[g->material].alpha_mode == SCN_ALPHA_MASK) {
                 rtcSetGeometryUserData(g->geom, g);
@@ -252,7 +273,7 @@ int rt_occluded(const eng_rt *rt, const float a[3], const float b[3])
     return ray.tfar < 0.0f; /* Embree sets tfar to -inf on a hit */
 }
 
-static void normalize_or(float v[3], const float fallback[3])
+static inline void normalize_or(float v[3], const float fallback[3])
 {
     float len = sqrtf(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
     if (len > 0.0f && isfinite(len)) {
@@ -340,22 +361,17 @@ static int intersect_in(const eng_rt *rt, RTCScene scene, int lamps, const float
     hit->material = g->material;
     hit->draw = rh.hit.geomID;
     hit->base_tex[0] = hit->base_tex[1] = hit->base_tex[2] = hit->base_tex[3] = 1.0f;
-    if (g->material >= 0 && (uint32_t)g->material < rt->scene->material_count)
-        scn_base_color_at(rt->scene, &rt->scene->materials[g->material], p, rh.hit.primID, u, v, hit->base_tex);
-    else if (p->colors)
-        scn_base_color_at(rt->scene, &(scn_material){.base_color_tex = {.texture = -1}}, p, rh.hit.primID, u, v,
-                          hit->base_tex);
+    if (g->base_lookup)
+        scn_base_color_at(rt->scene, g->mat ? g->mat : &(scn_material){.base_color_tex = {.texture = -1}}, p,
+                          rh.hit.primID, u, v, hit->base_tex);
     hit->roughness_tex = hit->metallic_tex = 1.0f;
     float mr[4];
-    if (g->material >= 0 && (uint32_t)g->material < rt->scene->material_count &&
-        scn_texref_at(rt->scene, &rt->scene->materials[g->material].metallic_roughness_tex, p, rh.hit.primID, u, v,
-                      mr)) {
+    if (g->mr_lookup && scn_texref_at(rt->scene, &g->mat->metallic_roughness_tex, p, rh.hit.primID, u, v, mr)) {
         hit->roughness_tex = mr[1];
         hit->metallic_tex = mr[2];
     }
     hit->emissive_tex[0] = hit->emissive_tex[1] = hit->emissive_tex[2] = 1.0f;
-    if (g->material >= 0 && (uint32_t)g->material < rt->scene->material_count &&
-        scn_texref_at(rt->scene, &rt->scene->materials[g->material].emissive_tex, p, rh.hit.primID, u, v, mr))
+    if (g->emissive_lookup && scn_texref_at(rt->scene, &g->mat->emissive_tex, p, rh.hit.primID, u, v, mr))
         memcpy(hit->emissive_tex, mr, sizeof hit->emissive_tex);
     return 1;
 }

@@ -602,6 +602,61 @@ static size_t cornell_bounce_photons(const cornell *c, const eng_random_maps *rm
     return n;
 }
 
+/* What the photon trace scatters with (bsdf_params_at on the draw's material and the hit's
+ * texture factors) is exactly eng_material_at's material, and bsdf_scatter_params on it
+ * scatters exactly as bsdf_scatter on that material. */
+START_TEST(bsdf_params_match_material)
+{
+    scn_scene scene;
+    memset(&scene, 0, sizeof scene);
+    scn_material mats[1];
+    mats[0] = eng_material_of(&scene, -1);
+    mats[0].base_color[0] = 0.7f;
+    mats[0].base_color[1] = 0.35f;
+    mats[0].base_color[2] = 0.1f;
+    mats[0].metallic = 0.3f;
+    mats[0].roughness = 0.45f;
+    mats[0].transmission = 0.2f;
+    mats[0].ior = 1.33f;
+    scene.materials = mats;
+    scene.material_count = 1;
+    const scn_material def = eng_material_of(&scene, -1);
+    eng_random_maps rm;
+    eng_error err;
+    ck_assert_int_eq(rmap_create(0xB5D1, 1u << 10, &rm, &err), ENG_OK);
+    for (int32_t index = -1; index <= 0; index++) {
+        for (uint32_t k = 0; k < 256; k++) {
+            rt_hit h;
+            memset(&h, 0, sizeof h);
+            h.material = index;
+            const float *u = rm.uniform + 4 * k;
+            for (int c = 0; c < 4; c++)
+                h.base_tex[c] = 0.25f + 0.75f * u[(c + 1) & 3];
+            h.roughness_tex = u[2];
+            h.metallic_tex = u[3];
+            scn_material m = eng_material_at(&scene, &h);
+            bsdf_params want, got;
+            bsdf_params_of(&m, &want);
+            bsdf_params_at(index >= 0 ? &mats[index] : &def, &h, &got);
+            ck_assert_int_eq(memcmp(&want, &got, sizeof want), 0);
+            ck_assert_int_eq(bsdf_stores_photons(&m), bsdf_stores_photons_params(&got));
+            const float n[3] = {0.0f, 0.6f, 0.8f};
+            const float wi[3] = {0.48f, 0.6f, 0.64f};
+            bsdf_sample rnd = {rm.uniform + 4 * ((k * 7u + 3u) & 1023u), rm.cosine + 4 * ((k * 7u + 3u) & 1023u)};
+            float eta_a = 1.0f, eta_b = 1.0f, wo_a[3], wo_b[3], w_a[3], w_b[3], d_a, d_b;
+            bsdf_lobe la = bsdf_scatter(&m, n, wi, &eta_a, &rnd, wo_a, w_a, &d_a);
+            bsdf_lobe lb = bsdf_scatter_params(&got, n, wi, &eta_b, &rnd, wo_b, w_b, &d_b);
+            ck_assert_int_eq(la, lb);
+            ck_assert_int_eq(memcmp(wo_a, wo_b, sizeof wo_a), 0);
+            ck_assert_int_eq(memcmp(w_a, w_b, sizeof w_a), 0);
+            ck_assert_int_eq(memcmp(&d_a, &d_b, sizeof d_a), 0);
+            ck_assert_int_eq(memcmp(&eta_a, &eta_b, sizeof eta_a), 0);
+        }
+    }
+    rmap_destroy(&rm);
+}
+END_TEST
+
 START_TEST(determinism_threads)
 {
     cornell c;
@@ -641,6 +696,16 @@ START_TEST(determinism_threads)
     eng_trace_settings u2 = u1;
     u2.threads = 2;
     ck_assert_int_eq(photon_trace(c.rt, &c.fs, &rm, in, n, &u2, &b, &sb, &err), ENG_OK);
+    ck_assert_uint_eq(a.count, b.count);
+    ck_assert_int_eq(memcmp(a.photons, b.photons, a.count * sizeof(eng_photon)), 0);
+    ck_assert_int_eq(memcmp(&sa, &sb, sizeof sa), 0);
+    /* The per-thread buffers a map keeps between traces (trace_bufs) grow with the thread
+     * count: a map last traced on 1 thread, traced on 4, is still the same map. */
+    ck_assert_int_eq(photon_trace(c.rt, &c.fs, &rm, in, n, &u1, &b, &sb, &err), ENG_OK);
+    eng_trace_settings u4 = u1;
+    u4.threads = 4;
+    ck_assert_int_eq(photon_trace(c.rt, &c.fs, &rm, in, n, &u4, &b, &sb, &err), ENG_OK);
+    ck_assert_int_ge(b.trace_buf_count, 4);
     ck_assert_uint_eq(a.count, b.count);
     ck_assert_int_eq(memcmp(a.photons, b.photons, a.count * sizeof(eng_photon)), 0);
     ck_assert_int_eq(memcmp(&sa, &sb, sizeof sa), 0);
@@ -1074,6 +1139,7 @@ static Suite *photon_suite(void)
     tcase_add_test(tc, energy_closed_box);
     tcase_add_test(tc, furnace_unbiased);
     tcase_add_test(tc, truncation_counted);
+    tcase_add_test(tc, bsdf_params_match_material);
     tcase_add_test(tc, determinism_threads);
     tcase_add_test(tc, packets_match_single_rays);
     tcase_add_test(tc, frame_coherence);
