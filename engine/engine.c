@@ -14,6 +14,7 @@
 #include "boundary.h"
 #include "shadow.h"
 #include "progressive.h"
+#include "overlap.h"
 #include "trace_method.h"
 #include "specular.h"
 #include "translucent.h"
@@ -99,6 +100,7 @@ struct eng_engine {
     size_t scratch_capacity;
     eng_frame_stats stats;
     double readback_ms;
+    eng_overlap *overlap; /* overlap.h: the photon stage's worker beside the GL thread */
 };
 
 /* glTF 2.0 §3.9.2: the default material when a primitive names none. */
@@ -292,6 +294,7 @@ eng_result eng_create(const eng_desc *desc, eng_engine **out, eng_error *err)
         if (r == ENG_OK)
             r = e->method->create(w, h, e->filtered, &e->method_state, err);
         e->tracer = pt_method_of(st->photon_trace);
+        e->overlap = ovl_create(st->threads);
         if (r == ENG_OK)
             r = e->tracer->create(st, &e->tracer_state, err);
         if (r == ENG_OK && st->temporal)
@@ -353,6 +356,7 @@ void eng_destroy(eng_engine *e)
 {
     if (!e)
         return;
+    ovl_destroy(e->overlap);
     if (e->gl) {
         for (int i = 0; i < 8; i++)
             light_maps_release(&e->lmaps[i]);
@@ -899,6 +903,65 @@ static eng_result trace_prepare(eng_engine *e, int frame, pt_tracer *tracer, eng
     return ENG_OK;
 }
 
+/* The photon stage of a frame (ISPM §3 1d and the kernel radii): the CPU photon trace from the
+ * bounce maps, then every photon's r_xy (and anisotropic kernel). It reads only the posed
+ * scene, the bounce photons and the traced geometry and writes only the photon map, the radii
+ * and its own fields, so it may run on the overlap worker (overlap.h) while the GL thread
+ * renders the eye G-buffer and the direct light; it calls no GL and announces nothing. */
+typedef struct photon_stage {
+    eng_engine *e;
+    pt_tracer tracer;
+    eng_trace_settings ts;
+    eng_trace_stats tstats;
+    eng_result r;
+    eng_error err;
+    double trace_ms;
+} photon_stage;
+
+static void photon_stage_run(void *arg)
+{
+    photon_stage *ps = arg;
+    eng_engine *e = ps->e;
+    double t0 = now_ms();
+    ps->r = photon_trace_with(&ps->tracer, &e->fs, &e->rmaps, e->bounce, e->bounce_count, &ps->ts, &e->pmap,
+                              &ps->tstats, &ps->err);
+    ps->trace_ms = now_ms() - t0;
+    if (ps->r != ENG_OK)
+        return;
+    if (e->pmap.count > e->radius_capacity) {
+        free(e->radius);
+        e->radius = eng_xmalloc(e->pmap.count * sizeof *e->radius);
+        free(e->aniso);
+        e->aniso = e->settings.kernel_scaling == ENG_SCALING_ANISOTROPIC
+                       ? eng_xmalloc(e->pmap.count * 4 * sizeof *e->aniso)
+                       : NULL;
+        e->radius_capacity = e->pmap.count;
+    }
+    ind_photon_radii(&e->pmap, &e->settings, &e->fs, e->width, e->height, e->radius_scale, e->radius);
+    e->aniso_on = e->aniso && ind_photon_aniso(&e->pmap, &e->settings, e->aniso);
+}
+
+/* Announces the photon stage's results after ovl_join: its trace time, statistics and
+ * photons.map / photons.origin. */
+static eng_result photon_stage_finish(eng_engine *e, int frame, photon_stage *ps, eng_error *err)
+{
+    add_time(e, "photons", ps->trace_ms);
+    if (ps->r != ENG_OK) {
+        if (err)
+            *err = ps->err;
+        return ps->r;
+    }
+    e->stats.trace = ps->tstats.counts;
+    e->stats.photons_emitted = ps->tstats.emitted;
+    memcpy(e->stats.photons_stored, ps->tstats.stored, sizeof e->stats.photons_stored);
+    e->stats.photons_truncated = ps->tstats.truncated;
+    if (announce_photon_map(e, frame))
+        return eng_fail(err, ENG_ERR_ABORTED, "frame %d: capture failed at photons.map", frame);
+    if (announce_photon_origin(e, frame))
+        return eng_fail(err, ENG_ERR_ABORTED, "frame %d: capture failed at photons.origin", frame);
+    return ENG_OK;
+}
+
 /* Runs the indirect method against gb (indirect.h), timed as the method's pass, and announces
  * the extra buffers it lists; *out gets its target. */
 static eng_result run_method(eng_engine *e, int frame, const glu_target *gb, const glu_target **out, eng_error *err)
@@ -1244,53 +1307,50 @@ eng_result eng_render_frame(eng_engine *e, int frame, eng_error *err)
             return r;
     }
 
-    /* Light G-buffers, bounce maps and the CPU photon trace (ISPM §3 1b–d). */
+    /* Light G-buffers, bounce maps (ISPM §3 1b–c), then the photon stage (the CPU photon trace,
+     * 1d, and the kernel radii) on the overlap worker while this thread renders the eye
+     * G-buffer and the direct light, which do not read photons (overlap.h); their buffers are
+     * announced after the join, in the order of a serial frame. */
+    photon_stage ps;
+    memset(&ps, 0, sizeof ps);
+    int staged = 0;
     if (e->method) {
         eng_rmap_frame rf; /* salt and stratum of this frame (002 §4.2), for both processors */
         rmap_frame(&e->settings, frame, &rf);
         eng_result r = light_passes(e, frame, &rf, err);
         if (r != ENG_OK)
             return r;
-        pt_tracer tracer;
         eng_trace_settings ts = {e->settings.bounces, e->settings.threads, rf.salt, rf.stratified,
                                  {rf.offset[0], rf.offset[1], rf.offset[2], rf.offset[3]}};
-        eng_trace_stats tstats;
-        memset(&tstats, 0, sizeof tstats);
-        if ((r = trace_prepare(e, frame, &tracer, err)) != ENG_OK)
+        ps.e = e;
+        ps.ts = ts;
+        if ((r = trace_prepare(e, frame, &ps.tracer, err)) != ENG_OK)
             return r;
-        t0 = now_ms();
-        r = photon_trace_with(&tracer, &e->fs, &e->rmaps, e->bounce, e->bounce_count, &ts, &e->pmap, &tstats, err);
-        add_time(e, "photons", now_ms() - t0);
-        if (r != ENG_OK)
-            return r;
-        e->stats.trace = tstats.counts;
-        if (e->pmap.count > e->radius_capacity) {
-            free(e->radius);
-            e->radius = eng_xmalloc(e->pmap.count * sizeof *e->radius);
-            free(e->aniso);
-            e->aniso = e->settings.kernel_scaling == ENG_SCALING_ANISOTROPIC
-                           ? eng_xmalloc(e->pmap.count * 4 * sizeof *e->aniso)
-                           : NULL;
-            e->radius_capacity = e->pmap.count;
-        }
         /* Progressive photon mapping's radius scale (progressive.h): one per frame. */
         e->radius_scale = e->prog ? prog_begin(e->prog, &e->fs) : 1.0f;
-        ind_photon_radii(&e->pmap, &e->settings, &e->fs, e->width, e->height, e->radius_scale, e->radius);
-        e->aniso_on = e->aniso && ind_photon_aniso(&e->pmap, &e->settings, e->aniso);
-        e->stats.photons_emitted = tstats.emitted;
-        memcpy(e->stats.photons_stored, tstats.stored, sizeof e->stats.photons_stored);
-        e->stats.photons_truncated = tstats.truncated;
-        if (announce_photon_map(e, frame))
-            return eng_fail(err, ENG_ERR_ABORTED, "frame %d: capture failed at photons.map", frame);
-        if (announce_photon_origin(e, frame))
-            return eng_fail(err, ENG_ERR_ABORTED, "frame %d: capture failed at photons.origin", frame);
+        add_time(e, "photons", 0.0); /* the passes keep a serial frame's order */
+        ovl_start(e->overlap, photon_stage_run, &ps);
+        staged = 1;
     }
 
-    /* Eye G-buffer. */
+    /* Eye G-buffer and direct light, rendered. */
     t0 = now_ms();
     const glu_target *gb = pass_gbuffer_run(e->gbuffer, &e->fs);
     glFinish();
     add_time(e, "gbuffer", now_ms() - t0);
+    t0 = now_ms();
+    const glu_target *direct = pass_direct_run(e->direct, &e->fs, gb, maps, shadow_extra, &e->settings);
+    glFinish();
+    add_time(e, "direct", now_ms() - t0);
+
+    if (staged) {
+        ovl_join(e->overlap);
+        eng_result r = photon_stage_finish(e, frame, &ps, err);
+        if (r != ENG_OK)
+            return r;
+    }
+
+    /* Eye G-buffer, announced. */
     {
         const int mat_pick[] = {0, 1, 2, 3};
         int abort_at = 0;
@@ -1325,11 +1385,7 @@ eng_result eng_render_frame(eng_engine *e, int frame, eng_error *err)
             return eng_fail(err, ENG_ERR_ABORTED, "frame %d: capture failed in the gbuffer pass", frame);
     }
 
-    /* Direct light. */
-    t0 = now_ms();
-    const glu_target *direct = pass_direct_run(e->direct, &e->fs, gb, maps, shadow_extra, &e->settings);
-    glFinish();
-    add_time(e, "direct", now_ms() - t0);
+    /* Direct light, announced. */
     if (read_and_announce(e, frame, "direct.radiance", direct, 0, 0, 3, p012, CH_RGB))
         return eng_fail(err, ENG_ERR_ABORTED, "frame %d: capture failed at direct.radiance", frame);
     if (any_sized_light(&e->fs) && read_and_announce(e, frame, "direct.penumbra", direct, 1, 0, 1, p0, CH_Y))

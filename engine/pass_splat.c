@@ -67,6 +67,30 @@ float splat_kernel(const float d[3], const float n_p[3], float r_xy, float r_z)
     return (float)(2.0 / (ENG_PI * (double)r_xy * r_xy) * (1.0 - t * t));
 }
 
+/* Photons per draw call when the splat is drawn in pieces (see draw_pipelined). */
+#define SPLAT_CHUNK 4096
+
+/* Draws the drawn photons' rectangles (the bound VAO's index buffer, 6 indices each). llvmpipe
+ * shades the vertices of a draw and bins its triangles on the calling thread, alone, and
+ * rasterises the binned scene on its LP_NUM_THREADS threads only once the scene is flushed
+ * (issue 22 item 3; cornell-box-perf, 65,536 photons, 2 threads: one draw ~560 ms a frame, in
+ * pieces ~360 ms, measured under chrt on the 2-core machine). With 2 or more threads
+ * the photons are therefore drawn SPLAT_CHUNK at a time with a glFlush after each, so that
+ * llvmpipe rasterises piece k while this thread bins piece k+1. The pixels are the same: the
+ * pieces are rasterised in submission order, each tile by one thread in primitive order, so
+ * every pixel sums the same photons in the same order. With 1 thread it stays one draw (a
+ * 1-thread run keeps one core busy at a time, as before). */
+static void draw_pipelined(size_t drawn, int threads)
+{
+    const size_t chunk = threads > 1 ? SPLAT_CHUNK : drawn;
+    for (size_t at = 0; at < drawn; at += chunk) {
+        const size_t m = drawn - at < chunk ? drawn - at : chunk;
+        glDrawElements(GL_TRIANGLES, (GLsizei)(m * 6), GL_UNSIGNED_INT, (const void *)(at * 6 * sizeof(GLuint)));
+        if (m < drawn)
+            glFlush();
+    }
+}
+
 /* Compiles variant k (0–5, see struct pass_splat) into p->program[k] and sets its samplers. */
 static eng_result splat_program(pass_splat *p, int k, eng_error *err)
 {
@@ -229,7 +253,7 @@ const glu_target *pass_splat_run(pass_splat *p, const eng_frame_scene *fs, const
         glBlendFunc(GL_ONE, GL_ONE);
         glBlendEquation(GL_FUNC_ADD);
         glBindVertexArray(p->vao);
-        glDrawElements(GL_TRIANGLES, (GLsizei)(drawn * 6), GL_UNSIGNED_INT, NULL);
+        draw_pipelined(drawn, s->threads);
         glBindVertexArray(0);
         glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, 0);
         glDisable(GL_BLEND);

@@ -380,15 +380,6 @@ extern "C" eng_result rep_oiio_read_parts(const char *path, size_t max_floats, r
     }
 }
 
-extern "C" void rep_parts_free(rep_part *parts, int count)
-{
-    if (!parts)
-        return;
-    for (int i = 0; i < count; i++)
-        free_part(parts[i]);
-    std::free(parts);
-}
-
 extern "C" eng_result rep_oiio_write_parts(const char *path, const eng_buffer *parts, int count, eng_error *err)
 {
     try {

@@ -5,7 +5,10 @@
  * layout) and owns nothing after returning: the caller owns the parts array and frees it with
  * rep_parts_free. The writer exists so that tests (and tools) can make fixture runs without
  * the capture module. No C++ exception crosses this header; every failure is an eng_result
- * with a one-line message naming the file.
+ * with a one-line message naming the file. The C++ lives in the module libispm_oiio.so, which
+ * oiio_lazy.c loads on the first call (so that programs and commands that never read or write
+ * an image through OpenImageIO, `ispm record`, do not pay its ~240 libraries' start-up); a
+ * module that cannot be loaded is an ENG_ERR_IO naming the file and the module.
  */
 #ifndef ISPM_REP_OIIO_SHIM_H
 #define ISPM_REP_OIIO_SHIM_H
@@ -40,6 +43,12 @@ eng_result rep_oiio_read_parts(const char *path, size_t max_floats, rep_part **p
                                eng_error *err);
 
 void rep_parts_free(rep_part *parts, int count);
+
+/* Loads the OpenImageIO module now (the other calls load it on first use). A program that opens
+ * a window calls this first: some of the libraries OpenImageIO pulls in initialise Xlib's
+ * threading when they load, which breaks an X connection opened before (ispm-view died with
+ * "XIO: fatal IO error" when the module came after SDL's window). */
+eng_result rep_oiio_load(eng_error *err);
 
 /* Writes count buffers as a multi-part float32 ZIP-compressed EXR, part i named parts[i].name
  * with parts[i]'s channel names. Overwrites path. */

@@ -21,6 +21,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "oiio_shim.h"
 #include "view_model.h"
 
 enum { LEFT_W = 260, RIGHT_W = 360, BOTTOM_H = 48, TIMELINE_H = 16, FONT_PT = 12 };
@@ -900,6 +901,13 @@ int main(int argc, char **argv)
         return 2;
     }
 
+    /* OpenImageIO's libraries before any X connection (oiio_shim.h: rep_oiio_load). */
+    if (rep_oiio_load(&err) != ENG_OK) {
+        fprintf(stderr, "ispm-view: %s\n", err.msg);
+        view_run_close(ap.a);
+        view_run_close(ap.b);
+        return 1;
+    }
     /* SDL falls back to its "offscreen" driver when there is no display, which would run
      * invisibly forever: without a display (or an explicit SDL_VIDEODRIVER) stop here. */
     int rc = 0;
