@@ -970,6 +970,8 @@ static cJSON *manifest_json(const cap_capture *c)
     jadd(st, "atrous_gamma", jfloat(s.atrous_gamma));
     jadd(st, "kernel_scaling", jstr(eng_scaling_name(s.kernel_scaling)));
     jadd(st, "progressive", cJSON_CreateBool(s.progressive));
+    if (s.progressive_pixel) /* only when set: runs without keep their manifests */
+        jadd(st, "progressive_radius", jstr("pixel"));
     jadd(st, "boundary", jstr(eng_boundary_name(s.boundary)));
     jadd(st, "photon_trace", jstr(eng_trace_name(s.photon_trace)));
     if (s.photon_trace == ENG_TRACE_MULTI_IMAGE) {

@@ -299,7 +299,7 @@ static const char *const SETTING_KEYS[] = {
     "temporal_alpha", "atrous_iterations", "atrous_detail", "atrous_gamma", "random", "random_map_size",
     "random_seed", "stratified_cycle", "shadow_map_size", "pcf_radius", "shadow_bias", "exposure", "threads",
     "kernel_scaling", "progressive", "boundary", "specular", "specular_depth", "photon_trace", "multi_image_maps",
-    "multi_image_size", "multi_image_miss", "multi_image_compare", NULL};
+    "multi_image_size", "multi_image_miss", "multi_image_compare", "progressive_radius", NULL};
 
 /* The value the engine uses for a settings key, as text; 0 for a key it does not know. */
 static int setting_text(const eng_settings *s, const char *key, char *out, size_t size)
@@ -322,6 +322,8 @@ static int setting_text(const eng_settings *s, const char *key, char *out, size_
         return snprintf(out, size, "%s", eng_scaling_name(s->kernel_scaling)), 1;
     if (!strcmp(key, "progressive"))
         return snprintf(out, size, "%s", s->progressive ? "true" : "false"), 1;
+    if (!strcmp(key, "progressive_radius"))
+        return snprintf(out, size, "%s", s->progressive_pixel ? "pixel" : "frame"), 1;
     if (!strcmp(key, "boundary"))
         return snprintf(out, size, "%s", eng_boundary_name(s->boundary)), 1;
     if (!strcmp(key, "photon_trace"))

@@ -183,6 +183,13 @@ static double leak_at(const double *lambda, double c, double d)
 void bnd_weights(const ind_gbuffer *gb, const float view_proj[16], const float eye[3], const eng_photon_map *map,
                  const float *radius, float compression, int threads, float *weight)
 {
+    bnd_weights_scaled(gb, view_proj, eye, map, radius, NULL, compression, threads, weight);
+}
+
+void bnd_weights_scaled(const ind_gbuffer *gb, const float view_proj[16], const float eye[3],
+                        const eng_photon_map *map, const float *radius, const float *pixel_scale, float compression,
+                        int threads, float *weight)
+{
     const int w = gb->width, h = gb->height;
     const int tx = (w + BND_TILE - 1) / BND_TILE, ty = (h + BND_TILE - 1) / BND_TILE;
     double *rt = tile_radii(view_proj, w, h, map, radius, tx, ty);
@@ -203,6 +210,8 @@ void bnd_weights(const ind_gbuffer *gb, const float view_proj[16], const float e
             size_t i = (size_t)y * w + x;
             const float *p = gb->position + 4 * i, *pn = gb->normal + 3 * i;
             double R = rt[(size_t)(y / BND_TILE) * tx + (size_t)(x / BND_TILE)];
+            if (pixel_scale)
+                R *= pixel_scale[i];
             double nl = sqrt((double)pn[0] * pn[0] + (double)pn[1] * pn[1] + (double)pn[2] * pn[2]);
             if (!(p[3] > 0.0f) || !(R > 0.0) || !(nl > 0.0)) {
                 weight[i] = 1.0f;
@@ -304,8 +313,8 @@ const float *bnd_pass_run(bnd_pass *b, const glu_target *gb, const glu_target **
 {
     static const int p4[] = {0, 1, 2, 3};
     ind_gbuffer_read(gb, &b->gb);
-    bnd_weights(&b->gb, in->fs->camera.view_proj, in->fs->camera.eye, in->map, in->radius,
-                in->s->normal_compression, in->s->threads, b->weight);
+    bnd_weights_scaled(&b->gb, in->fs->camera.view_proj, in->fs->camera.eye, in->map, in->radius, in->pixel_scale,
+                       in->s->normal_compression, in->s->threads, b->weight);
     const size_t n = (size_t)gb->width * (size_t)gb->height;
     for (int a = 0; a < b->attachments; a++) {
         glu_read(*sp, a, 0, 4, p4, b->rgba);

@@ -50,6 +50,11 @@ double bnd_mass(double x);
  * radii (map->count); `threads` OpenMP threads (≤ 0: one). */
 void bnd_weights(const ind_gbuffer *gb, const float view_proj[16], const float eye[3], const eng_photon_map *map,
                  const float *radius, float compression, int threads, float *weight);
+/* The same with each pixel's radius times pixel_scale[pixel] (progressive photon mapping's
+ * per-pixel radius, ind_input.pixel_scale; NULL: bnd_weights). */
+void bnd_weights_scaled(const ind_gbuffer *gb, const float view_proj[16], const float eye[3],
+                        const eng_photon_map *map, const float *radius, const float *pixel_scale, float compression,
+                        int threads, float *weight);
 
 /* Divides the RGB of n RGBA pixels by weight (A untouched). */
 void bnd_apply(size_t n, const float *weight, float *rgba);

@@ -439,6 +439,9 @@ typedef struct eng_settings {
     int specular_depth;       /* specular surfaces an eye path crosses, 1..16; default 4 */
     /* Capture (issue 22): EXR compression of the frame files; default zip. */
     eng_capture_compression capture_compression;
+    /* Issue 13: `"progressive_radius": "pixel"` (1): progressive photon mapping's radius per pixel
+     * (progressive.h; every method but tile-gather-gl); "frame" (0, default): one scale per frame. */
+    int progressive_pixel;
 } eng_settings;
 
 void eng_settings_defaults(eng_settings *s);

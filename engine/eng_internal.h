@@ -245,6 +245,13 @@ typedef struct pass_splat pass_splat;
  * radiance (splat_irradiance.frag.glsl). width×height must be the G-buffer's it runs against.
  * aniso: NULL, or the anisotropic kernel's 4 floats per photon (indirect.h, ind_input). */
 eng_result pass_splat_create(int width, int height, int irradiance, pass_splat **out, eng_error *err);
+/* Per-pixel radius scales (w×h, top row first, each ≤ 1) the next pass_splat_run applies to
+ * every photon's r_xy and r_z at that pixel (progressive photon mapping's per-pixel radius,
+ * progressive.h); NULL: none (the default). */
+void pass_splat_set_pixel_scale(pass_splat *p, const float *scale);
+/* Uploads w×h scales (top row first) into the R32F texture *tex (created on first use, with
+ * *rows its w×h upload scratch): the u_pixel_scale of shaders/pixel_scale.glsl. */
+void pixel_scale_upload(GLuint *tex, float **rows, int w, int h, const float *scale);
 const glu_target *pass_splat_run(pass_splat *p, const eng_frame_scene *fs, const glu_target *gbuf,
                                  const eng_photon_map *map, const float *radius,
                                  const float *aniso, const eng_settings *s);

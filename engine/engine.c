@@ -87,6 +87,7 @@ struct eng_engine {
     ind_cpu_target prog_target;
     int prog_target_ok;
     float radius_scale; /* this frame's progressive radius scale (1 without) */
+    const float *pixel_scale; /* this frame's per-pixel radius scales (progressive_radius "pixel"), or NULL */
     int next_frame; /* the frame the temporal/progressive history is ready for (frames render in order) */
     int silent;     /* re-rendering earlier frames for the temporal history: announce nothing */
     int history_start; /* eng_set_history_start: where a rebuilt history begins (0: frame 0) */
@@ -303,8 +304,14 @@ eng_result eng_create(const eng_desc *desc, eng_engine **out, eng_error *err)
             r = pass_atrous_create(e->width, e->height, st->atrous_iterations, &e->atrous, err);
         if (r == ENG_OK && e->filtered)
             r = pass_resolve_create(e->width, e->height, &e->resolve, err);
+        if (r == ENG_OK && st->progressive_pixel && (!st->progressive || !e->method->per_pixel_radius))
+            r = eng_fail(err, ENG_ERR_INVALID,
+                         "settings.progressive_radius \"pixel\" needs \"progressive\": true and indirect "
+                         "\"kd-gather\", \"tile-gather\", \"ispm\" or \"quads\" (got \"%s\")",
+                         e->method->name);
         if (r == ENG_OK && st->progressive) {
             e->prog = prog_create();
+            prog_set_per_pixel(e->prog, st->progressive_pixel);
             r = ind_cpu_target_create(&e->prog_target, w, h, e->filtered, err);
             e->prog_target_ok = r == ENG_OK;
         }
@@ -966,7 +973,13 @@ static eng_result photon_stage_finish(eng_engine *e, int frame, photon_stage *ps
  * the extra buffers it lists; *out gets its target. */
 static eng_result run_method(eng_engine *e, int frame, const glu_target *gb, const glu_target **out, eng_error *err)
 {
-    ind_input in = {&e->fs, gb, &e->pmap, e->radius, &e->settings, e->aniso_on ? e->aniso : NULL};
+    /* Per-pixel progressive radii (progressive.h): this frame's scales for the G-buffer gb. */
+    e->pixel_scale = NULL;
+    if (e->prog && e->settings.progressive_pixel) {
+        ind_gbuffer_read(gb, &e->prog_gb);
+        e->pixel_scale = prog_pixel_scales(e->prog, &e->prog_gb);
+    }
+    ind_input in = {&e->fs, gb, &e->pmap, e->radius, &e->settings, e->aniso_on ? e->aniso : NULL, e->pixel_scale};
     ind_output o;
     memset(&o, 0, sizeof o);
     double t0 = now_ms();
@@ -992,7 +1005,7 @@ static eng_result boundary_run(eng_engine *e, int frame, const glu_target *gb, c
     if (!e->bnd)
         return ENG_OK;
     double t0 = now_ms();
-    ind_input in = {&e->fs, gb, &e->pmap, e->radius, &e->settings, NULL};
+    ind_input in = {&e->fs, gb, &e->pmap, e->radius, &e->settings, NULL, e->pixel_scale};
     const float *wt = bnd_pass_run(e->bnd, gb, sp, &in);
     glFinish();
     add_time(e, "boundary", now_ms() - t0);
@@ -1038,7 +1051,9 @@ static eng_result progressive_run(eng_engine *e, int frame, const glu_target *gb
     static const int p012[] = {0, 1, 2};
     if (read_and_announce(e, frame, "progressive.radiance", *sp, 0, 0, 3, p012, CH_RGB) ||
         announce(e, frame, "progressive.count", w, h, 1, CH_Y, e->prog_count) ||
-        announce(e, frame, "progressive.radius", w, h, 1, CH_Y, e->prog_radius))
+        announce(e, frame, "progressive.radius", w, h, 1, CH_Y, e->prog_radius) ||
+        (e->settings.progressive_pixel &&
+         announce(e, frame, "progressive.photons", w, h, 1, CH_Y, prog_photons(e->prog))))
         return eng_fail(err, ENG_ERR_ABORTED, "frame %d: capture failed in the progressive pass", frame);
     return ENG_OK;
 }

@@ -45,6 +45,9 @@ typedef struct quad_instance {
 typedef struct quads_state {
     glu_target target;
     GLuint program, program_aniso, vao, vbo_quad, vbo_inst; /* program_aniso: PHOTON_ANISO, on first use */
+    GLuint program_scale[2]; /* PIXEL_SCALE (per-pixel radii; [1] also PHOTON_ANISO), on first use */
+    GLuint scale_tex;        /* their u_pixel_scale (pixel_scale_upload) */
+    float *scale_rows;
     int irradiance;
     size_t inst_capacity;
     quad_instance *inst; /* inst_capacity instances, CPU side */
@@ -64,15 +67,23 @@ static void quads_destroy(void *state)
         glDeleteProgram(q->program);
     if (q->program_aniso)
         glDeleteProgram(q->program_aniso);
+    for (int k = 0; k < 2; k++)
+        if (q->program_scale[k])
+            glDeleteProgram(q->program_scale[k]);
+    if (q->scale_tex)
+        glDeleteTextures(1, &q->scale_tex);
+    free(q->scale_rows);
     free(q->inst);
     free(q);
 }
 
-/* The quads program (PHOTON_ANISO with aniso) into *prog, samplers set. */
-static eng_result quads_program(int irradiance, int aniso, GLuint *prog, eng_error *err)
+/* The quads program (PHOTON_ANISO with aniso, PIXEL_SCALE with scale) into *prog, samplers set. */
+static eng_result quads_program(int irradiance, int aniso, int scale, GLuint *prog, eng_error *err)
 {
+    static const char *const defines[4] = {NULL, "#define PHOTON_ANISO\n", "#define PIXEL_SCALE\n",
+                                            "#define PIXEL_SCALE\n#define PHOTON_ANISO\n"};
     eng_result r = glu_program_defines("quads.vert.glsl", irradiance ? "quads_irradiance.frag.glsl" : "quads.frag.glsl",
-                                       aniso ? "#define PHOTON_ANISO\n" : NULL, prog, err);
+                                       defines[(aniso ? 1 : 0) + (scale ? 2 : 0)], prog, err);
     if (r != ENG_OK)
         return r;
     glUseProgram(*prog);
@@ -80,6 +91,8 @@ static eng_result quads_program(int irradiance, int aniso, GLuint *prog, eng_err
     glUniform1i(glGetUniformLocation(*prog, "u_normal"), 1);
     glUniform1i(glGetUniformLocation(*prog, "u_albedo"), 2);
     glUniform1i(glGetUniformLocation(*prog, "u_material"), 3);
+    if (scale)
+        glUniform1i(glGetUniformLocation(*prog, "u_pixel_scale"), 4);
     glUseProgram(0);
     return ENG_OK;
 }
@@ -91,7 +104,7 @@ static eng_result quads_create(int width, int height, int irradiance, void **sta
     if (!q)
         return eng_fail(err, ENG_ERR_NOMEM, "quads: out of memory");
     q->irradiance = irradiance;
-    eng_result r = quads_program(irradiance, 0, &q->program, err);
+    eng_result r = quads_program(irradiance, 0, 0, &q->program, err);
     if (r == ENG_OK)
         r = glu_target_create(&q->target, irradiance ? 2 : 1, width, height, 0, err);
     if (r != ENG_OK) {
@@ -164,12 +177,20 @@ static eng_result quads_run(void *state, const ind_input *in, ind_output *out, e
         glBindBuffer(GL_ARRAY_BUFFER, q->vbo_inst);
         glBufferSubData(GL_ARRAY_BUFFER, 0, (GLsizeiptr)(map->count * sizeof *inst), inst);
 
-        if (in->aniso && !q->program_aniso) {
-            eng_result r = quads_program(q->irradiance, 1, &q->program_aniso, err);
+        GLuint *slot = in->pixel_scale ? &q->program_scale[in->aniso ? 1 : 0]
+                                       : in->aniso ? &q->program_aniso
+                                                   : &q->program;
+        if (!*slot) {
+            eng_result r = quads_program(q->irradiance, in->aniso != NULL, in->pixel_scale != NULL, slot, err);
             if (r != ENG_OK)
                 return r;
         }
-        const GLuint prog = in->aniso ? q->program_aniso : q->program;
+        if (in->pixel_scale) { /* per-pixel radii (ind_input.pixel_scale): texture unit 4 */
+            pixel_scale_upload(&q->scale_tex, &q->scale_rows, q->target.width, q->target.height, in->pixel_scale);
+            glActiveTexture(GL_TEXTURE4);
+            glBindTexture(GL_TEXTURE_2D, q->scale_tex);
+        }
+        const GLuint prog = *slot;
         glUseProgram(prog);
         glUniformMatrix4fv(glGetUniformLocation(prog, "u_view_proj"), 1, GL_FALSE, in->fs->camera.view_proj);
         glUniform3fv(glGetUniformLocation(prog, "u_eye"), 1, in->fs->camera.eye);
@@ -194,4 +215,4 @@ static eng_result quads_run(void *state, const ind_input *in, ind_output *out, e
     return ENG_OK;
 }
 
-const ind_method ind_quads_method = {"quads", "splat", "quads", quads_create, quads_run, quads_destroy};
+const ind_method ind_quads_method = {"quads", "splat", "quads", quads_create, quads_run, quads_destroy, 1};

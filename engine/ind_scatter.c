@@ -13,6 +13,7 @@ static eng_result scatter_create(int width, int height, int irradiance, void **s
 static eng_result scatter_run(void *state, const ind_input *in, ind_output *out, eng_error *err)
 {
     (void)err;
+    pass_splat_set_pixel_scale(state, in->pixel_scale);
     out->target = pass_splat_run(state, in->fs, in->gbuf, in->map, in->radius, in->aniso, in->s);
     out->extra_count = 0;
     return ENG_OK;
@@ -20,4 +21,4 @@ static eng_result scatter_run(void *state, const ind_input *in, ind_output *out,
 
 static void scatter_destroy(void *state) { pass_splat_destroy(state); }
 
-const ind_method ind_scatter_method = {"ispm", "splat", "splat", scatter_create, scatter_run, scatter_destroy};
+const ind_method ind_scatter_method = {"ispm", "splat", "splat", scatter_create, scatter_run, scatter_destroy, 1};

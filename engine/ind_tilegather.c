@@ -204,6 +204,33 @@ static void photon_aniso(const tg_state *t, const eng_photon *ph, float r, const
         }
 }
 
+/* Per-pixel progressive radii (ind_input.pixel_scale ≤ 1, so the lists built with the unscaled
+ * reach still hold every photon that can reach): photon ph over its rectangle one pixel at a
+ * time, its r_xy times that pixel's scale — the k-d gather's test and kernel with the same
+ * radius, the same bits. aniso: NULL or the photon's 4 floats. */
+static void photon_scaled(const tg_state *t, const eng_photon *ph, float r, const float *aniso, const float *pscale,
+                          float compression, const float *loc, float *acc, int x0, int y0, const tl_entry *e)
+{
+    for (int y = e->ya; y <= e->yb; y++)
+        for (int x = e->xa; x <= e->xb; x++) {
+            const int l = y * ROW + x;
+            const size_t p = (size_t)(y0 + y) * (size_t)t->width + (size_t)(x0 + x);
+            const float rp = r * pscale[p], ra = aniso ? rp * aniso[3] : rp;
+            float dx = loc[P_SX * LANES + l] - ph->position[0], dy = loc[P_SY * LANES + l] - ph->position[1],
+                  dz = loc[P_SZ * LANES + l] - ph->position[2];
+            if (!(dx * dx + dy * dy + dz * dz <= ra * ra * 1.001f))
+                continue;
+            float *a = acc + l;
+            float v[4] = {a[0], a[LANES], a[2 * LANES], a[3 * LANES]};
+            if (aniso)
+                gk_add_aniso(&t->px[p], ph, rp, aniso, compression, v, t->glossy ? t->glossy + 4 * p : NULL);
+            else
+                gk_add(&t->px[p], ph, rp, compression, v, t->glossy ? t->glossy + 4 * p : NULL);
+            for (int c = 0; c < 4; c++)
+                a[c * LANES] = v[c];
+        }
+}
+
 /* One tile: its photons in list order, each over the pixels of its rectangle inside the tile.
  * Per pixel the k-d gather's distance test (d² <= r²·1.001), then gather_kernel.h's kernel
  * and BSDF: with AVX where the processor has it (photon_avx, the same bits), else one pixel
@@ -211,7 +238,7 @@ static void photon_aniso(const tg_state *t, const eng_photon *ph, float r, const
  * are copied to a local block first (it fits in L1); accumulates locally and writes only the
  * tile's own pixels at the end. */
 static void eval_tile(tg_state *t, const eng_photon_map *map, const float *radius, const float *aniso,
-                      float compression, int x0, int y0, const tl_entry *list, uint32_t count)
+                      const float *pscale, float compression, int x0, int y0, const tl_entry *list, uint32_t count)
 {
     const int w = t->width, h = t->height;
     const size_t npix = (size_t)w * (size_t)h;
@@ -236,6 +263,11 @@ static void eval_tile(tg_state *t, const eng_photon_map *map, const float *radiu
         const eng_photon *ph = &map->photons[i];
         const float r = radius[i], r2 = r * r * 1.001f;
         const int ya = list[e].ya, yb = list[e].yb, xa = list[e].xa, xb = list[e].xb;
+        if (pscale) {
+            photon_scaled(t, ph, r, aniso ? aniso + 4 * (size_t)i : NULL, pscale, compression, loc, acc, x0, y0,
+                          &list[e]);
+            continue;
+        }
         if (aniso && aniso[4 * (size_t)i + 3] != 1.0f) {
             photon_aniso(t, ph, r, aniso + 4 * (size_t)i, compression, loc, acc, x0, y0, &list[e]);
             continue;
@@ -287,8 +319,8 @@ static eng_result tg_run(void *state, const ind_input *in, ind_output *out, eng_
     const float compression = s->normal_compression;
 #pragma omp parallel for num_threads(threads) schedule(dynamic, 1)
     for (size_t k = 0; k < tiles; k++)
-        eval_tile(t, map, in->radius, in->aniso, compression, (int)(k % (size_t)tx) * TILE, (int)(k / (size_t)tx) * TILE,
-                  t->tl.entries + t->tl.offset[k], t->tl.offset[k + 1] - t->tl.offset[k]);
+        eval_tile(t, map, in->radius, in->aniso, in->pixel_scale, compression, (int)(k % (size_t)tx) * TILE,
+                  (int)(k / (size_t)tx) * TILE, t->tl.entries + t->tl.offset[k], t->tl.offset[k + 1] - t->tl.offset[k]);
 
     ind_cpu_target_upload(&t->target, 0, t->out);
     if (t->irradiance)
@@ -300,4 +332,4 @@ static eng_result tg_run(void *state, const ind_input *in, ind_output *out, eng_
     return ENG_OK;
 }
 
-const ind_method ind_tilegather_method = {"tile-gather", "gather", "gather", tg_create, tg_run, tg_destroy};
+const ind_method ind_tilegather_method = {"tile-gather", "gather", "gather", tg_create, tg_run, tg_destroy, 1};

@@ -29,6 +29,11 @@ typedef struct ind_input {
     const float *aniso;          /* NULL (isotropic), or per photon 4 floats: the anisotropic kernel's
                                   * stretch vector and s_u (gather_kernel.h, gk_aniso_of; 002 Eq.
                                   * 6.3–6.5); its support reaches s_u·r_xy from the photon */
+    const float *pixel_scale;    /* NULL, or per eye pixel (top row first) a factor ≤ 1 on every
+                                  * photon's r_xy (and reach) when evaluated at that pixel:
+                                  * progressive photon mapping's per-pixel radius (progressive.h,
+                                  * `"progressive_radius": "pixel"`); only for methods whose
+                                  * per_pixel_radius is 1 */
 } ind_input;
 
 /* A CPU-side buffer a method wants announced besides its target (e.g. gather.tile_count). */
@@ -58,6 +63,7 @@ typedef struct ind_method {
     eng_result (*create)(int width, int height, int irradiance, void **state, eng_error *err);
     eng_result (*run)(void *state, const ind_input *in, ind_output *out, eng_error *err);
     void (*destroy)(void *state); /* accepts NULL */
+    int per_pixel_radius; /* 1: run honours ind_input.pixel_scale (all but tile-gather-gl) */
 } ind_method;
 
 extern const ind_method ind_scatter_method;

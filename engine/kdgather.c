@@ -200,18 +200,20 @@ static int cmp_u32(const void *a, const void *b)
 __attribute__((always_inline))
 #endif
 static inline void gather_point(const kd_tree *tree, const eng_photon_map *map, const float *r_xy, const float *aniso,
-                                float radius, float compression, const gk_pixel *px, uint32_t **list, size_t *cap,
-                                float acc[4], float *glossy)
+                                float radius, float compression, float ps, const gk_pixel *px, uint32_t **list,
+                                size_t *cap, float acc[4], float *glossy)
 {
+    /* ps: the pixel's progressive radius scale (progressive.h; 1 = none): every photon's r_xy
+     * and reach times ps here (x·1 is x: without it the sums are the same bits). */
     const float *p = px->s;
     size_t n = 0, kept = 0;
-    kd_tree_range(tree, p, radius, list, &n, cap);
+    kd_tree_range(tree, p, radius * ps, list, &n, cap);
     /* Photons whose own kernel cannot reach s (t >= |d|/r_xy >= 1) are dropped before
      * sorting; the margin keeps every photon the kernel could accept. */
     uint32_t *l = *list;
     for (size_t k = 0; k < n; k++) {
         const float *x = map->photons[l[k]].position;
-        float dx = p[0] - x[0], dy = p[1] - x[1], dz = p[2] - x[2], r = r_xy[l[k]];
+        float dx = p[0] - x[0], dy = p[1] - x[1], dz = p[2] - x[2], r = r_xy[l[k]] * ps;
         if (aniso)
             r *= aniso[4 * (size_t)l[k] + 3];
         if (dx * dx + dy * dy + dz * dz <= r * r * 1.001f)
@@ -223,16 +225,17 @@ static inline void gather_point(const kd_tree *tree, const eng_photon_map *map, 
     /* shaders/splat.frag.glsl's main() summed over the photons in index order. */
     for (size_t k = 0; k < n; k++) {
         if (aniso)
-            gk_add_aniso(px, &map->photons[l[k]], r_xy[l[k]], aniso + 4 * (size_t)l[k], compression, acc, glossy);
+            gk_add_aniso(px, &map->photons[l[k]], r_xy[l[k]] * ps, aniso + 4 * (size_t)l[k], compression, acc,
+                         glossy);
         else
-            gk_add(px, &map->photons[l[k]], r_xy[l[k]], compression, acc, glossy);
+            gk_add(px, &map->photons[l[k]], r_xy[l[k]] * ps, compression, acc, glossy);
     }
 }
 
 void kd_gather_point(const kd_tree *tree, const eng_photon_map *map, const float *r_xy, float radius,
                      float compression, const gk_pixel *px, uint32_t **list, size_t *cap, float acc[4], float *glossy)
 {
-    gather_point(tree, map, r_xy, NULL, radius, compression, px, list, cap, acc, glossy);
+    gather_point(tree, map, r_xy, NULL, radius, compression, 1.0f, px, list, cap, acc, glossy);
 }
 
 /* One row of gather(): the isotropic kernel, or (aniso not NULL) the anisotropic one; two
@@ -242,6 +245,7 @@ typedef struct row_ctx {
     const eng_photon_map *map;
     const float *r_xy, *aniso, *position, *normal, *albedo, *material, *eye;
     float radius, compression;
+    const float *pscale; /* per-pixel radius scale, or NULL */
     int w;
     float *out, *glossy;
 } row_ctx;
@@ -258,8 +262,8 @@ static inline void gather_row(const row_ctx *c, const float *aniso, int y, uint3
             continue;
         gk_pixel px;
         gk_pixel_init(&px, p, c->normal + 3 * i, c->albedo + 3 * i, c->material + 4 * i, c->eye);
-        gather_point(c->tree, c->map, c->r_xy, aniso, c->radius, c->compression, &px, list, cap, c->out + 4 * i,
-                     c->glossy ? c->glossy + 4 * i : NULL);
+        gather_point(c->tree, c->map, c->r_xy, aniso, c->radius, c->compression, c->pscale ? c->pscale[i] : 1.0f,
+                     &px, list, cap, c->out + 4 * i, c->glossy ? c->glossy + 4 * i : NULL);
     }
 }
 
@@ -270,7 +274,8 @@ static void gather_row_aniso(const row_ctx *c, int y, uint32_t **list, size_t *c
     gather_row(c, c->aniso, y, list, cap);
 }
 
-static eng_result gather(const eng_photon_map *map, const float *radii, const float *aniso, int w, int h,
+static eng_result gather(const eng_photon_map *map, const float *radii, const float *aniso, const float *pscale, int w,
+                         int h,
                          const float *position, const float *normal, const float *albedo, const float *material,
                          const float eye[3], const eng_settings *s, float *out, float *glossy, eng_error *err)
 {
@@ -294,7 +299,7 @@ static eng_result gather(const eng_photon_map *map, const float *radii, const fl
         radius = fmaxf(radius, aniso ? r_xy[i] * aniso[4 * i + 3] : r_xy[i]);
     }
     const row_ctx c = {&tree, map, r_xy, aniso, position, normal, albedo, material, eye, radius,
-                       s->normal_compression, w, out, glossy};
+                       s->normal_compression, pscale, w, out, glossy};
     void (*const row)(const row_ctx *, int, uint32_t **, size_t *) = aniso ? gather_row_aniso : gather_row_iso;
     int threads = s->threads > 0 ? s->threads : 2;
 #pragma omp parallel num_threads(threads)
@@ -315,7 +320,7 @@ eng_result kd_gather(const eng_photon_map *map, int w, int h, const float *posit
                      const float *albedo, const float *material, const float eye[3], const eng_settings *s,
                      float *out, eng_error *err)
 {
-    return gather(map, NULL, NULL, w, h, position, normal, albedo, material, eye, s, out, NULL, err);
+    return gather(map, NULL, NULL, NULL, w, h, position, normal, albedo, material, eye, s, out, NULL, err);
 }
 
 /* ---------------------------------------------------------------- the method (indirect.h) */
@@ -368,7 +373,8 @@ static eng_result kd_run(void *state, const ind_input *in, ind_output *out, eng_
 {
     kd_state *k = state;
     ind_gbuffer_read(in->gbuf, &k->gb);
-    eng_result r = gather(in->map, in->radius, in->aniso, k->width, k->height, k->gb.position, k->gb.normal, k->gb.albedo, k->gb.material,
+    eng_result r = gather(in->map, in->radius, in->aniso, in->pixel_scale, k->width, k->height, k->gb.position,
+                          k->gb.normal, k->gb.albedo, k->gb.material,
                           in->fs->camera.eye, in->s, k->out, k->glossy, err);
     if (r != ENG_OK)
         return r;
@@ -380,4 +386,4 @@ static eng_result kd_run(void *state, const ind_input *in, ind_output *out, eng_
     return ENG_OK;
 }
 
-const ind_method ind_kdgather_method = {"kd-gather", "gather", "gather", kd_create, kd_run, kd_destroy};
+const ind_method ind_kdgather_method = {"kd-gather", "gather", "gather", kd_create, kd_run, kd_destroy, 1};

@@ -30,8 +30,12 @@ struct pass_splat {
     glu_target target;
     /* 0 the full BSDF, 1 SPLAT_NO_METALLIC (no glossy term), 2 also SPLAT_NO_TRANSMISSION
      * (Lambert only, no material fetch); 3–5 the same with PHOTON_ANISO (the anisotropic
-     * kernel, photon_kernel.glsl), compiled on first use. */
-    GLuint program[6], vao, ssbo, ibo;
+     * kernel, photon_kernel.glsl), compiled on first use; 6–11 the same six with
+     * PIXEL_SCALE (per-pixel radius scales, pass_splat_set_pixel_scale; pixel_scale.glsl). */
+    GLuint program[12], vao, ssbo, ibo;
+    GLuint scale_tex;     /* R32F per-pixel radius scales (0 until first set) */
+    int use_scale;        /* the next run applies them */
+    float *scale_rows;    /* upload scratch, GL row order */
     int irradiance;
     size_t capacity; /* photons the buffers hold */
     float *position;  /* read-back G-buffer positions, GL row order */
@@ -91,9 +95,10 @@ static void draw_pipelined(size_t drawn, int threads)
     }
 }
 
-/* Compiles variant k (0–5, see struct pass_splat) into p->program[k] and sets its samplers. */
+/* Compiles variant k (0–11, see struct pass_splat) into p->program[k] and sets its samplers. */
 static eng_result splat_program(pass_splat *p, int k, eng_error *err)
 {
+    char defs[160];
     static const char *const defines[6] = {
         NULL,
         "#define SPLAT_NO_METALLIC\n",
@@ -102,7 +107,8 @@ static eng_result splat_program(pass_splat *p, int k, eng_error *err)
         "#define PHOTON_ANISO\n#define SPLAT_NO_METALLIC\n",
         "#define PHOTON_ANISO\n#define SPLAT_NO_METALLIC\n#define SPLAT_NO_TRANSMISSION\n"};
     const char *frag = p->irradiance ? "splat_irradiance.frag.glsl" : "splat.frag.glsl";
-    eng_result r = glu_program_defines("splat.vert.glsl", frag, defines[k], &p->program[k], err);
+    snprintf(defs, sizeof defs, "%s%s", k >= 6 ? "#define PIXEL_SCALE\n" : "", defines[k % 6] ? defines[k % 6] : "");
+    eng_result r = glu_program_defines("splat.vert.glsl", frag, defs[0] ? defs : NULL, &p->program[k], err);
     if (r != ENG_OK)
         return r;
     GLuint prog = p->program[k];
@@ -111,6 +117,8 @@ static eng_result splat_program(pass_splat *p, int k, eng_error *err)
     glUniform1i(glGetUniformLocation(prog, "u_normal"), 1);
     glUniform1i(glGetUniformLocation(prog, "u_albedo"), 2);
     glUniform1i(glGetUniformLocation(prog, "u_material"), 3);
+    if (k >= 6)
+        glUniform1i(glGetUniformLocation(prog, "u_pixel_scale"), 4);
     glUniform2f(glGetUniformLocation(prog, "u_viewport"), (float)p->target.width, (float)p->target.height);
     glUseProgram(0);
     return ENG_OK;
@@ -231,7 +239,7 @@ const glu_target *pass_splat_run(pass_splat *p, const eng_frame_scene *fs, const
             metallic |= m.metallic > 0.0f;
             transmission |= m.transmission != 0.0f;
         }
-        const int k = (metallic ? 0 : transmission ? 1 : 2) + (aniso ? 3 : 0);
+        const int k = (metallic ? 0 : transmission ? 1 : 2) + (aniso ? 3 : 0) + (p->use_scale ? 6 : 0);
         if (!p->program[k]) {
             eng_error e;
             if (splat_program(p, k, &e) != ENG_OK) {
@@ -245,6 +253,10 @@ const glu_target *pass_splat_run(pass_splat *p, const eng_frame_scene *fs, const
         for (int i = 0; i < 4; i++) {
             glActiveTexture(GL_TEXTURE0 + i);
             glBindTexture(GL_TEXTURE_2D, gbuf->color[i]);
+        }
+        if (p->use_scale) {
+            glActiveTexture(GL_TEXTURE4);
+            glBindTexture(GL_TEXTURE_2D, p->scale_tex);
         }
         glEnable(GL_DEPTH_TEST);
         glDepthFunc(GL_GEQUAL);
@@ -275,13 +287,40 @@ void pass_splat_destroy(pass_splat *p)
         glDeleteVertexArrays(1, &p->vao);
     GLuint bufs[2] = {p->ssbo, p->ibo};
     glDeleteBuffers(2, bufs);
-    for (int k = 0; k < 6; k++)
+    for (int k = 0; k < 12; k++)
         if (p->program[k])
             glDeleteProgram(p->program[k]);
+    if (p->scale_tex)
+        glDeleteTextures(1, &p->scale_tex);
+    free(p->scale_rows);
     free(p->position);
     free(p->packed);
     free(p->bounds);
     free(p->keep);
     splat_tiles_free(&p->tiles);
     free(p);
+}
+
+void pixel_scale_upload(GLuint *tex, float **rows, int w, int h, const float *scale)
+{
+    if (!*tex) {
+        *rows = eng_xmalloc((size_t)w * (size_t)h * sizeof(float));
+        glGenTextures(1, tex);
+        glBindTexture(GL_TEXTURE_2D, *tex);
+        glTexImage2D(GL_TEXTURE_2D, 0, GL_R32F, w, h, 0, GL_RED, GL_FLOAT, NULL);
+        glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+        glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+    }
+    for (int y = 0; y < h; y++) /* top row first → GL's bottom row first */
+        memcpy(*rows + (size_t)(h - 1 - y) * (size_t)w, scale + (size_t)y * (size_t)w, (size_t)w * sizeof(float));
+    glBindTexture(GL_TEXTURE_2D, *tex);
+    glTexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, w, h, GL_RED, GL_FLOAT, *rows);
+    glBindTexture(GL_TEXTURE_2D, 0);
+}
+
+void pass_splat_set_pixel_scale(pass_splat *p, const float *scale)
+{
+    p->use_scale = scale != NULL;
+    if (scale)
+        pixel_scale_upload(&p->scale_tex, &p->scale_rows, p->target.width, p->target.height, scale);
 }

@@ -20,6 +20,12 @@ struct prog_state {
     uint32_t *count;
     ind_gbuffer prev;  /* the previous frame's G-buffer, for the bit-wise test */
     int have_prev;
+    uint8_t *restart;  /* per pixel: restarts this frame (mark_restarts) */
+    int marked;        /* restart[] is this frame's */
+    /* Per-pixel radii (prog_set_per_pixel). */
+    int per_pixel;
+    double *r2px, *npx; /* R² and N per pixel */
+    float *scale, *photons;
 };
 
 static void *xcalloc(size_t n, size_t size)
@@ -43,8 +49,16 @@ static void free_buffers(prog_state *p)
     free(p->sum[0]);
     free(p->sum[1]);
     free(p->count);
+    free(p->restart);
+    free(p->r2px);
+    free(p->npx);
+    free(p->scale);
+    free(p->photons);
     p->sum[0] = p->sum[1] = NULL;
     p->count = NULL;
+    p->restart = NULL;
+    p->r2px = p->npx = NULL;
+    p->scale = p->photons = NULL;
     ind_gbuffer_free(&p->prev);
     p->have_prev = 0;
     p->width = p->height = p->attachments = 0;
@@ -64,6 +78,20 @@ void prog_reset(prog_state *p)
     p->r2 = 1.0;
     p->have_view = 0;
     p->have_prev = 0;
+    p->marked = 0;
+}
+
+void prog_set_per_pixel(prog_state *p, int on) { p->per_pixel = on ? 1 : 0; }
+
+void prog_ppm_update(double *r2, double *n, double m)
+{
+    /* Hachisuka et al. 2008 §4: N_{i+1} = N_i + αM_i, R_{i+1}² = R_i² (N_i + αM_i)/(N_i + M_i). */
+    const double found = *n + m;
+    if (!(found > 0.0))
+        return;
+    const double kept = *n + PROG_ALPHA * m;
+    *r2 *= kept / found;
+    *n = kept;
 }
 
 double prog_radius_scale(int i)
@@ -106,7 +134,8 @@ float prog_begin(prog_state *p, const eng_frame_scene *fs)
         p->frames++;
     }
     p->restart_all = moved;
-    return (float)sqrt(p->r2);
+    p->marked = 0;
+    return p->per_pixel ? 1.0f : (float)sqrt(p->r2);
 }
 
 static int same_pixel(const ind_gbuffer *a, const ind_gbuffer *b, size_t i)
@@ -135,25 +164,73 @@ static void copy_gbuffer(ind_gbuffer *dst, const ind_gbuffer *src)
     memcpy(dst->material, src->material, n * 4 * sizeof(float));
 }
 
+/* The per-pixel buffers for a w×h image (a new size forgets everything). */
+static void ensure_size(prog_state *p, int w, int h)
+{
+    if (p->width == w && p->height == h && p->count)
+        return;
+    free_buffers(p);
+    const size_t n = (size_t)w * (size_t)h;
+    p->width = w;
+    p->height = h;
+    p->count = xcalloc(n, sizeof(uint32_t));
+    p->restart = xcalloc(n, 1);
+    p->r2px = xcalloc(n, sizeof(double));
+    p->npx = xcalloc(n, sizeof(double));
+    p->scale = xcalloc(n, sizeof(float));
+    p->photons = xcalloc(n, sizeof(float));
+}
+
+/* This frame's restarts against gb, once per frame: every pixel after a global restart, else
+ * the pixels whose G-buffer changed; per-pixel radii restart there (R = 1, N = 0). */
+static void mark_restarts(prog_state *p, const ind_gbuffer *gb)
+{
+    if (p->marked)
+        return;
+    const size_t n = (size_t)gb->width * (size_t)gb->height;
+    const int all = p->restart_all || !p->have_prev;
+    for (size_t i = 0; i < n; i++) {
+        p->restart[i] = (uint8_t)(all || !same_pixel(gb, &p->prev, i));
+        if (p->restart[i]) {
+            p->r2px[i] = 1.0;
+            p->npx[i] = 0.0;
+        }
+    }
+    p->marked = 1;
+}
+
+const float *prog_pixel_scales(prog_state *p, const ind_gbuffer *gb)
+{
+    ensure_size(p, gb->width, gb->height);
+    mark_restarts(p, gb);
+    const size_t n = (size_t)gb->width * (size_t)gb->height;
+    for (size_t i = 0; i < n; i++)
+        p->scale[i] = (float)sqrt(p->r2px[i]);
+    return p->scale;
+}
+
+const float *prog_photons(const prog_state *p) { return p->photons; }
+
 void prog_accumulate(prog_state *p, const ind_gbuffer *gb, int attachments, const float *const *in, float **mean,
                      float *count, float *radius)
 {
     const int w = gb->width, h = gb->height;
     const size_t n = (size_t)w * (size_t)h;
-    if (p->width != w || p->height != h || p->attachments != attachments) {
-        free_buffers(p);
-        p->width = w;
-        p->height = h;
+    ensure_size(p, w, h);
+    if (p->attachments != attachments) {
+        for (int a = 0; a < 2; a++) {
+            free(p->sum[a]);
+            p->sum[a] = a < attachments ? xcalloc(n * 3, sizeof(double)) : NULL;
+        }
         p->attachments = attachments;
-        for (int a = 0; a < attachments; a++)
-            p->sum[a] = xcalloc(n * 3, sizeof(double));
-        p->count = xcalloc(n, sizeof(uint32_t));
+        p->have_prev = 0; /* a new layout restarts everything */
+        p->marked = 0;
     }
-    const int all = p->restart_all || !p->have_prev;
+    mark_restarts(p, gb);
     const float scale = (float)sqrt(p->r2);
     for (size_t i = 0; i < n; i++) {
         int surface = gb->position[4 * i + 3] > 0.0f;
-        if (all || !same_pixel(gb, &p->prev, i)) {
+        if (p->restart[i]) {
             p->count[i] = 0;
             for (int a = 0; a < attachments; a++)
                 p->sum[a][3 * i] = p->sum[a][3 * i + 1] = p->sum[a][3 * i + 2] = 0.0;
@@ -175,9 +252,19 @@ void prog_accumulate(prog_state *p, const ind_gbuffer *gb, int attachments, cons
             m[3] = x[3];
         }
         count[i] = (float)k;
-        radius[i] = surface ? scale : 0.0f;
+        if (p->per_pixel) {
+            /* The scale this frame's sample used, then PPM's update with the M photons the
+             * method found (its A channel). */
+            radius[i] = surface ? (float)sqrt(p->r2px[i]) : 0.0f;
+            if (surface)
+                prog_ppm_update(&p->r2px[i], &p->npx[i], (double)in[0][4 * i + 3]);
+            p->photons[i] = surface ? (float)p->npx[i] : 0.0f;
+        } else {
+            radius[i] = surface ? scale : 0.0f;
+        }
     }
     copy_gbuffer(&p->prev, gb);
     p->have_prev = 1;
     p->restart_all = 0;
+    p->marked = 0;
 }

@@ -160,7 +160,8 @@ static eng_result parse_settings(parser *P, const cJSON *obj, eng_settings *s)
                                        "atrous_detail", "atrous_gamma", "kernel_scaling", "progressive", "boundary",
                                        "specular", "specular_depth",
                                        "photon_trace", "multi_image_maps", "multi_image_size",
-                                       "multi_image_miss", "multi_image_compare", "capture_compression", "temporal_window", NULL};
+                                       "multi_image_miss", "multi_image_compare", "capture_compression", "temporal_window",
+                                       "progressive_radius", NULL};
     char v[80];
     eng_result r;
     if (!cJSON_IsObject(obj))
@@ -317,6 +318,14 @@ static eng_result parse_settings(parser *P, const cJSON *obj, eng_settings *s)
             return bad(P, "settings.progressive: expected true or false, got %s", show(it, v, sizeof v));
         s->progressive = cJSON_IsTrue(it) ? 1 : 0;
     }
+    if ((it = cJSON_GetObjectItemCaseSensitive(obj, "progressive_radius"))) {
+        if (cJSON_IsString(it) && !strcmp(it->valuestring, "frame"))
+            s->progressive_pixel = 0;
+        else if (cJSON_IsString(it) && !strcmp(it->valuestring, "pixel"))
+            s->progressive_pixel = 1;
+        else
+            return bad(P, "settings.progressive_radius: %s is not one of \"frame\", \"pixel\"", show(it, v, sizeof v));
+    }
     if ((it = cJSON_GetObjectItemCaseSensitive(obj, "boundary"))) {
         if (cJSON_IsString(it) && !strcmp(it->valuestring, "none"))
             s->boundary = ENG_BOUNDARY_NONE;
@@ -371,6 +380,11 @@ static eng_result parse_settings(parser *P, const cJSON *obj, eng_settings *s)
         !(cJSON_IsString(it) && eng_compression_parse(it->valuestring, &s->capture_compression)))
         return bad(P, "settings.capture_compression: %s is not one of \"none\", \"rle\", \"zips\", \"zip\", \"piz\" "
                    "(lossless only)", show(it, v, sizeof v));
+    /* Per-pixel progressive radii: only where the method evaluates a pixel-dependent kernel
+     * (ind_method.per_pixel_radius; the engine checks the same). */
+    if (s->progressive_pixel && (!s->progressive || s->indirect == ENG_INDIRECT_TILEGATHER_GL))
+        return bad(P, "settings.progressive_radius \"pixel\" needs \"progressive\": true and an indirect method "
+                      "other than \"tile-gather-gl\"");
     return ENG_OK;
 }
 

@@ -194,6 +194,76 @@ START_TEST(radius_shrinks_as_ppm)
 }
 END_TEST
 
+/* Per-pixel radii (`"progressive_radius": "pixel"`): PPM §4's update N' = N + αM,
+ * R'² = R² (N + αM)/(N + M), exact fractions for α = 2/3. */
+START_TEST(ppm_update_per_pixel)
+{
+    double r2 = 1.0, n = 0.0;
+    prog_ppm_update(&r2, &n, 0.0); /* nothing found, nothing kept: unchanged */
+    ck_assert(r2 == 1.0 && n == 0.0);
+    prog_ppm_update(&r2, &n, 9.0); /* N = 6, R² = 6/9 */
+    ck_assert(fabs(n - 6.0) < 1e-12 && fabs(r2 - 2.0 / 3.0) < 1e-12);
+    prog_ppm_update(&r2, &n, 3.0); /* N = 8, R² = 2/3 · 8/9 */
+    ck_assert(fabs(n - 8.0) < 1e-12 && fabs(r2 - 16.0 / 27.0) < 1e-12);
+    prog_ppm_update(&r2, &n, 0.0); /* N > 0, M = 0: R and N stay */
+    ck_assert(fabs(n - 8.0) < 1e-12 && fabs(r2 - 16.0 / 27.0) < 1e-12);
+
+    /* Through prog_state: M comes from the method's A channel, per pixel. */
+    ind_gbuffer g;
+    make_gbuffer(&g);
+    eng_frame_scene fs;
+    eng_light_pose light;
+    make_scene(&fs, &light);
+    float in[N * 4], mean[N * 4], count[N], radius[N];
+    const float *ins[1] = {in};
+    float *outs[1] = {mean};
+    prog_state *p = prog_create();
+    prog_set_per_pixel(p, 1);
+    const int m1[3] = {9, 0, 3}; /* photons found at pixel i, frames 1 and 2: i·m1[f] */
+    for (int f = 0; f < 2; f++) {
+        ck_assert_float_eq(prog_begin(p, &fs), 1.0f); /* the photons' radii are not scaled */
+        const float *sc = prog_pixel_scales(p, &g);
+        for (int i = 0; i < N; i++) {
+            in[4 * i] = in[4 * i + 1] = in[4 * i + 2] = 1.0f;
+            in[4 * i + 3] = (float)(i % 3 == 0 ? m1[f] : m1[f] + 3);
+        }
+        for (int i = 0; i < N - 1; i++) {
+            /* frame 1: R = 1; frame 2: R² = (αM)/M = 2/3 wherever M > 0 */
+            double want = f == 0 ? 1.0 : sqrt(2.0 / 3.0);
+            ck_assert_msg(fabs(sc[i] - want) < 1e-6, "frame %d pixel %d: scale %g want %g", f, i, sc[i], want);
+        }
+        prog_accumulate(p, &g, 1, ins, outs, count, radius);
+        for (int i = 0; i < N - 1; i++)
+            ck_assert_float_eq(radius[i], sc[i]);
+    }
+    /* After two frames: M = (9, 0) → N = 6, R² = 2/3 (unchanged by M = 0); M = (12, 3) →
+     * N = 8 + 2 = 10, R² = 2/3 · 10/11. */
+    const float *sc = prog_pixel_scales(p, &g);
+    for (int i = 0; i < N - 1; i++) {
+        double n_want = i % 3 == 0 ? 6.0 : 10.0, r2_want = i % 3 == 0 ? 2.0 / 3.0 : 2.0 / 3.0 * 10.0 / 11.0;
+        ck_assert_msg(fabs(prog_photons(p)[i] - n_want) < 1e-5, "pixel %d: N %g", i, prog_photons(p)[i]);
+        ck_assert_msg(fabs(sc[i] - sqrt(r2_want)) < 1e-6, "pixel %d: R %g", i, sc[i]);
+    }
+    ck_assert_float_eq(prog_photons(p)[N - 1], 0.0f); /* background */
+    /* A changed pixel restarts alone (R = 1, N = 0); the others keep theirs. */
+    prog_accumulate(p, &g, 1, ins, outs, count, radius);
+    prog_begin(p, &fs);
+    g.albedo[3 * 5] = 0.25f;
+    sc = prog_pixel_scales(p, &g);
+    ck_assert_float_eq(sc[5], 1.0f);
+    ck_assert(sc[4] < 0.8f);
+    /* The camera moves: every pixel restarts. */
+    prog_accumulate(p, &g, 1, ins, outs, count, radius);
+    fs.camera.eye[0] = 1.0f;
+    prog_begin(p, &fs);
+    sc = prog_pixel_scales(p, &g);
+    for (int i = 0; i < N; i++)
+        ck_assert_float_eq(sc[i], 1.0f);
+    prog_destroy(p);
+    ind_gbuffer_free(&g);
+}
+END_TEST
+
 /* ---------------------------------------------------------------- kernel scalings */
 
 static eng_photon photon(float x, float y, float z, float len, float cos_theta, float rho)
@@ -440,6 +510,7 @@ static Suite *suite(void)
     tcase_add_test(t, running_mean_is_the_arithmetic_mean);
     tcase_add_test(t, restarts_where_the_gbuffer_changes);
     tcase_add_test(t, radius_shrinks_as_ppm);
+    tcase_add_test(t, ppm_update_per_pixel);
     suite_add_tcase(s, t);
     TCase *k = tcase_create("kernel_scaling");
     tcase_add_test(k, each_kernel_scaling_on_a_hand_made_map);

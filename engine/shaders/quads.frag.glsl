@@ -27,6 +27,7 @@ layout(location = 0) out vec4 o_radiance;
 #pragma ispm_include "ggx.glsl"
 #pragma ispm_include "photon_kernel.glsl"
 #pragma ispm_include "quad_kernel.glsl"
+#pragma ispm_include "pixel_scale.glsl"
 
 void main()
 {
@@ -36,9 +37,9 @@ void main()
         discard;
     vec3 n = texelFetch(u_normal, px, 0).xyz;
 #ifdef PHOTON_ANISO
-    float kappa = quad_kappa_aniso(s.xyz, n, v_position, v_normal, v_radius, photon_aniso(v_direction, v_normal, v_stretch));
+    float kappa = quad_kappa_aniso(s.xyz, n, v_position, v_normal, KERNEL_RADIUS, photon_aniso(v_direction, v_normal, v_stretch));
 #else
-    float kappa = quad_kappa(s.xyz, n, v_position, v_normal, v_radius);
+    float kappa = quad_kappa(s.xyz, n, v_position, v_normal, KERNEL_RADIUS);
 #endif
     if (kappa < 0.0)
         discard;

@@ -28,6 +28,7 @@ layout(location = 1) out vec4 o_glossy;
 
 #pragma ispm_include "ggx.glsl"
 #pragma ispm_include "photon_kernel.glsl"
+#pragma ispm_include "pixel_scale.glsl"
 
 void main()
 {
@@ -36,9 +37,9 @@ void main()
     if (s.w == 0.0)
         discard;
 #ifdef PHOTON_ANISO
-    float kappa = photon_kappa_aniso(s.xyz, v_position, v_normal, v_radius, photon_aniso(v_direction, v_normal, v_stretch));
+    float kappa = photon_kappa_aniso(s.xyz, v_position, v_normal, KERNEL_RADIUS, photon_aniso(v_direction, v_normal, v_stretch));
 #else
-    float kappa = photon_kappa(s.xyz, v_position, v_normal, v_radius);
+    float kappa = photon_kappa(s.xyz, v_position, v_normal, KERNEL_RADIUS);
 #endif
     if (kappa < 0.0)
         discard;
