@@ -1,9 +1,9 @@
 /* replay.c — rep_replay: a run, checked against itself and (usually) against a golden.
  *
- * The walk is frame by frame so that memory holds one frame of each run at a time. Both
- * manifests are validated first, and from them alone the first frame and buffer whose
- * recorded digest differs is named (redis DEBUG DIGEST): it points at the first divergence
- * before any pixel is decoded. Then every frame file is decoded and verified against its
+ * The walk is frame by frame so that memory holds two frames of each run at a time (the one
+ * compared and the next, decoded meanwhile). Both manifests are validated first, and from them
+ * alone the first frame and buffer whose recorded digest differs is named (redis DEBUG DIGEST):
+ * it points at the first divergence before any pixel is decoded. Then every frame file is decoded and verified against its
  * manifest (an unverifiable file is UNREADABLE: comparing it would compare noise), and each
  * run buffer is compared with the golden buffer of the same name under the tolerance that
  * matches it. Buffers or frames present on one side only fail. Without a golden only
@@ -109,14 +109,15 @@ typedef struct cmp_job {
     int j, k;
 } cmp_job;
 
-/* The entries are added in the report's order first (run buffers, then the golden's extra
- * ones), then the comparisons, each writing only its own entry, run on the OpenMP threads:
- * the report is the same whatever the thread count and timing. */
-static void compare_frame(rep_report *r, const rep_tolerances *tols, const char *glob, int no_flip,
-                          const rep_frame_info *rf, const rep_part *rp, const rep_frame_info *gf, const rep_part *gp)
+/* The entries of a frame are added in the report's order first (run buffers, then the golden's
+ * extra ones) and the comparisons listed in jobs (returned, their count in *njobs); each
+ * comparison then writes only its own entry (compare_one), on whichever thread runs it: the
+ * report is the same whatever the thread count and timing. */
+static cmp_job *compare_prepare(rep_report *r, const rep_tolerances *tols, const char *glob, const rep_frame_info *rf,
+                                const rep_frame_info *gf, int *njobs)
 {
     cmp_job *jobs = rep_xcalloc((size_t)rf->buffer_count + 1, sizeof *jobs);
-    int njobs = 0;
+    *njobs = 0;
     for (int j = 0; j < rf->buffer_count; j++) {
         const char *name = rf->buffers[j].name;
         if (!wanted(glob, name))
@@ -129,7 +130,7 @@ static void compare_frame(rep_report *r, const rep_tolerances *tols, const char 
             continue;
         }
         e->tol_match = rep_xstrdup(rep_tol_lookup(tols, name, &e->tol));
-        jobs[njobs++] = (cmp_job){r->count - 1, j, k};
+        jobs[(*njobs)++] = (cmp_job){r->count - 1, j, k};
     }
     for (int k = 0; k < gf->buffer_count; k++)
         if (wanted(glob, gf->buffers[k].name) && rep_frame_find(rf, gf->buffers[k].name) < 0) {
@@ -137,26 +138,25 @@ static void compare_frame(rep_report *r, const rep_tolerances *tols, const char 
             e->verdict = REP_V_FAIL;
             e->problem = REP_PROB_MISSING;
         }
-    rep_entry *entries = r->entries; /* no entry is added below: the array stays put */
-#pragma omp parallel for schedule(dynamic, 1)
-    for (int i = 0; i < njobs; i++) {
-        rep_entry *e = &entries[jobs[i].entry];
-        eng_buffer a = rep_part_buffer(&rp[jobs[i].j]), b = rep_part_buffer(&gp[jobs[i].k]);
-        if (rep_is_photon_map(&a) && rep_is_photon_map(&b)) {
-            e->photon_set = 1;
-            e->verdict = rep_photon_compare(&a, &b, &e->tol, &e->m, &e->pd);
-        } else {
-            e->verdict = rep_compare(&a, &b, &e->tol, &e->m);
-            e->verdict = rep_compare_flip(&a, &b, &e->tol, e->verdict, no_flip, &e->m, &e->flip_kind, &e->flip);
-        }
-        if (e->verdict == REP_V_SIZE) {
-            e->run_shape = shape(a.width, a.height, a.channel_count, a.channels);
-            e->golden_shape = shape(b.width, b.height, b.channel_count, b.channels);
-        } else {
-            e->compared = 1;
-        }
+    return jobs;
+}
+
+static void compare_one(rep_entry *e, const cmp_job *jb, const rep_part *rp, const rep_part *gp, int no_flip)
+{
+    eng_buffer a = rep_part_buffer(&rp[jb->j]), b = rep_part_buffer(&gp[jb->k]);
+    if (rep_is_photon_map(&a) && rep_is_photon_map(&b)) {
+        e->photon_set = 1;
+        e->verdict = rep_photon_compare(&a, &b, &e->tol, &e->m, &e->pd);
+    } else {
+        e->verdict = rep_compare(&a, &b, &e->tol, &e->m);
+        e->verdict = rep_compare_flip(&a, &b, &e->tol, e->verdict, no_flip, &e->m, &e->flip_kind, &e->flip);
     }
-    free(jobs);
+    if (e->verdict == REP_V_SIZE) {
+        e->run_shape = shape(a.width, a.height, a.channel_count, a.channels);
+        e->golden_shape = shape(b.width, b.height, b.channel_count, b.channels);
+    } else {
+        e->compared = 1;
+    }
 }
 
 static void one_side(rep_report *r, const char *glob, const rep_frame_info *f, rep_problem problem)
@@ -224,28 +224,6 @@ static eng_result stab_begin(stab_walk *w, const rep_options *o, const char *rep
             res = rep_mkdirs(frames, err);
         free(frames);
     }
-    return res;
-}
-
-static eng_result stab_run_frame(stab_walk *w, int i, const rep_frame_info *rf, const rep_part *rp, eng_error *err);
-
-/* Feeds frame i of the run (and of the golden) to the stability measurement. */
-static eng_result stab_frame(stab_walk *w, int i, const rep_frame_info *rf, const rep_part *rp,
-                             const rep_frame_info *gf, const rep_part *gp, eng_error *err)
-{
-    eng_result res = ENG_OK;
-    int golden_ok = 1;
-    /* The golden's measure and the run's are independent: side by side. */
-#pragma omp parallel sections
-    {
-#pragma omp section
-        if (w->golden_on && gf)
-            golden_ok = rep_stab_frame(&w->s->golden, gf, gp, gf->buffer_count, NULL, 0, NULL, NULL);
-#pragma omp section
-        res = stab_run_frame(w, i, rf, rp, err);
-    }
-    if (!golden_ok)
-        w->golden_on = 0;
     return res;
 }
 
@@ -318,6 +296,52 @@ static eng_result stab_end(stab_walk *w, rep_report *r, const rep_run *run, cons
     return res;
 }
 
+/* The decoded parts of one frame of the run and of the golden, with what decoding them gave. */
+typedef struct frame_parts {
+    rep_part *rp, *gp;
+    eng_result res, gres;
+    eng_error err, gerr;
+} frame_parts;
+
+/* Frame i of one side (none when the side has no frame i). */
+static void frame_fetch_side(const rep_run *side, int i, rep_part **parts, eng_result *res, eng_error *err)
+{
+    *parts = NULL;
+    *res = ENG_OK;
+    if (side && i < side->frame_count)
+        *res = rep_run_read_frame(side, i, parts, err);
+}
+
+/* Frame i of both sides, decoded and verified side by side. */
+static void frame_fetch(const rep_run *run, const rep_run *gold, int i, frame_parts *f)
+{
+    memset(f, 0, sizeof *f);
+#pragma omp parallel sections
+    {
+#pragma omp section
+        frame_fetch_side(run, i, &f->rp, &f->res, &f->err);
+#pragma omp section
+        frame_fetch_side(gold, i, &f->gp, &f->gres, &f->gerr);
+    }
+}
+
+static void frame_free(const rep_run *run, const rep_run *gold, int i, frame_parts *f)
+{
+    if (f->rp)
+        rep_parts_free(f->rp, run->frames[i].buffer_count);
+    if (f->gp)
+        rep_parts_free(f->gp, gold->frames[i].buffer_count);
+    f->rp = f->gp = NULL;
+}
+
+/* The first frame from i on that --frames selects (frames: none). */
+static int next_frame(const rep_options *o, int i, int frames)
+{
+    while (i < frames && o->frames_set && (i < o->frame_first || i > o->frame_last))
+        i++; /* stability needs every frame: it is then not measured */
+    return i;
+}
+
 /* Fills r; returns ENG_OK or the error that makes an input unreadable. */
 static eng_result walk(const rep_options *o, const char *report_dir, rep_report *r, eng_error *err)
 {
@@ -368,46 +392,81 @@ static eng_result walk(const rep_options *o, const char *report_dir, rep_report 
     if (o->progress)
         o->progress->total = o->frames_set ? (o->frame_last < r->frames ? o->frame_last : r->frames - 1) - o->frame_first + 1
                                            : r->frames;
-    for (int i = 0, done = 0; i < r->frames && res == ENG_OK; i++) {
-        if (o->frames_set && (i < o->frame_first || i > o->frame_last))
-            continue; /* stability needs every frame: it is then not measured */
-        rep_part *rp = NULL, *gp = NULL;
+    /* A pipeline of two frames: while frame i is compared and measured, frame i+1 (the next one
+     * in --frames) of both sides is decoded and verified, all as OpenMP tasks of one parallel
+     * region (the decoding of a frame file is serial inside OpenImageIO, so alone it would
+     * leave a core idle). Each task writes only its own results; a frame's decoding error is
+     * looked at when that frame's turn comes, as if it had been decoded then (the run's error
+     * is the one reported when both sides fail). */
+    frame_parts cur, nxt;
+    memset(&cur, 0, sizeof cur);
+    memset(&nxt, 0, sizeof nxt);
+    int i = next_frame(o, 0, r->frames);
+    if (i < r->frames)
+        frame_fetch(run, gold, i, &cur);
+    for (int done = 0; i < r->frames && res == ENG_OK;) {
         const rep_frame_info *rf = i < run->frame_count ? &run->frames[i] : NULL;
         const rep_frame_info *gf = gold && i < gold->frame_count ? &gold->frames[i] : NULL;
-        /* The run's frame and the golden's are decoded (and verified against their manifests)
-         * at the same time; the run's error is the one reported when both fail. */
-        eng_error gerr = {{0}};
-        eng_result gres = ENG_OK;
-#pragma omp parallel sections
-        {
-#pragma omp section
-            if (rf)
-                res = rep_run_read_frame(run, i, &rp, err);
-#pragma omp section
-            if (gf)
-                gres = rep_run_read_frame(gold, i, &gp, &gerr);
-        }
-        if (res == ENG_OK && gres != ENG_OK) {
-            res = gres;
-            *err = gerr;
+        int ni = next_frame(o, i + 1, r->frames);
+        int fetching = 0;
+        res = cur.res;
+        if (res != ENG_OK) {
+            *err = cur.err;
+        } else if (cur.gres != ENG_OK) {
+            res = cur.gres;
+            *err = cur.gerr;
         }
         if (res == ENG_OK) {
+            cmp_job *jobs = NULL;
+            int njobs = 0;
             if (!gold)
-                integrity_only(r, o->buffers, rf, rp);
+                integrity_only(r, o->buffers, rf, cur.rp);
             else if (!rf)
                 one_side(r, o->buffers, gf, REP_PROB_FRAME_MISSING);
             else if (!gf)
                 one_side(r, o->buffers, rf, REP_PROB_FRAME_EXTRA);
             else
-                compare_frame(r, use, o->buffers, o->no_flip, rf, rp, gf, gp);
-            res = stab_frame(&sw, i, rf, rp, gf, gp, err);
+                jobs = compare_prepare(r, use, o->buffers, rf, gf, &njobs);
+            rep_entry *entries = r->entries; /* no entry is added below: the array stays put */
+            int golden_ok = 1;
+            eng_result sres = ENG_OK;
+            fetching = ni < r->frames;
+            rep_part *rp = cur.rp, *gp = cur.gp;
+#pragma omp parallel
+#pragma omp single
+            {
+                if (fetching) {
+#pragma omp task shared(nxt)
+                    frame_fetch_side(run, ni, &nxt.rp, &nxt.res, &nxt.err);
+#pragma omp task shared(nxt)
+                    frame_fetch_side(gold, ni, &nxt.gp, &nxt.gres, &nxt.gerr);
+                }
+                for (int k = 0; k < njobs; k++) {
+#pragma omp task firstprivate(k) shared(jobs, entries, rp, gp)
+                    compare_one(&entries[jobs[k].entry], &jobs[k], rp, gp, o->no_flip);
+                }
+                /* temporal stability: the golden's measure and the run's are independent */
+#pragma omp task shared(sw, golden_ok)
+                if (sw.golden_on && gf)
+                    golden_ok = rep_stab_frame(&sw.s->golden, gf, gp, gf->buffer_count, NULL, 0, NULL, NULL);
+#pragma omp task shared(sw, sres)
+                sres = stab_run_frame(&sw, i, rf, rp, err);
+            }
+            free(jobs);
+            if (!golden_ok)
+                sw.golden_on = 0;
+            res = sres;
         }
-        if (rf)
-            rep_parts_free(rp, rf->buffer_count);
-        if (gf)
-            rep_parts_free(gp, gf->buffer_count);
-        if (o->progress && res == ENG_OK)
+        frame_free(run, gold, i, &cur);
+        if (res != ENG_OK) {
+            if (fetching)
+                frame_free(run, gold, ni, &nxt);
+            break;
+        }
+        if (o->progress)
             rep_progress_step(o->progress, ++done, NULL);
+        cur = nxt;
+        i = ni;
     }
     if (o->progress)
         rep_progress_end(o->progress);

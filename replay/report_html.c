@@ -111,30 +111,47 @@ static void sanitize(char *s)
             *s = '_';
 }
 
-/* Writes rgb as img/<serial>-f<frame>-<buffer>-<what>.png; returns the page-relative name or
- * NULL (and sets *note) on failure. */
-static char *save(page *pg, const unsigned char *rgb, int w, int h, int frame, const char *buffer,
-                  const char *what, const char **note)
+/* One thumbnail of a job: its pixels (made on any thread), then its name (given in job order, so
+ * the names do not depend on timing), then its PNG (written on any thread). */
+typedef struct image {
+    unsigned char *px;
+    int w, h;
+    const char *what; /* "golden", "new", "diff", "flip" */
+    char **slot;      /* where the tset keeps its page-relative name */
+    char *rel, *path; /* img/<serial>-f<frame>-<buffer>-<what>.png, and its path */
+    int ok;
+} image;
+
+/* The images of one job, in the order the page names them. */
+typedef struct job_images {
+    image im[4];
+    int n;
+} job_images;
+
+static void add_image(job_images *ji, unsigned char *px, int w, int h, const char *what, char **slot)
 {
-    char *leaf = rep_xprintf("%04d-f%06d-%s-%s.png", pg->serial++, frame, buffer, what);
+    ji->im[ji->n++] = (image){px, w, h, what, slot, NULL, NULL, 0};
+}
+
+/* Names image im of a job img/<serial>-f<frame>-<buffer>-<what>.png (serials in call order). */
+static void name_image(page *pg, const job *jb, image *im)
+{
+    char *leaf = rep_xprintf("%04d-f%06d-%s-%s.png", pg->serial++, jb->frame, jb->buffer, im->what);
     sanitize(leaf);
-    char *rel = rep_xprintf("img/%s", leaf);
-    char *path = rep_path_join(pg->dir, rel);
-    char *tmp = rep_xprintf("%s.tmp.%ld", path, (long)getpid());
-    eng_error err;
-    int ok = rep_oiio_write_png(tmp, w, h, 3, rgb, &err) == ENG_OK && rename(tmp, path) == 0;
-    if (!ok) {
-        unlink(tmp);
-        free(rel);
-        rel = NULL;
-        *note = "a thumbnail could not be written";
-    } else {
-        pg->images++;
-    }
-    free(tmp);
-    free(path);
+    im->rel = rep_xprintf("img/%s", leaf);
+    im->path = rep_path_join(pg->dir, im->rel);
     free(leaf);
-    return rel;
+}
+
+/* Writes an image atomically (temporary name, then rename); im->ok says whether it is there. */
+static void write_image(image *im)
+{
+    char *tmp = rep_xprintf("%s.tmp.%ld", im->path, (long)getpid());
+    eng_error err;
+    im->ok = rep_oiio_write_png(tmp, im->w, im->h, 3, im->px, &err) == ENG_OK && rename(tmp, im->path) == 0;
+    if (!im->ok)
+        unlink(tmp);
+    free(tmp);
 }
 
 static const rep_part *find_part(const rep_part *parts, int n, const char *name)
@@ -146,7 +163,7 @@ static const rep_part *find_part(const rep_part *parts, int n, const char *name)
 }
 
 /* The ꟻLIP heat map of a colour buffer that differs (flip.h's ramp, box maximum). */
-static void flip_thumb(page *pg, const job *jb, const eng_buffer *a, const eng_buffer *b)
+static void flip_thumb(const job *jb, const eng_buffer *a, const eng_buffer *b, job_images *ji)
 {
     const rep_entry *e = jb->e;
     if (!e || e->flip_kind == REP_FLIP_NONE || e->verdict == REP_V_BITEXACT)
@@ -156,12 +173,12 @@ static void flip_thumb(page *pg, const job *jb, const eng_buffer *a, const eng_b
         return;
     int w, h;
     unsigned char *px = rep_flip_heat(map, a->width, a->height, REP_THUMB_MAX_SIDE, &w, &h);
-    jb->t->flip = save(pg, px, w, h, jb->frame, jb->buffer, "flip", &jb->t->note);
-    free(px);
+    add_image(ji, px, w, h, "flip", &jb->t->flip);
     free(map);
 }
 
-static void make_thumbs(page *pg, const job *jb, const rep_part *rp, int rn, const rep_part *gp, int gn)
+/* The pixels of a job's thumbnails (touches only the job's own tset and ji). */
+static void make_thumbs(const job *jb, const rep_part *rp, int rn, const rep_part *gp, int gn, job_images *ji)
 {
     tset *t = jb->t;
     const rep_part *a = rp ? find_part(rp, rn, jb->buffer) : NULL;
@@ -181,23 +198,19 @@ static void make_thumbs(page *pg, const job *jb, const rep_part *rp, int rn, con
     int w, h;
     if (b && jb->want_golden) {
         unsigned char *px = rep_thumb_render(&bv, &t->map, &w, &h);
-        t->golden = save(pg, px, w, h, jb->frame, jb->buffer, "golden", &t->note);
+        add_image(ji, px, w, h, "golden", &t->golden);
         t->tw = w, t->th = h;
-        free(px);
     }
     if (a && jb->want_run) {
         unsigned char *px = rep_thumb_render(&av, &t->map, &w, &h);
-        t->run = save(pg, px, w, h, jb->frame, jb->buffer, "new", &t->note);
+        add_image(ji, px, w, h, "new", &t->run);
         t->tw = w, t->th = h;
-        free(px);
     }
     if (a && b && jb->want_diff) {
         unsigned char *px = rep_thumb_diff(&av, &bv, &t->scale, &w, &h);
-        if (px) {
-            t->diff = save(pg, px, w, h, jb->frame, jb->buffer, "diff", &t->note);
-            free(px);
-        }
-        flip_thumb(pg, jb, &av, &bv);
+        if (px)
+            add_image(ji, px, w, h, "diff", &t->diff);
+        flip_thumb(jb, &av, &bv, ji);
     }
 }
 
@@ -209,34 +222,70 @@ static int by_frame(const void *pa, const void *pb)
     return a->t < b->t ? -1 : a->t > b->t;
 }
 
-/* Decodes each frame that has jobs once per side and makes its thumbnails. */
+/* Decodes each frame that has jobs once per side (both side by side) and makes its thumbnails:
+ * pixels on OpenMP threads, names in job order, PNGs on OpenMP threads. */
 static void run_jobs(page *pg, job *jobs, size_t n)
 {
     qsort(jobs, n, sizeof *jobs, by_frame);
+    job_images *ji = rep_xcalloc(n + 1, sizeof *ji);
     for (size_t i = 0; i < n;) {
         int f = jobs[i].frame;
         size_t j = i;
         while (j < n && jobs[j].frame == f)
             j++;
         rep_part *rp = NULL, *gp = NULL;
-        int rn = 0, gn = 0;
-        eng_error err;
-        const char *note = NULL;
-        if (pg->run && f < pg->run->frame_count &&
-            rep_oiio_read_parts(pg->run->frames[f].path, REP_MAX_FLOATS, &rp, &rn, &err) != ENG_OK)
-            note = "the run's frame file could not be decoded";
-        if (pg->golden && f < pg->golden->frame_count &&
-            rep_oiio_read_parts(pg->golden->frames[f].path, REP_MAX_FLOATS, &gp, &gn, &err) != ENG_OK)
-            note = "the golden's frame file could not be decoded";
-        for (size_t k = i; k < j; k++) {
+        int rn = 0, gn = 0, rbad = 0, gbad = 0;
+        eng_error rerr, gerr;
+#pragma omp parallel sections
+        {
+#pragma omp section
+            rbad = pg->run && f < pg->run->frame_count &&
+                   rep_oiio_read_parts(pg->run->frames[f].path, REP_MAX_FLOATS, &rp, &rn, &rerr) != ENG_OK;
+#pragma omp section
+            gbad = pg->golden && f < pg->golden->frame_count &&
+                   rep_oiio_read_parts(pg->golden->frames[f].path, REP_MAX_FLOATS, &gp, &gn, &gerr) != ENG_OK;
+        }
+        const char *note = gbad ? "the golden's frame file could not be decoded"
+                           : rbad ? "the run's frame file could not be decoded" : NULL;
+        long m = (long)(j - i);
+#pragma omp parallel for schedule(dynamic, 1)
+        for (long k = 0; k < m; k++) {
             if (note)
-                jobs[k].t->note = note;
-            make_thumbs(pg, &jobs[k], rp, rn, gp, gn);
+                jobs[i + (size_t)k].t->note = note;
+            make_thumbs(&jobs[i + (size_t)k], rp, rn, gp, gn, &ji[i + (size_t)k]);
         }
         rep_parts_free(rp, rn);
         rep_parts_free(gp, gn);
         i = j;
     }
+    /* names in job order, then every PNG of the page at once */
+    long total = 0;
+    for (size_t k = 0; k < n; k++)
+        for (int q = 0; q < ji[k].n; q++, total++)
+            name_image(pg, &jobs[k], &ji[k].im[q]);
+    image **all = rep_xcalloc((size_t)total + 1, sizeof *all);
+    total = 0;
+    for (size_t k = 0; k < n; k++)
+        for (int q = 0; q < ji[k].n; q++)
+            all[total++] = &ji[k].im[q];
+#pragma omp parallel for schedule(dynamic, 1)
+    for (long k = 0; k < total; k++)
+        write_image(all[k]);
+    for (size_t k = 0; k < n; k++)
+        for (int q = 0; q < ji[k].n; q++) {
+            image *im = &ji[k].im[q];
+            if (im->ok) {
+                *im->slot = im->rel;
+                pg->images++;
+            } else {
+                free(im->rel);
+                jobs[k].t->note = "a thumbnail could not be written";
+            }
+            free(im->path);
+            free(im->px);
+        }
+    free(all);
+    free(ji);
 }
 
 /* ---------------------------------------------------------------- page pieces */
