@@ -3,11 +3,12 @@
  * glTF 2.0 §3.7.2.2 (morph targets): the morphed attribute is the base plus the weighted sum
  * of the targets' deltas, pos = base + Σ_i w_i · Δpos_i, the same for normals.
  * glTF 2.0 §3.7.3 (skins): the joint matrix of joint j is world(joint_j) · inverseBind_j; a
- * vertex is moved by the skin matrix Σ_k WEIGHTS_0[k] · joint matrix(JOINTS_0[k]), which maps
- * the (morphed) bind-pose position straight to world space: the skinned node's own transform
+ * vertex is moved by the skin matrix Σ_k WEIGHTS_n[k] · joint matrix(JOINTS_n[k]) over the
+ * sets it has (JOINTS_0/WEIGHTS_0, and _1 for 8 influences), which maps the (morphed) bind-pose position straight to world space: the skinned node's own transform
  * is ignored, as the specification says. Normals are moved by the inverse transpose of the
  * skin matrix's upper 3×3 (its cofactor matrix with the sign of its determinant) and
- * renormalised. Morphing comes first, then skinning (the spec's order).
+ * renormalised; tangents (normal maps) by the upper 3×3 itself, renormalised, their
+ * handedness w kept. Morphing comes first, then skinning (the spec's order).
  *
  * A primitive whose normals the loader computed flat gets its face normals recomputed from
  * the deformed positions (as flat_normals in gltf_load.c does), so they follow the surface.
@@ -47,6 +48,14 @@ static void normalise_into(const double v[3], const float *fallback, float *out)
 int scn_deform(const scn_scene *scene, uint32_t node, uint32_t prim, const float *world, const float *weights,
                float *positions, float *normals)
 {
+    return scn_deform_tangents(scene, node, prim, world, weights, positions, normals, NULL);
+}
+
+/* Tangents are surface directions: they move with the skin matrix's upper 3×3 itself (not its
+ * inverse transpose), after their morph deltas; w (handedness) is kept. */
+int scn_deform_tangents(const scn_scene *scene, uint32_t node, uint32_t prim, const float *world,
+                        const float *weights, float *positions, float *normals, float *tangents)
+{
     const scn_node *n = &scene->nodes[node];
     const scn_primitive *p = &scene->primitives[prim];
     const uint32_t nv = p->vertex_count;
@@ -62,11 +71,15 @@ int scn_deform(const scn_scene *scene, uint32_t node, uint32_t prim, const float
         for (uint32_t j = 0; j < sk->joint_count; j++)
             mul_ff(world + (size_t)sk->joints[j] * 16, sk->inverse_bind + (size_t)j * 16, joint + (size_t)j * 16);
     }
+    if (!p->tangents)
+        tangents = NULL;
     for (uint32_t v = 0; v < nv; v++) {
-        double pos[3], nrm[3];
+        double pos[3], nrm[3], tan[3] = {0, 0, 0};
         for (int c = 0; c < 3; c++) {
             pos[c] = p->positions[(size_t)v * 3 + c];
             nrm[c] = p->normals[(size_t)v * 3 + c];
+            if (tangents)
+                tan[c] = p->tangents[(size_t)v * 4 + c];
         }
         for (uint32_t t = 0; t < nt && t < p->target_count; t++) {
             if (w[t] == 0.0f)
@@ -77,15 +90,18 @@ int scn_deform(const scn_scene *scene, uint32_t node, uint32_t prim, const float
                     pos[c] += (double)w[t] * p->target_positions[at + c];
                 if (p->target_normals)
                     nrm[c] += (double)w[t] * p->target_normals[at + c];
+                if (tangents && p->target_tangents)
+                    tan[c] += (double)w[t] * p->target_tangents[at + c];
             }
         }
         if (skinned) {
             double s[16] = {0};
-            for (int k = 0; k < 4; k++) {
-                double wk = p->weights[(size_t)v * 4 + k];
+            const size_t inf = p->influences ? p->influences : 4; /* JOINTS_0, and _1 when 8 */
+            for (size_t k = 0; k < inf; k++) {
+                double wk = p->weights[(size_t)v * inf + k];
                 if (wk == 0.0)
                     continue;
-                const double *j = joint + (size_t)p->joints[(size_t)v * 4 + k] * 16;
+                const double *j = joint + (size_t)p->joints[(size_t)v * inf + k] * 16;
                 for (int e = 0; e < 16; e++)
                     s[e] += wk * j[e];
             }
@@ -106,12 +122,20 @@ int scn_deform(const scn_scene *scene, uint32_t node, uint32_t prim, const float
             /* inverse transpose = cof / det: the normal is cof · n, up to a positive scale. */
             for (int r = 0; r < 3; r++)
                 m[r] = sign * (cof[r][0] * nrm[0] + cof[r][1] * nrm[1] + cof[r][2] * nrm[2]);
+            double tq[3];
+            for (int r = 0; r < 3; r++)
+                tq[r] = s[r] * tan[0] + s[4 + r] * tan[1] + s[8 + r] * tan[2];
             memcpy(pos, q, sizeof pos);
             memcpy(nrm, m, sizeof nrm);
+            memcpy(tan, tq, sizeof tan);
         }
         for (int c = 0; c < 3; c++)
             positions[(size_t)v * 3 + c] = (float)pos[c];
         normalise_into(nrm, p->normals + (size_t)v * 3, normals + (size_t)v * 3);
+        if (tangents) {
+            normalise_into(tan, p->tangents + (size_t)v * 4, tangents + (size_t)v * 4);
+            tangents[(size_t)v * 4 + 3] = p->tangents[(size_t)v * 4 + 3];
+        }
     }
     free(joint);
     if (p->flat)

@@ -2,7 +2,8 @@
  *
  * A draw whose node has a skin or morph targets (scn_node_deforms) gets its own VAO with
  * three dynamic vertex buffers — this frame's positions (location 0) and normals (1) and the
- * previous frame's positions (5, for the eye G-buffer's motion vectors) — and shares the
+ * previous frame's positions (5, for the eye G-buffer's motion vectors), and a fourth for
+ * tangents (6) where the primitive has them (normal maps) — and shares the
  * primitive's texcoord, colour and index buffers. Every frame both poses are computed on the
  * CPU (scn_deform, deform.c) from the frame's and the previous frame's world matrices and
  * morph weights, so motion vectors follow the deformed surface; the CPU copies are what the
@@ -18,6 +19,7 @@ typedef struct deformed {
     eng_gpu_prim gpu; /* own vao, vbo_pos, vbo_nrm, vbo_prev; the rest the primitive's */
     GLuint vbo_prev;
     float *pos, *nrm, *prev_pos, *prev_nrm;
+    float *tan; /* deformed tangents (location 6) where the primitive has them, else NULL */
 } deformed;
 
 struct eng_deform {
@@ -37,13 +39,13 @@ static void *xcalloc(size_t n, size_t size)
     return p;
 }
 
-static GLuint dynamic_vbo(GLuint location, uint32_t vertices)
+static GLuint dynamic_vbo(GLuint location, uint32_t vertices, int comps)
 {
     GLuint b;
     glGenBuffers(1, &b);
     glBindBuffer(GL_ARRAY_BUFFER, b);
-    glBufferData(GL_ARRAY_BUFFER, (GLsizeiptr)((size_t)vertices * 3 * sizeof(float)), NULL, GL_DYNAMIC_DRAW);
-    glVertexAttribPointer(location, 3, GL_FLOAT, GL_FALSE, 0, NULL);
+    glBufferData(GL_ARRAY_BUFFER, (GLsizeiptr)((size_t)vertices * (size_t)comps * sizeof(float)), NULL, GL_DYNAMIC_DRAW);
+    glVertexAttribPointer(location, comps, GL_FLOAT, GL_FALSE, 0, NULL);
     glEnableVertexAttribArray(location);
     return b;
 }
@@ -91,9 +93,14 @@ eng_deform *eng_deform_create(const scn_scene *s, const eng_gpu_prim *gpu)
         *g = *sg;
         glGenVertexArrays(1, &g->vao);
         glBindVertexArray(g->vao);
-        g->vbo_pos = dynamic_vbo(0, p->vertex_count);
-        g->vbo_nrm = dynamic_vbo(1, p->vertex_count);
-        it->vbo_prev = dynamic_vbo(5, p->vertex_count);
+        g->vbo_pos = dynamic_vbo(0, p->vertex_count, 3);
+        g->vbo_nrm = dynamic_vbo(1, p->vertex_count, 3);
+        it->vbo_prev = dynamic_vbo(5, p->vertex_count, 3);
+        g->vbo_tan = 0;
+        if (p->tangents) {
+            it->tan = xcalloc(n3 / 3 * 4, sizeof(float));
+            g->vbo_tan = dynamic_vbo(6, p->vertex_count, 4);
+        }
         const GLuint shared[3] = {sg->vbo_uv[0], sg->vbo_uv[1], sg->vbo_col};
         for (int a = 0; a < 3; a++) {
             if (!shared[a])
@@ -108,10 +115,10 @@ eng_deform *eng_deform_create(const scn_scene *s, const eng_gpu_prim *gpu)
     return d;
 }
 
-static void upload(GLuint vbo, const float *v, uint32_t vertices)
+static void upload(GLuint vbo, const float *v, uint32_t vertices, int comps)
 {
     glBindBuffer(GL_ARRAY_BUFFER, vbo);
-    glBufferSubData(GL_ARRAY_BUFFER, 0, (GLsizeiptr)((size_t)vertices * 3 * sizeof(float)), v);
+    glBufferSubData(GL_ARRAY_BUFFER, 0, (GLsizeiptr)((size_t)vertices * (size_t)comps * sizeof(float)), v);
 }
 
 void eng_deform_pose(eng_deform *d, eng_frame_scene *fs, const float *world, const float *prev_world, double t,
@@ -126,7 +133,7 @@ void eng_deform_pose(eng_deform *d, eng_frame_scene *fs, const float *world, con
         deformed *it = &d->items[k];
         eng_draw *dr = &fs->draws[it->draw];
         const scn_primitive *p = &s->primitives[dr->primitive];
-        int skinned = scn_deform(s, it->node, dr->primitive, world, d->weights, it->pos, it->nrm);
+        int skinned = scn_deform_tangents(s, it->node, dr->primitive, world, d->weights, it->pos, it->nrm, it->tan);
         scn_deform(s, it->node, dr->primitive, prev_world, d->prev_weights, it->prev_pos, it->prev_nrm);
         if (skinned) {
             m4_identity(dr->world);
@@ -134,10 +141,13 @@ void eng_deform_pose(eng_deform *d, eng_frame_scene *fs, const float *world, con
         }
         dr->positions = it->pos;
         dr->normals = it->nrm;
+        dr->tangents = it->tan;
         dr->gpu = &it->gpu;
-        upload(it->gpu.vbo_pos, it->pos, p->vertex_count);
-        upload(it->gpu.vbo_nrm, it->nrm, p->vertex_count);
-        upload(it->vbo_prev, it->prev_pos, p->vertex_count);
+        upload(it->gpu.vbo_pos, it->pos, p->vertex_count, 3);
+        upload(it->gpu.vbo_nrm, it->nrm, p->vertex_count, 3);
+        upload(it->vbo_prev, it->prev_pos, p->vertex_count, 3);
+        if (it->tan)
+            upload(it->gpu.vbo_tan, it->tan, p->vertex_count, 4);
     }
     glBindBuffer(GL_ARRAY_BUFFER, 0);
 }
@@ -151,11 +161,14 @@ void eng_deform_destroy(eng_deform *d)
         glDeleteBuffers(1, &it->gpu.vbo_pos);
         glDeleteBuffers(1, &it->gpu.vbo_nrm);
         glDeleteBuffers(1, &it->vbo_prev);
+        if (it->gpu.vbo_tan)
+            glDeleteBuffers(1, &it->gpu.vbo_tan);
         glDeleteVertexArrays(1, &it->gpu.vao);
         free(it->pos);
         free(it->nrm);
         free(it->prev_pos);
         free(it->prev_nrm);
+        free(it->tan);
     }
     free(d->items);
     free(d->weights);

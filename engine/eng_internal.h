@@ -83,6 +83,7 @@ typedef struct eng_gpu_prim { /* vertex attribute 5: the previous frame's positi
     GLuint vao, vbo_pos, vbo_nrm, ibo;
     GLuint vbo_uv[2], vbo_col; /* TEXCOORD_0/1 (location 2, 3), COLOR_0 (4); 0 where absent */
     GLsizei index_count;
+    GLuint vbo_tan; /* TANGENT xyzw (location 6, normal_map.glsl); 0 where the primitive has none */
 } eng_gpu_prim;
 
 /* One draw: a primitive at a node's world transform this frame and the previous one. */
@@ -95,6 +96,7 @@ typedef struct eng_draw {
     /* A skinned or morphed draw (deform_gl.c): its vertices this frame in the space `world`
      * maps from (world space, world = identity, when skinned); NULL: the primitive's own. */
     const float *positions, *normals;
+    const float *tangents; /* deformed tangents (4 per vertex) beside them, or NULL */
 } eng_draw;
 
 /* The object-space positions of draw d (deformed or the primitive's). */
@@ -440,6 +442,9 @@ typedef struct eng_trace_settings {
     uint32_t salt;       /* 0 = precomputed random maps; frame-dependent for per-frame random */
     int stratified;      /* eng_rmap_frame's: 1 = rotate the numbers by offset */
     float offset[4];
+    /* The width of a photon's ray cone (photon_trace.c: its texture level of detail at each
+     * hit); the engine passes the kernel's diameter 2·kernel_radius. 0: level 0 only. */
+    float footprint;
 } eng_trace_settings;
 
 typedef struct eng_trace_stats {
@@ -451,7 +456,7 @@ typedef struct eng_trace_stats {
 } eng_trace_stats;
 
 /* A ray hit (rt.c): distance along the unit ray, world position, interpolated shading
- * normal (unit) and Embree's geometric normal (unit), both in world space and NOT oriented
+ * normal (unit; the material's normal texture applied, scn_normal_at) and Embree's geometric normal (unit), both in world space and NOT oriented
  * toward the ray (the caller does that); the draw's material (−1 = default) and the draw
  * index (= Embree geomID). */
 typedef struct rt_hit {
@@ -470,7 +475,19 @@ typedef struct rt_hit {
     /* What emissiveFactor is multiplied by here: the emissive texture's RGB (sRGB-decoded,
      * glTF §3.9.3); 1 without one. */
     float emissive_tex[3];
+    /* Where on the draw's primitive (rt.c; tri = UINT32_MAX where the tracer does not know,
+     * e.g. a multi-image hit): triangle, barycentrics of its vertices 1 and 2, and the
+     * triangle's world-space area, for rt_hit_textures' footprint. */
+    uint32_t tri;
+    float bary[2];
+    float world_area;
 } rt_hit;
+
+/* Fills hit's base_tex, roughness_tex, metallic_tex and emissive_tex from its material's
+ * textures on primitive p at (tri, bary) (hit_textures.c). width ≤ 0: level 0 as each
+ * sampler's magFilter says (every CPU lookup before issue 17's mips); width > 0: the ray-cone
+ * width over |cos| at the hit (world units), the level chosen from it (scn_texref_at_cone). */
+void rt_hit_textures(const scn_scene *scene, const scn_primitive *p, rt_hit *hit, float width);
 
 typedef struct eng_rt eng_rt;
 /* Closest hit of the ray org + t·dir, t in [tnear, tfar], dir unit, against the scene as

@@ -191,14 +191,22 @@ static void upload_scene(eng_engine *e)
             glVertexAttribPointer((GLuint)(2 + a), comps, GL_FLOAT, GL_FALSE, 0, NULL);
             glEnableVertexAttribArray((GLuint)(2 + a));
         }
+        if (p->tangents) { /* normal maps (normal_map.glsl) */
+            glGenBuffers(1, &g->vbo_tan);
+            glBindBuffer(GL_ARRAY_BUFFER, g->vbo_tan);
+            glBufferData(GL_ARRAY_BUFFER, (GLsizeiptr)(p->vertex_count * 4 * sizeof(float)), p->tangents, GL_STATIC_DRAW);
+            glVertexAttribPointer(6, 4, GL_FLOAT, GL_FALSE, 0, NULL);
+            glEnableVertexAttribArray(6);
+        }
         glGenBuffers(1, &g->ibo);
         glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, g->ibo);
         glBufferData(GL_ELEMENT_ARRAY_BUFFER, (GLsizeiptr)(p->index_count * sizeof(uint32_t)), p->indices, GL_STATIC_DRAW);
         g->index_count = (GLsizei)p->index_count;
         glBindVertexArray(0);
     }
-    /* Textures as the loader decoded them (linear RGBA floats, row 0 = v 0), mipmapped
-     * where their minFilter asks for it. */
+    /* Textures as the loader decoded them (linear RGBA floats, row 0 = v 0), with the mip
+     * levels the loader built where their minFilter asks for them (texture_mip.c: the CPU
+     * samples the same levels). */
     e->textures = xcalloc(s->texture_count, sizeof *e->textures);
     for (uint32_t i = 0; i < s->texture_count; i++) {
         const scn_texture *t = &s->textures[i];
@@ -208,9 +216,11 @@ static void upload_scene(eng_engine *e)
         glPixelStorei(GL_UNPACK_ALIGNMENT, 4);
         glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA32F, (GLsizei)t->width, (GLsizei)t->height, 0, GL_RGBA, GL_FLOAT,
                      t->texels);
-        int mip = t->min_filter >= GL_NEAREST_MIPMAP_NEAREST && t->min_filter <= GL_LINEAR_MIPMAP_LINEAR;
-        if (mip)
-            glGenerateMipmap(GL_TEXTURE_2D);
+        for (uint32_t l = 1; l < t->levels; l++) {
+            GLsizei w = (GLsizei)(t->width >> l), h = (GLsizei)(t->height >> l);
+            glTexImage2D(GL_TEXTURE_2D, (GLint)l, GL_RGBA32F, w ? w : 1, h ? h : 1, 0, GL_RGBA, GL_FLOAT, t->mips[l]);
+        }
+        glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAX_LEVEL, t->levels ? (GLint)t->levels - 1 : 0);
         glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, t->min_filter);
         glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, t->mag_linear ? GL_LINEAR : GL_NEAREST);
         glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, wraps[t->wrap_s]);
@@ -402,6 +412,7 @@ void eng_destroy(eng_engine *e)
                 glDeleteBuffers(1, &e->gpu[i].ibo);
                 glDeleteBuffers(2, e->gpu[i].vbo_uv);
                 glDeleteBuffers(1, &e->gpu[i].vbo_col);
+                glDeleteBuffers(1, &e->gpu[i].vbo_tan);
                 glDeleteVertexArrays(1, &e->gpu[i].vao);
             }
     }
@@ -513,7 +524,7 @@ static void pose_frame(eng_engine *e, int frame)
                 memcpy(dr->world, w, sizeof dr->world);
                 memcpy(dr->prev_world, e->prev_world + 16 * (size_t)i, sizeof dr->prev_world);
                 dr->gpu = &e->gpu[dr->primitive];
-                dr->positions = dr->normals = NULL;
+                dr->positions = dr->normals = dr->tangents = NULL;
             }
         }
     }
@@ -1336,7 +1347,8 @@ eng_result eng_render_frame(eng_engine *e, int frame, eng_error *err)
         if (r != ENG_OK)
             return r;
         eng_trace_settings ts = {e->settings.bounces, e->settings.threads, rf.salt, rf.stratified,
-                                 {rf.offset[0], rf.offset[1], rf.offset[2], rf.offset[3]}};
+                                 {rf.offset[0], rf.offset[1], rf.offset[2], rf.offset[3]},
+                                 2.0f * e->settings.kernel_radius};
         ps.e = e;
         ps.ts = ts;
         if ((r = trace_prepare(e, frame, &ps.tracer, err)) != ENG_OK)
@@ -1534,7 +1546,8 @@ eng_result eng_frame_trace_inputs(eng_engine *e, int frame, eng_trace_inputs *ou
     out->in = e->bounce;
     out->count = e->bounce_count;
     eng_trace_settings ts = {e->settings.bounces, e->settings.threads, rf.salt, rf.stratified,
-                             {rf.offset[0], rf.offset[1], rf.offset[2], rf.offset[3]}};
+                             {rf.offset[0], rf.offset[1], rf.offset[2], rf.offset[3]},
+                                 2.0f * e->settings.kernel_radius};
     out->settings = ts;
     return ENG_OK;
 }

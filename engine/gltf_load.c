@@ -18,9 +18,10 @@
  *     decoded from the shim, as ordinary accessors); sparse accessors and KHR_mesh_quantization's
  *     integer attributes are read (read_floats_as), sparse index accessors are not;
  *   - textures are decoded to linear RGBA floats (make_texture; base colour and emissive
- *     sRGB-decoded; occlusionTexture.strength checked to [0, 1]), TEXCOORD_0/1 and COLOR_0 read; skins (JOINTS_0/WEIGHTS_0, inverse
- *     bind matrices) and morph targets (POSITION/NORMAL deltas, mesh/node weights, "weights"
- *     channels) are read for deform.c;
+ *     sRGB-decoded; occlusionTexture.strength checked to [0, 1]), TEXCOORD_0/1 and COLOR_0 read; skins (JOINTS_0/WEIGHTS_0 and _1, inverse
+ *     bind matrices) and morph targets (POSITION/NORMAL/TANGENT deltas, mesh/node weights, "weights"
+ *     channels) are read for deform.c; TANGENT is read, or generated (scn_generate_tangents)
+ *     for a primitive whose material has a normal texture;
  *   - primitives without NORMAL get flat normals, their vertices un-shared; normals are
  *     normalised;
  *   - only nodes reachable from the default scene (else scene 0, else every root) are kept,
@@ -544,6 +545,14 @@ static eng_result make_texture(loader *L, int index, int srgb, const char *where
         }
         d.texels[i] = srgb && i % 4 != 3 ? srgb_to_linear(c) : c;
     }
+    d.mips[0] = d.texels;
+    d.levels = 1;
+    if (d.min_filter >= 9984 && d.min_filter <= 9987 && !scn_texture_build_mips(&d)) {
+        for (uint32_t l = 1; l < d.levels; l++)
+            free(d.mips[l]);
+        free(d.texels);
+        return nomem(L, "texture mip levels");
+    }
     L->texture_source[s->texture_count] = index;
     s->textures[s->texture_count] = d;
     *out = (int32_t)s->texture_count++;
@@ -663,6 +672,9 @@ static eng_result load_materials(loader *L)
         if ((r = check_unit_range(L, where, "occlusionTexture.strength", g->occlusion_texture.strength)))
             return r;
         d->occlusion_strength = (float)g->occlusion_texture.strength;
+        if (!isfinite(g->normal_texture.strength))
+            return fail(L, ENG_ERR_INVALID, "%s: normalTexture.scale is not finite", where);
+        d->normal_scale = (float)g->normal_texture.strength;
         d->alpha_mode = SCN_ALPHA_OPAQUE;
         if (g->alpha_mode && strcmp(g->alpha_mode, "MASK") == 0)
             d->alpha_mode = SCN_ALPHA_MASK;
@@ -852,9 +864,9 @@ static eng_result flat_normals(loader *L, scn_primitive *p, const char *where)
             memcpy(nrm + ((size_t)3 * t + k) * 3, f, sizeof f);
     }
     /* The other attributes follow the vertices they belonged to. */
-    float **attr[3] = {&p->texcoords[0], &p->texcoords[1], &p->colors};
-    const size_t comps[3] = {2, 2, 4};
-    for (int a = 0; a < 3; a++) {
+    float **attr[4] = {&p->texcoords[0], &p->texcoords[1], &p->colors, &p->tangents};
+    const size_t comps[4] = {2, 2, 4, 4};
+    for (int a = 0; a < 4; a++) {
         if (!*attr[a])
             continue;
         float *un = malloc((size_t)n * comps[a] * sizeof *un);
@@ -868,21 +880,22 @@ static eng_result flat_normals(loader *L, scn_primitive *p, const char *where)
         free(*attr[a]);
         *attr[a] = un;
     }
+    const size_t inf = p->influences ? p->influences : 4;
     if (p->joints) {
-        uint32_t *un = malloc((size_t)n * 4 * sizeof *un);
+        uint32_t *un = malloc((size_t)n * inf * sizeof *un);
         if (!un) {
             free(pos);
             free(nrm);
             return nomem(L, where);
         }
         for (uint32_t i = 0; i < n; i++)
-            memcpy(un + (size_t)i * 4, p->joints + (size_t)p->indices[i] * 4, 4 * sizeof *un);
+            memcpy(un + (size_t)i * inf, p->joints + (size_t)p->indices[i] * inf, inf * sizeof *un);
         free(p->joints);
         p->joints = un;
     }
-    float **per_target[3] = {&p->weights, &p->target_positions, &p->target_normals};
-    const size_t tcomps[3] = {4, 3, 3};
-    for (int a = 0; a < 3; a++) {
+    float **per_target[4] = {&p->weights, &p->target_positions, &p->target_normals, &p->target_tangents};
+    const size_t tcomps[4] = {inf, 3, 3, 3};
+    for (int a = 0; a < 4; a++) {
         if (!*per_target[a])
             continue;
         size_t sets = a == 0 ? 1 : p->target_count;
@@ -918,36 +931,38 @@ static int find_attribute(const gls_primitive *g, const char *semantic)
     return -2;
 }
 
-/* JOINTS_0 (UNSIGNED_BYTE/SHORT VEC4) and WEIGHTS_0 (FLOAT or normalized UNSIGNED_BYTE/SHORT
- * VEC4), both or neither; JOINTS_1/WEIGHTS_1 (more than 4 influences) are ignored with a
- * warning. Joint indices are checked against the skin of each node that draws the mesh
- * (load_skins). */
-static eng_result load_skin_attributes(loader *L, const gls_primitive *g, scn_primitive *d, const char *where)
+/* One skinning set n: JOINTS_n (UNSIGNED_BYTE/SHORT VEC4) and WEIGHTS_n (FLOAT or normalized
+ * UNSIGNED_BYTE/SHORT VEC4), both present (*j, *w: 4 per vertex, malloc'd), both absent
+ * (ENG_OK, *j = *w = NULL), or an error. */
+static eng_result load_skin_set(loader *L, const gls_primitive *g, scn_primitive *d, const char *where, int n,
+                                uint32_t **jout, float **wout)
 {
     const gls_model *m = L->m;
-    int ja = find_attribute(g, "JOINTS_0"), wa = find_attribute(g, "WEIGHTS_0");
-    if (find_attribute(g, "JOINTS_1") != -2)
-        scn_warn(L->s, "%s: JOINTS_1/WEIGHTS_1 ignored (4 influences per vertex are used)", where);
+    char jn[16], wn[16];
+    snprintf(jn, sizeof jn, "JOINTS_%d", n);
+    snprintf(wn, sizeof wn, "WEIGHTS_%d", n);
+    *jout = NULL;
+    *wout = NULL;
+    int ja = find_attribute(g, jn), wa = find_attribute(g, wn);
     if (ja == -2 && wa == -2)
         return ENG_OK;
     if (ja == -2 || wa == -2)
-        return fail(L, ENG_ERR_INVALID, "%s: %s without %s", where, ja == -2 ? "WEIGHTS_0" : "JOINTS_0",
-                    ja == -2 ? "JOINTS_0" : "WEIGHTS_0");
+        return fail(L, ENG_ERR_INVALID, "%s: %s without %s", where, ja == -2 ? wn : jn, ja == -2 ? jn : wn);
     const gls_accessor *aj = &m->accessors[ja], *aw = &m->accessors[wa];
     if ((aj->component_type != GLS_COMPONENT_UNSIGNED_BYTE && aj->component_type != GLS_COMPONENT_UNSIGNED_SHORT) ||
         aj->normalized)
-        return fail(L, ENG_ERR_INVALID, "%s JOINTS_0: accessor %d is %s, must be UNSIGNED_BYTE or UNSIGNED_SHORT", where,
+        return fail(L, ENG_ERR_INVALID, "%s %s: accessor %d is %s, must be UNSIGNED_BYTE or UNSIGNED_SHORT", where, jn,
                     ja, component_name(aj->component_type));
     if (aw->component_type != GLS_COMPONENT_FLOAT &&
         !((aw->component_type == GLS_COMPONENT_UNSIGNED_BYTE || aw->component_type == GLS_COMPONENT_UNSIGNED_SHORT) &&
           aw->normalized))
-        return fail(L, ENG_ERR_INVALID, "%s WEIGHTS_0: accessor %d must be FLOAT or normalized UNSIGNED_BYTE/SHORT",
-                    where, wa);
+        return fail(L, ENG_ERR_INVALID, "%s %s: accessor %d must be FLOAT or normalized UNSIGNED_BYTE/SHORT", where,
+                    wn, wa);
     char what[160];
     uint64_t count;
-    float *j = NULL;
+    float *j = NULL, *w = NULL;
     eng_result r;
-    snprintf(what, sizeof what, "%s JOINTS_0", where);
+    snprintf(what, sizeof what, "%s %s", where, jn);
     if ((r = read_floats_as(L, ja, what, 4, 1, MAX_PRIMITIVE_VERTICES, &j, &count)))
         return r;
     if (count != d->vertex_count) {
@@ -955,28 +970,83 @@ static eng_result load_skin_attributes(loader *L, const gls_primitive *g, scn_pr
         return fail(L, ENG_ERR_INVALID, "%s: %llu joints for %u positions", what, (unsigned long long)count,
                     d->vertex_count);
     }
-    d->joints = malloc((size_t)count * 4 * sizeof *d->joints);
-    if (!d->joints) {
+    uint32_t *ji = malloc((size_t)count * 4 * sizeof *ji);
+    if (!ji) {
         free(j);
         return nomem(L, what);
     }
     for (size_t i = 0; i < count * 4; i++)
-        d->joints[i] = (uint32_t)j[i];
+        ji[i] = (uint32_t)j[i];
     free(j);
-    snprintf(what, sizeof what, "%s WEIGHTS_0", where);
-    if ((r = read_floats_as(L, wa, what, 4, 1, MAX_PRIMITIVE_VERTICES, &d->weights, &count)))
+    snprintf(what, sizeof what, "%s %s", where, wn);
+    if ((r = read_floats_as(L, wa, what, 4, 1, MAX_PRIMITIVE_VERTICES, &w, &count))) {
+        free(ji);
         return r;
+    }
     if (count != d->vertex_count)
-        return fail(L, ENG_ERR_INVALID, "%s: %llu weights for %u positions", what, (unsigned long long)count,
-                    d->vertex_count);
-    for (size_t i = 0; i < count * 4; i++)
-        if (d->weights[i] < 0.0f)
-            return fail(L, ENG_ERR_INVALID, "%s: weight %g of vertex %zu is negative", what, d->weights[i], i / 4);
+        r = fail(L, ENG_ERR_INVALID, "%s: %llu weights for %u positions", what, (unsigned long long)count,
+                 d->vertex_count);
+    for (size_t i = 0; !r && i < count * 4; i++)
+        if (w[i] < 0.0f)
+            r = fail(L, ENG_ERR_INVALID, "%s: weight %g of vertex %zu is negative", what, w[i], i / 4);
+    if (r) {
+        free(ji);
+        free(w);
+        return r;
+    }
+    *jout = ji;
+    *wout = w;
     return ENG_OK;
 }
 
-/* Morph targets' POSITION and NORMAL deltas (other target attributes, TANGENT or TEXCOORD,
- * are ignored), one array of target_count × vertex_count × 3 each. */
+/* Skinning attributes (glTF §3.7.3.1): JOINTS_0/WEIGHTS_0 and, for more than 4 influences,
+ * JOINTS_1/WEIGHTS_1, interleaved into d->joints/d->weights with d->influences (4 or 8) per
+ * vertex; a set 1 without set 0 is an error, sets 2 and up are ignored with a warning. Joint
+ * indices are checked against the skin of each node that draws the mesh (load_skins). */
+static eng_result load_skin_attributes(loader *L, const gls_primitive *g, scn_primitive *d, const char *where)
+{
+    uint32_t *j[2] = {NULL, NULL};
+    float *w[2] = {NULL, NULL};
+    eng_result r = ENG_OK;
+    for (int n = 0; n < 2 && !r; n++)
+        r = load_skin_set(L, g, d, where, n, &j[n], &w[n]);
+    if (!r && !j[0] && j[1])
+        r = fail(L, ENG_ERR_INVALID, "%s: JOINTS_1 without JOINTS_0", where);
+    if (!r && find_attribute(g, "JOINTS_2") != -2)
+        scn_warn(L->s, "%s: JOINTS_2 and later sets ignored (8 influences per vertex are used)", where);
+    if (!r && j[1]) {
+        size_t nv = d->vertex_count;
+        d->joints = malloc(nv * 8 * sizeof *d->joints);
+        d->weights = malloc(nv * 8 * sizeof *d->weights);
+        if (!d->joints || !d->weights)
+            r = nomem(L, where);
+        for (size_t v = 0; !r && v < nv; v++)
+            for (int n = 0; n < 2; n++) {
+                memcpy(d->joints + v * 8 + 4 * n, j[n] + v * 4, 4 * sizeof *d->joints);
+                memcpy(d->weights + v * 8 + 4 * n, w[n] + v * 4, 4 * sizeof *d->weights);
+            }
+        d->influences = 8;
+        for (int n = 0; n < 2; n++) {
+            free(j[n]);
+            free(w[n]);
+        }
+        return r;
+    }
+    free(j[1]);
+    free(w[1]);
+    if (r) {
+        free(j[0]);
+        free(w[0]);
+        return r;
+    }
+    d->joints = j[0];
+    d->weights = w[0];
+    d->influences = j[0] ? 4 : 0;
+    return ENG_OK;
+}
+
+/* Morph targets' POSITION, NORMAL and TANGENT deltas (other target attributes, TEXCOORD or
+ * COLOR, are ignored), one array of target_count × vertex_count × 3 each. */
 static eng_result load_targets(loader *L, const gls_primitive *g, scn_primitive *d, const char *where)
 {
     if (g->target_count == 0)
@@ -986,11 +1056,11 @@ static eng_result load_targets(loader *L, const gls_primitive *g, scn_primitive 
                     g->target_count);
     size_t n = (size_t)d->vertex_count * 3;
     d->target_count = g->target_count;
-    static const char *const sem[2] = {"POSITION", "NORMAL"};
-    float **dst[2] = {&d->target_positions, &d->target_normals};
+    static const char *const sem[3] = {"POSITION", "NORMAL", "TANGENT"};
+    float **dst[3] = {&d->target_positions, &d->target_normals, &d->target_tangents};
     for (uint32_t t = 0; t < g->target_count; t++) {
         const gls_target *gt = &g->targets[t];
-        for (int a = 0; a < 2; a++) {
+        for (int a = 0; a < 3; a++) {
             int acc = -2;
             for (uint32_t k = 0; k < gt->attribute_count; k++)
                 if (strcmp(gt->attributes[k].semantic, sem[a]) == 0)
@@ -1021,6 +1091,23 @@ static eng_result load_targets(loader *L, const gls_primitive *g, scn_primitive 
             free(v);
         }
     }
+    return ENG_OK;
+}
+
+/* A per-vertex attribute (accessor acc, semantic name) of comps floats per vertex into *out,
+ * which must have vertex_count elements. */
+static eng_result read_vertex_attribute(loader *L, int acc, const char *where, const char *name, uint32_t comps,
+                                        uint32_t vertex_count, float **out)
+{
+    char what[160];
+    uint64_t count;
+    snprintf(what, sizeof what, "%s %s", where, name);
+    eng_result r = read_floats_as(L, acc, what, comps, 1, MAX_PRIMITIVE_VERTICES, out, &count);
+    if (r)
+        return r;
+    if (count != vertex_count)
+        return fail(L, ENG_ERR_INVALID, "%s: %llu values for %u positions", what, (unsigned long long)count,
+                    vertex_count);
     return ENG_OK;
 }
 
@@ -1064,12 +1151,9 @@ static eng_result load_primitive(loader *L, const gls_primitive *g, scn_primitiv
 
     int nrm_acc = find_attribute(g, "NORMAL");
     if (nrm_acc != -2) {
-        snprintf(what, sizeof what, "%s NORMAL", where);
-        if ((r = read_floats_as(L, nrm_acc, what, 3, 1, MAX_PRIMITIVE_VERTICES, &d->normals, &count)))
+        if ((r = read_vertex_attribute(L, nrm_acc, where, "NORMAL", 3, d->vertex_count, &d->normals)))
             return r;
-        if (count != d->vertex_count)
-            return fail(L, ENG_ERR_INVALID, "%s: %llu normals for %u positions", what, (unsigned long long)count,
-                        d->vertex_count);
+        snprintf(what, sizeof what, "%s NORMAL", where);
         for (uint32_t v = 0; v < d->vertex_count; v++) {
             float *n = d->normals + (size_t)v * 3;
             double len = sqrt((double)n[0] * n[0] + (double)n[1] * n[1] + (double)n[2] * n[2]);
@@ -1084,12 +1168,17 @@ static eng_result load_primitive(loader *L, const gls_primitive *g, scn_primitiv
         int acc = find_attribute(g, set ? "TEXCOORD_1" : "TEXCOORD_0");
         if (acc == -2)
             continue;
-        snprintf(what, sizeof what, "%s TEXCOORD_%d", where, set);
-        if ((r = read_floats_as(L, acc, what, 2, 1, MAX_PRIMITIVE_VERTICES, &d->texcoords[set], &count)))
+        if ((r = read_vertex_attribute(L, acc, where, set ? "TEXCOORD_1" : "TEXCOORD_0", 2, d->vertex_count,
+                                       &d->texcoords[set])))
             return r;
-        if (count != d->vertex_count)
-            return fail(L, ENG_ERR_INVALID, "%s: %llu texcoords for %u positions", what, (unsigned long long)count,
-                        d->vertex_count);
+    }
+    int tan_acc = find_attribute(g, "TANGENT");
+    if (tan_acc != -2) {
+        /* glTF §3.7.2.1: VEC4, FLOAT or normalized BYTE/SHORT; xyz unit, w ±1. */
+        if ((r = read_vertex_attribute(L, tan_acc, where, "TANGENT", 4, d->vertex_count, &d->tangents)))
+            return r;
+        for (uint32_t v = 0; v < d->vertex_count; v++)
+            d->tangents[(size_t)v * 4 + 3] = d->tangents[(size_t)v * 4 + 3] < 0.0f ? -1.0f : 1.0f;
     }
     int col_acc = find_attribute(g, "COLOR_0");
     if (col_acc != -2) {
@@ -1136,6 +1225,11 @@ static eng_result load_primitive(loader *L, const gls_primitive *g, scn_primitiv
 
     if (!d->normals && (r = flat_normals(L, d, where)))
         return r;
+    /* A normal texture needs tangents: the glTF's, or generated from its texcoord set. */
+    const scn_material *mat = d->material >= 0 ? &L->s->materials[d->material] : NULL;
+    if (mat && mat->normal_tex.texture >= 0 && !d->tangents && d->texcoords[mat->normal_tex.texcoord] &&
+        !(d->tangents = scn_generate_tangents(d, mat->normal_tex.texcoord)))
+        return nomem(L, where);
     L->total_vertices += d->vertex_count;
     if (L->total_vertices > MAX_SCENE_VERTICES)
         return fail(L, ENG_ERR_UNSUPPORTED, "%s: the scene exceeds %llu vertices", where,
@@ -1489,10 +1583,11 @@ static eng_result load_skins(loader *L, const int32_t *remap)
         const scn_mesh *me = &s->meshes[n->mesh];
         for (uint32_t p = 0; p < me->primitive_count && !r; p++) {
             const scn_primitive *pr = &s->primitives[me->first_primitive + p];
-            for (size_t v = 0; pr->joints && v < (size_t)pr->vertex_count * 4; v++)
+            const size_t inf = pr->influences;
+            for (size_t v = 0; pr->joints && v < (size_t)pr->vertex_count * inf; v++)
                 if (pr->joints[v] >= s->skins[n->skin].joint_count) {
                     r = fail(L, ENG_ERR_INVALID, "node %d: mesh %d vertex %zu uses joint %u, skin %d has %u joints",
-                             n->source, n->mesh, v / 4, pr->joints[v], n->skin, s->skins[n->skin].joint_count);
+                             n->source, n->mesh, v / inf, pr->joints[v], n->skin, s->skins[n->skin].joint_count);
                     break;
                 }
         }
@@ -1815,6 +1910,8 @@ void scn_destroy(scn_scene *s)
         free(s->primitives[i].weights);
         free(s->primitives[i].target_positions);
         free(s->primitives[i].target_normals);
+        free(s->primitives[i].tangents);
+        free(s->primitives[i].target_tangents);
     }
     for (uint32_t i = 0; i < s->mesh_count; i++)
         free(s->meshes[i].weights);
@@ -1824,8 +1921,11 @@ void scn_destroy(scn_scene *s)
     }
     free(s->skins);
     free(s->weights);
-    for (uint32_t i = 0; i < s->texture_count; i++)
+    for (uint32_t i = 0; i < s->texture_count; i++) {
+        for (uint32_t l = 1; l < s->textures[i].levels; l++)
+            free(s->textures[i].mips[l]);
         free(s->textures[i].texels);
+    }
     free(s->textures);
     for (uint32_t a = 0; a < s->animation_count; a++) {
         for (uint32_t c = 0; c < s->animations[a].channel_count; c++)

@@ -394,6 +394,7 @@ void build_view(gls_impl &g)
                                                pbr.metallicRoughnessTexture.texCoord,
                                                pbr.metallicRoughnessTexture.extensions);
         c.normal_texture = texinfo(g, mat.normalTexture.index, mat.normalTexture.texCoord, mat.normalTexture.extensions);
+        c.normal_texture.strength = mat.normalTexture.scale;
         c.occlusion_texture = texinfo(g, mat.occlusionTexture.index, mat.occlusionTexture.texCoord,
                                       mat.occlusionTexture.extensions);
         c.occlusion_texture.strength = mat.occlusionTexture.strength;

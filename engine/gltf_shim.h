@@ -154,7 +154,7 @@ typedef struct gls_texinfo {
     gls_doubles offset, scale; /* transform: [0,0] and [1,1] where absent (len 0) */
     gls_number rotation;
     gls_number transform_texcoord;
-    double strength; /* occlusionTexture.strength (1 for the others) */
+    double strength; /* occlusionTexture.strength, normalTexture.scale (1 for the others) */
 } gls_texinfo;
 
 typedef struct gls_image {

@@ -413,4 +413,9 @@ void eng_bind_material(GLuint prog, const eng_frame_scene *fs, const eng_draw *d
     bind_texref(prog, fs, g, &m->emissive_tex, "u_em", ENG_BASE_TEX_UNIT + 2);
     bind_texref(prog, fs, g, &m->occlusion_tex, "u_occ", ENG_BASE_TEX_UNIT + 3);
     glUniform1f(glGetUniformLocation(prog, "u_occ_strength"), m->occlusion_strength);
+    /* Normal texture (normal_map.glsl): only where the draw has tangents. */
+    bind_texref(prog, fs, g, &m->normal_tex, "u_nrm", ENG_BASE_TEX_UNIT + 4);
+    if (!g->vbo_tan)
+        glUniform1i(glGetUniformLocation(prog, "u_nrm_tex_on"), 0);
+    glUniform1f(glGetUniformLocation(prog, "u_nrm_scale"), m->normal_scale);
 }

@@ -87,11 +87,21 @@ static int has_power(const float p[3])
     return p[0] > 0.0f || p[1] > 0.0f || p[2] > 0.0f;
 }
 
+/* Whether material m has a texture whose level a footprint chooses. */
+static int textured(const scn_scene *scene, int32_t m)
+{
+    if (m < 0 || (uint32_t)m >= scene->material_count)
+        return 0;
+    const scn_material *x = &scene->materials[m];
+    return x->base_color_tex.texture >= 0 || x->metallic_roughness_tex.texture >= 0 || x->emissive_tex.texture >= 0;
+}
+
 /* Traces one bounce-map photon, appending its stored photons to buf; fills rec. */
-static void trace_path(const pt_tracer *tr, const scn_scene *scene, const scn_material *default_material,
+static void trace_path(const pt_tracer *tr, const eng_frame_scene *fs, const scn_material *default_material,
                        const eng_random_maps *rm, const eng_bounce_photon *bp, const eng_trace_settings *s, pt_buf *buf,
                        pt_path *rec)
 {
+    const scn_scene *scene = fs->scene;
     rec->at = buf->n;
     rec->count = 0;
     rec->truncated = rec->oom = 0;
@@ -123,8 +133,19 @@ static void trace_path(const pt_tracer *tr, const scn_scene *scene, const scn_ma
         __builtin_prefetch(rm->uniform + 4 * (size_t)e);
         __builtin_prefetch(rm->cosine + 4 * (size_t)e);
         rt_hit h;
+        h.tri = UINT32_MAX;
         if (!tr->intersect(tr->state, org, dir, tnear, &h, &buf->counts))
             break;
+        /* Texture level of detail (texture_mip.c, Akenine-Möller et al. 2019 ray cones): the
+         * photon's cone has the constant width s->footprint, the diameter of the kernel its
+         * photons are gathered with (spread angle 0): texture detail finer than the kernel
+         * cannot show in the photon map, so the colour a photon carries on is the texture
+         * averaged over that width, over |cos| of the geometric normal and the ray. */
+        if (s->footprint > 0.0f && h.tri != UINT32_MAX && h.draw < fs->draw_count && textured(scene, h.material)) {
+            float c = fabsf(dot3(h.geom_normal, dir));
+            rt_hit_textures(scene, &scene->primitives[fs->draws[h.draw].primitive], &h,
+                            s->footprint / (c > 1e-3f ? c : 1e-3f));
+        }
         const float wi[3] = {-dir[0], -dir[1], -dir[2]};
         /* Shading normal, unless interpolation put wi on the other side of it than the true
          * surface: then the geometric normal, so scattering stays on the photon's side. */
@@ -236,15 +257,14 @@ eng_result photon_trace_with(const pt_tracer *tr, const eng_frame_scene *fs, con
         bufs[t].n = 0;
         memset(&bufs[t].counts, 0, sizeof bufs[t].counts);
     }
-    const scn_scene *scene = fs->scene;
-    const scn_material default_material = eng_material_of(scene, -1);
+    const scn_material default_material = eng_material_of(fs->scene, -1);
 #pragma omp parallel num_threads(threads)
     {
         int t = omp_get_thread_num();
         pt_buf *mine = &bufs[t];
 #pragma omp for schedule(static)
         for (ptrdiff_t i = 0; i < (ptrdiff_t)count; i++) {
-            trace_path(tr, scene, &default_material, rm, &in[i], s, mine, &paths[i]);
+            trace_path(tr, fs, &default_material, rm, &in[i], s, mine, &paths[i]);
             paths[i].thread = (uint16_t)t;
         }
     }

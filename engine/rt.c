@@ -7,7 +7,8 @@
  *
  * Each geometry also keeps its world-space vertex normals (object normals through the
  * inverse transpose, m4_normal_matrix), re-posed with the positions, so rt_intersect can
- * return the interpolated shading normal the photon tracer scatters about.
+ * return the interpolated shading normal the photon tracer scatters about, and its world
+ * tangents where the primitive has them, for the normal texture (scn_normal_at).
  *
  * Lamps (issue 15): the emitter of a point or spot light with a size is an opaque sphere that
  * reflects nothing, tested analytically (rt_lamp_hit): a ray that meets one before any
@@ -38,6 +39,7 @@ typedef struct rt_geom {
     uint32_t primitive;
     int32_t material;
     float *normals; /* world space, 3 per vertex, unit (zero where the authored normal is) */
+    float *tangents; /* world space xyz (not renormalised, as the G-buffers interpolate them) + w; NULL without */
     float world[16];
     int posed;
     /* What a hit on this draw looks up (rt_geom_lookups): fixed by the material and the
@@ -156,6 +158,16 @@ static void pose(rt_geom *g, const scn_primitive *p, const eng_draw *d)
             for (int r = 0; r < 3; r++)
                 w[r] /= len;
     }
+    if (g->tangents) { /* surface directions: the world matrix's upper 3×3, as gbuffer.vert.glsl */
+        const float *tan = d->tangents ? d->tangents : p->tangents;
+        for (uint32_t i = 0; i < p->vertex_count; i++) {
+            const float *o = tan + 4 * i;
+            float *w = g->tangents + 4 * i;
+            for (int r = 0; r < 3; r++)
+                w[r] = world[r] * o[0] + world[4 + r] * o[1] + world[8 + r] * o[2];
+            w[3] = o[3];
+        }
+    }
     rtcUpdateGeometryBuffer(g->geom, RTC_BUFFER_TYPE_VERTEX, 0);
     memcpy(g->world, world, sizeof g->world);
     g->posed = 1;
@@ -186,7 +198,8 @@ void rt_update(eng_rt *rt, const eng_frame_scene *fs)
             g->primitive = fs->draws[i].primitive;
             g->material = fs->draws[i].material;
             g->normals = malloc((p->vertex_count ? p->vertex_count : 1) * 3 * sizeof(float));
-            if (!g->normals) {
+            g->tangents = p->tangents ? malloc((size_t)p->vertex_count * 4 * sizeof(float)) : NULL;
+            if (!g->normals || (p->tangents && !g->tangents)) {
                 fprintf(stderr, "ispm: out of memory\n");
                 abort();
             }
@@ -356,23 +369,26 @@ static int intersect_in(const eng_rt *rt, RTCScene scene, int lamps, const float
     for (int i = 0; i < 3; i++)
         ns[i] = w * n0[i] + u * n1[i] + v * n2[i];
     normalize_or(ns, ng);
+    if (g->tangents && g->material >= 0 && (uint32_t)g->material < rt->scene->material_count)
+        scn_normal_at(rt->scene, &rt->scene->materials[g->material], p, rh.hit.primID, u, v, g->tangents + 4 * tri[0],
+                      g->tangents + 4 * tri[1], g->tangents + 4 * tri[2], ns);
     memcpy(hit->geom_normal, ng, sizeof ng);
     memcpy(hit->normal, ns, sizeof ns);
     hit->material = g->material;
     hit->draw = rh.hit.geomID;
-    hit->base_tex[0] = hit->base_tex[1] = hit->base_tex[2] = hit->base_tex[3] = 1.0f;
-    if (g->base_lookup)
-        scn_base_color_at(rt->scene, g->mat ? g->mat : &(scn_material){.base_color_tex = {.texture = -1}}, p,
-                          rh.hit.primID, u, v, hit->base_tex);
-    hit->roughness_tex = hit->metallic_tex = 1.0f;
-    float mr[4];
-    if (g->mr_lookup && scn_texref_at(rt->scene, &g->mat->metallic_roughness_tex, p, rh.hit.primID, u, v, mr)) {
-        hit->roughness_tex = mr[1];
-        hit->metallic_tex = mr[2];
+    hit->tri = rh.hit.primID;
+    hit->bary[0] = u;
+    hit->bary[1] = v;
+    if (g->base_lookup || g->mr_lookup || g->emissive_lookup) {
+        /* The triangle's world area: half the length of Embree's unnormalised Ng (e1 × e2). */
+        hit->world_area = 0.5f * sqrtf(rh.hit.Ng_x * rh.hit.Ng_x + rh.hit.Ng_y * rh.hit.Ng_y + rh.hit.Ng_z * rh.hit.Ng_z);
+        rt_hit_textures(rt->scene, p, hit, 0.0f);
+    } else { /* no lookup would return anything but 1 (see rt_geom) */
+        hit->world_area = 0.0f;
+        hit->base_tex[0] = hit->base_tex[1] = hit->base_tex[2] = hit->base_tex[3] = 1.0f;
+        hit->roughness_tex = hit->metallic_tex = 1.0f;
+        hit->emissive_tex[0] = hit->emissive_tex[1] = hit->emissive_tex[2] = 1.0f;
     }
-    hit->emissive_tex[0] = hit->emissive_tex[1] = hit->emissive_tex[2] = 1.0f;
-    if (g->emissive_lookup && scn_texref_at(rt->scene, &g->mat->emissive_tex, p, rh.hit.primID, u, v, mr))
-        memcpy(hit->emissive_tex, mr, sizeof hit->emissive_tex);
     return 1;
 }
 
@@ -394,6 +410,7 @@ void rt_destroy(eng_rt *rt)
         if (rt->geoms[i].geom)
             rtcReleaseGeometry(rt->geoms[i].geom);
         free(rt->geoms[i].normals);
+        free(rt->geoms[i].tangents);
     }
     free(rt->geoms);
     if (rt->rtscene)

@@ -250,64 +250,9 @@ int32_t scn_find_node(const scn_scene *scene, const char *name)
 
 /* ---------------------------------------------------------------- textures */
 
-/* Texel coordinate i (may be outside 0..n-1) wrapped as glTF §3.8.4 (GL's wrap modes). */
-static uint32_t wrap_index(long long i, uint32_t n, scn_wrap w)
-{
-    long long nn = (long long)n;
-    switch (w) {
-    case SCN_WRAP_CLAMP: return (uint32_t)(i < 0 ? 0 : i >= nn ? nn - 1 : i);
-    case SCN_WRAP_MIRROR: {
-        long long p = ((i % (2 * nn)) + 2 * nn) % (2 * nn);
-        return (uint32_t)(p < nn ? p : 2 * nn - 1 - p);
-    }
-    default: return (uint32_t)(((i % nn) + nn) % nn);
-    }
-}
+/* scn_texture_sample: texture_mip.c, beside the mip levels. */
 
-void scn_texture_sample(const scn_texture *t, float u, float v, float out[4])
-{
-    /* GL's texel space: texel i covers [i, i+1) of u·width; LINEAR weighs the four texels
-     * around u·width − 0.5 (OpenGL 4.5 §8.14.2). Row 0 is the top of the image, v = 0. */
-    double x = (double)u * t->width, y = (double)v * t->height;
-    if (!isfinite(x) || !isfinite(y) || fabs(x) > 1e15 || fabs(y) > 1e15)
-        x = y = 0.0;
-    if (!t->mag_linear) {
-        const float *p = t->texels +
-                         ((size_t)wrap_index((long long)floor(y), t->height, t->wrap_t) * t->width +
-                          wrap_index((long long)floor(x), t->width, t->wrap_s)) * 4;
-        memcpy(out, p, 4 * sizeof *out);
-        return;
-    }
-    x -= 0.5;
-    y -= 0.5;
-    double fx = floor(x), fy = floor(y);
-    double ax = x - fx, ay = y - fy;
-    uint32_t x0 = wrap_index((long long)fx, t->width, t->wrap_s), x1 = wrap_index((long long)fx + 1, t->width, t->wrap_s);
-    uint32_t y0 = wrap_index((long long)fy, t->height, t->wrap_t), y1 = wrap_index((long long)fy + 1, t->height, t->wrap_t);
-    const float *p00 = t->texels + ((size_t)y0 * t->width + x0) * 4, *p01 = t->texels + ((size_t)y0 * t->width + x1) * 4;
-    const float *p10 = t->texels + ((size_t)y1 * t->width + x0) * 4, *p11 = t->texels + ((size_t)y1 * t->width + x1) * 4;
-    for (int c = 0; c < 4; c++)
-        out[c] = (float)((1 - ay) * ((1 - ax) * p00[c] + ax * p01[c]) + ay * ((1 - ax) * p10[c] + ax * p11[c]));
-}
-
-int scn_texref_at(const scn_scene *scene, const scn_texref *r, const scn_primitive *p, uint32_t tri, float b1,
-                  float b2, float out[4])
-{
-    out[0] = out[1] = out[2] = out[3] = 1.0f;
-    const uint32_t *i = p->indices + 3 * (size_t)tri;
-    double w[3] = {1.0 - (double)b1 - (double)b2, b1, b2};
-    if (!(r->texture >= 0 && (uint32_t)r->texture < scene->texture_count && p->texcoords[r->texcoord]))
-        return 0;
-    const float *tc = p->texcoords[r->texcoord];
-    double uv[2] = {0, 0};
-    for (int k = 0; k < 3; k++)
-        for (int c = 0; c < 2; c++)
-            uv[c] += w[k] * tc[(size_t)i[k] * 2 + c];
-    const float *t = r->transform;
-    float u = (float)(t[0] * uv[0] + t[2] * uv[1] + t[4]), v = (float)(t[1] * uv[0] + t[3] * uv[1] + t[5]);
-    scn_texture_sample(&scene->textures[r->texture], u, v, out);
-    return 1;
-}
+/* scn_texref_at: texture_mip.c (scn_texref_at_cone without a footprint). */
 
 void scn_base_color_at(const scn_scene *scene, const scn_material *m, const scn_primitive *p, uint32_t tri,
                        float b1, float b2, float out[4])

@@ -358,7 +358,7 @@ START_TEST(embree_method_bit_identical)
     const eng_random_maps rm = f->rm;
     const eng_bounce_photon *in = f->in;
     eng_error err;
-    eng_trace_settings ts = {0, 2, 0, 0, {0, 0, 0, 0}};
+    eng_trace_settings ts = {0, 2, 0, 0, {0, 0, 0, 0}, 0.0f};
     eng_photon_map a = {0}, b = {0};
     ck_assert_int_eq(photon_trace(c.rt, &c.fs, &rm, in, N, &ts, &a, NULL, &err), ENG_OK);
     const pt_method *m = pt_method_of(ENG_TRACE_DEFAULT);
@@ -410,7 +410,7 @@ static void run_mi(cornell *c, const eng_random_maps *rm, const eng_bounce_photo
     ck_assert(m->buffer(state, 2, &b));
     ck_assert_str_eq(b.name, "multiimage.map0.face0.material");
     ck_assert_int_eq(b.channel_count, 6);
-    eng_trace_settings ts = {0, threads, 0, 0, {0, 0, 0, 0}};
+    eng_trace_settings ts = {0, threads, 0, 0, {0, 0, 0, 0}, 0.0f};
     ck_assert_int_eq(photon_trace_with(&tr, &c->fs, rm, in, n, &ts, out, st, &err), ENG_OK);
     m->destroy(state);
 }

@@ -366,6 +366,117 @@ START_TEST(engine_skinned_motion)
 }
 END_TEST
 
+/* src with a zero VEC4 accessor of `count` elements (no bufferView: all zeros, glTF
+ * §3.6.2.3) appended to its accessors, and attr_from replaced by attr_to. */
+static char *with_zero_vec4(const char *src, const char *attr_from, const char *attr_to, int count)
+{
+    char to[128];
+    snprintf(to, sizeof to, "},{\"componentType\":5126,\"count\":%d,\"type\":\"VEC4\"}],\"bufferViews\"", count);
+    char *a = replaced(src, "}],\"bufferViews\"", to);
+    char *b = replaced(a, attr_from, attr_to);
+    free(a);
+    return b;
+}
+
+/* JOINTS_1/WEIGHTS_1 (8 influences): a second set of zero weights leaves every vertex where
+ * the first set alone puts it (bit for bit); the first set repeated as the second doubles
+ * the skin matrix, so every deformed position is twice the 4-influence one. A JOINTS_1
+ * without JOINTS_0 is an error. */
+START_TEST(eight_influences)
+{
+    scn_scene *s4 = load(SKIN_GLTF);
+    char *zero = with_zero_vec4(SKIN_GLTF, "\"WEIGHTS_0\":3}", "\"WEIGHTS_0\":3,\"JOINTS_1\":2,\"WEIGHTS_1\":9}", 8);
+    char *twice = replaced(SKIN_GLTF, "\"WEIGHTS_0\":3}", "\"WEIGHTS_0\":3,\"JOINTS_1\":2,\"WEIGHTS_1\":3}");
+    scn_scene *sz = load(zero), *s2 = load(twice);
+    ck_assert_uint_eq(s4->primitives[0].influences, 4);
+    ck_assert_uint_eq(sz->primitives[0].influences, 8);
+    ck_assert_uint_eq(s2->primitives[0].influences, 8);
+    int32_t body = scn_find_node(s4, "body");
+    float *world = malloc((size_t)s4->node_count * 16 * sizeof *world);
+    float p4[8 * 3], pz[8 * 3], p2[8 * 3], nrm[8 * 3];
+    float none = 0.0f;
+    scn_evaluate(s4, 0.75, world);
+    ck_assert_int_eq(scn_deform(s4, (uint32_t)body, 0, world, &none, p4, nrm), 1);
+    ck_assert_int_eq(scn_deform(sz, (uint32_t)body, 0, world, &none, pz, nrm), 1);
+    ck_assert_int_eq(scn_deform(s2, (uint32_t)body, 0, world, &none, p2, nrm), 1);
+    for (int i = 0; i < 8 * 3; i++) {
+        ck_assert_float_eq(pz[i], p4[i]);
+        ck_assert_msg(fabs(p2[i] - 2.0 * p4[i]) <= 1e-6, "component %d: %.9g, want %.9g", i, p2[i], 2.0 * p4[i]);
+    }
+    char *alone = replaced(SKIN_GLTF, "\"JOINTS_0\":2,\"WEIGHTS_0\":3}", "\"JOINTS_1\":2,\"WEIGHTS_1\":3}");
+    scn_scene *bad = NULL;
+    eng_error err;
+    ck_assert_int_eq(scn_load_gltf_memory("test.gltf", alone, strlen(alone), &bad, &err), ENG_ERR_INVALID);
+    ck_assert_msg(strstr(err.msg, "JOINTS_1 without JOINTS_0"), "%s", err.msg);
+    free(alone);
+    free(world);
+    free(zero);
+    free(twice);
+    scn_destroy(s4);
+    scn_destroy(sz);
+    scn_destroy(s2);
+}
+END_TEST
+
+/* Tangents follow the deformation (normal maps on skinned and morphed meshes): skinned by the
+ * skin matrix's upper 3×3 and renormalised, handedness kept; morphed by their TANGENT deltas. */
+START_TEST(tangents_deform)
+{
+    /* The skin with WEIGHTS_0's accessor as TANGENT too (xyz = the weights, w = 0: +1). */
+    char *tj = replaced(SKIN_GLTF, "\"WEIGHTS_0\":3}", "\"WEIGHTS_0\":3,\"TANGENT\":3}");
+    scn_scene *s = load(tj);
+    const scn_primitive *p = &s->primitives[0];
+    ck_assert_ptr_nonnull(p->tangents);
+    int32_t body = scn_find_node(s, "body");
+    float *world = malloc((size_t)s->node_count * 16 * sizeof *world);
+    float pos[8 * 3], nrm[8 * 3], tan[8 * 4];
+    float none = 0.0f;
+    scn_evaluate(s, 1.0, world); /* tip turned 90° about z */
+    ck_assert_int_eq(scn_deform_tangents(s, (uint32_t)body, 0, world, &none, pos, nrm, tan), 1);
+    for (uint32_t v = 0; v < p->vertex_count; v++) {
+        const float *t = p->tangents + v * 4;
+        double wr = 0.0; /* the root's (joint 0) weight; the tip has the rest */
+        for (int k = 0; k < 4; k++)
+            wr += p->joints[v * 4 + k] == 0 ? p->weights[v * 4 + k] : 0.0;
+        /* (wr·I + (1 − wr)·Rz(90°)) t */
+        double m[3] = {wr * t[0] - (1 - wr) * t[1], wr * t[1] + (1 - wr) * t[0], t[2]};
+        double len = sqrt(m[0] * m[0] + m[1] * m[1] + m[2] * m[2]);
+        for (int k = 0; k < 3; k++)
+            ck_assert_msg(fabs(tan[v * 4 + k] - m[k] / len) <= 1e-6, "vertex %u axis %d: %.9g, want %.9g", v, k,
+                          tan[v * 4 + k], m[k] / len);
+        ck_assert_float_eq(tan[v * 4 + 3], 1.0f);
+    }
+    free(tj);
+    scn_destroy(s);
+    /* The morph with a zero base TANGENT and the NORMAL deltas as TANGENT deltas: at weight
+     * 0.75 (node "fixed") the tangent is the deltas' direction. */
+    char *tm = with_zero_vec4(MORPH_GLTF, "\"NORMAL\":1},\"targets\":[{\"POSITION\":2,\"NORMAL\":3}]",
+                              "\"NORMAL\":1,\"TANGENT\":6},\"targets\":[{\"POSITION\":2,\"NORMAL\":3,\"TANGENT\":3}]", 3);
+    s = load(tm);
+    p = &s->primitives[0];
+    ck_assert_ptr_nonnull(p->target_tangents);
+    int32_t fixed = scn_find_node(s, "fixed");
+    float *w = malloc((size_t)s->weight_count * sizeof *w);
+    free(world);
+    world = malloc((size_t)s->node_count * 16 * sizeof *world);
+    scn_evaluate(s, 0.0, world);
+    scn_evaluate_weights(s, 0.0, w);
+    ck_assert_int_eq(scn_deform_tangents(s, (uint32_t)fixed, 0, world, w, pos, nrm, tan), 0);
+    for (uint32_t v = 0; v < p->vertex_count; v++) {
+        const float *d = p->target_normals + v * 3;
+        double len = sqrt((double)d[0] * d[0] + (double)d[1] * d[1] + (double)d[2] * d[2]);
+        if (len == 0.0)
+            continue;
+        for (int k = 0; k < 3; k++)
+            ck_assert_msg(fabs(tan[v * 4 + k] - d[k] / len) <= 1e-6, "vertex %u axis %d: %.9g", v, k, tan[v * 4 + k]);
+    }
+    free(w);
+    free(world);
+    free(tm);
+    scn_destroy(s);
+}
+END_TEST
+
 int main(void)
 {
     Suite *s = suite_create("skin");
@@ -373,6 +484,8 @@ int main(void)
     tcase_set_timeout(tc, 60);
     tcase_add_test(tc, skin_poses);
     tcase_add_test(tc, morph_weights);
+    tcase_add_test(tc, eight_influences);
+    tcase_add_test(tc, tangents_deform);
     tcase_add_test(tc, bad_skins_and_weights);
     tcase_add_test(tc, engine_skinned_motion);
     suite_add_tcase(s, tc);

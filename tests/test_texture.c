@@ -3,7 +3,7 @@
  * checkerboard (exact texel values, in the right place), and a texture seen only through
  * photons, whose colour must bleed onto a white floor. Every glTF is written by the test. */
 #define _POSIX_C_SOURCE 200809L
-#include "eng.h"
+#include "eng_internal.h"
 
 #include <check.h>
 #include <math.h>
@@ -17,6 +17,9 @@
 /* 2x2 RGBA PNGs: a checker (top row red, green; bottom row blue, grey 128) and plain red. */
 #define CHECKER_PNG "data:image/png;base64,iVBORw0KGgoAAAANSUhEUgAAAAIAAAACCAYAAABytg0kAAAAFUlEQVR4nGP4z8DwHwyB9P+Ghob/AEVRCHp8uJy8AAAAAElFTkSuQmCC"
 #define RED_PNG "data:image/png;base64,iVBORw0KGgoAAAANSUhEUgAAAAIAAAACCAYAAABytg0kAAAAEUlEQVR4nGP4z8DwH4QZYAwAR8oH+WdZbrcAAAAASUVORK5CYII="
+/* A constant tangent-space normal map: every texel (204, 77, 230), linear, so
+ * (x, y, z) = 2·texel/255 − 1 = (0.6, −0.396, 0.804). */
+#define NORMAL_PNG "data:image/png;base64,%s"
 /* Opaque white top row, transparent white bottom row. */
 #define MASK_PNG "data:image/png;base64,iVBORw0KGgoAAAANSUhEUgAAAAIAAAACCAYAAABytg0kAAAADklEQVR4nGP4DwUMMAwAiYgN82n6rJMAAAAASUVORK5CYII="
 /* A 2 m quad at y = 0 facing up: positions (-1,0,-1) (1,0,-1) (1,0,1) (-1,0,1), normals up,
@@ -165,6 +168,21 @@ static eng_engine *render_one(const char *json, grab *g, int keep, scn_scene **s
     return NULL;
 }
 
+/* render_one of the 32×32 view straight down on a glTF (-Z up in the image) that the
+ * texture tests share, capturing the comma-separated quoted names in capture. */
+static eng_engine *render_top(const char *gltf, const char *capture, grab *g, scn_scene **scene)
+{
+    char json[1024];
+    snprintf(json, sizeof json,
+             "{\"scene\": \"%s\", \"frames\": 1, \"fps\": 1, \"resolution\": [32, 32],"
+             " \"camera\": {\"keys\": [{\"time\": 0, \"position\": [0, 3, 0], \"target\": [0, 0, 0]}],"
+             " \"up\": [0, 0, -1], \"yfov_deg\": 30}, \"lights\": [{\"type\": \"point\", \"position\": [0, 2, 0]}],"
+             " \"settings\": {\"shadow_map_size\": 64, \"photon_count\": 64, \"threads\": 2},"
+             " \"capture\": [%s]}",
+             gltf, capture);
+    return render_one(json, g, scene != NULL, scene);
+}
+
 /* Looking straight down with -Z up in the image: the image's top-left quadrant is the
  * texture's top-left texel, and every pixel's albedo is exactly one of the four texels. */
 START_TEST(gbuffer_albedo_checker)
@@ -220,13 +238,7 @@ START_TEST(gbuffer_emission_texture)
     ck_assert_int_eq(fclose(f), 0);
     grab g[] = {{"gbuffer.emission", NULL, 0, 0, 0}, {NULL, NULL, 0, 0, 0}};
     scn_scene *s = NULL;
-    eng_engine *e =
-        render_one("{\"scene\": \"emissive.gltf\", \"frames\": 1, \"fps\": 1, \"resolution\": [32, 32],"
-                   " \"camera\": {\"keys\": [{\"time\": 0, \"position\": [0, 3, 0], \"target\": [0, 0, 0]}],"
-                   " \"up\": [0, 0, -1], \"yfov_deg\": 30}, \"lights\": [{\"type\": \"point\", \"position\": [0, 2, 0]}],"
-                   " \"settings\": {\"shadow_map_size\": 64, \"photon_count\": 64, \"threads\": 2},"
-                   " \"capture\": [\"gbuffer.emission\"]}",
-                   g, 1, &s);
+    eng_engine *e = render_top("emissive.gltf", "\"gbuffer.emission\"", g, &s);
     ck_assert_ptr_nonnull(g[0].data);
     float want[4][4];
     checker_texels(want);
@@ -374,6 +386,219 @@ START_TEST(alpha_mask_everywhere)
 }
 END_TEST
 
+/* Embree's view of scene s's first primitive drawn at node 0's world matrix at t = 0, as the
+ * engine's draw would pose it (rt_update copies what it needs). */
+static eng_rt *rt_of_node0(const scn_scene *s)
+{
+    float *world = malloc((size_t)s->node_count * 16 * sizeof *world);
+    scn_evaluate(s, 0.0, world);
+    eng_draw dr = {.primitive = 0, .material = s->primitives[0].material};
+    memcpy(dr.world, world, sizeof dr.world);
+    memcpy(dr.prev_world, world, sizeof dr.prev_world);
+    free(world);
+    eng_frame_scene fs = {.scene = s, .draw_count = 1, .draws = &dr};
+    eng_rt *rt = NULL;
+    eng_error err;
+    ck_assert_int_eq(rt_create(s, 2, &rt, &err), ENG_OK);
+    rt_update(rt, &fs);
+    return rt;
+}
+
+/* The quad of QUAD_PARTS turned 30° about +Y, with material 0's normal texture at `scale`
+ * (none when scale < 0). */
+static void write_normal_quad(const char *path, double scale)
+{
+    char png[160];
+    snprintf(png, sizeof png, NORMAL_PNG, "iVBORw0KGgoAAAANSUhEUgAAAAIAAAACCAYAAABytg0kAAAAEUlEQVR42mM44/vsPwgzwBgAaWYL+XSz8UEAAAAASUVORK5CYII=");
+    FILE *f = fopen(path, "w");
+    ck_assert_ptr_nonnull(f);
+    char mat[128] = "";
+    if (scale >= 0.0)
+        snprintf(mat, sizeof mat, "\"normalTexture\":{\"index\":0,\"scale\":%.17g},", scale);
+    fprintf(f,
+            "{\"asset\":{\"version\":\"2.0\"},\"scenes\":[{\"nodes\":[0]}],"
+            "\"nodes\":[{\"mesh\":0,\"rotation\":[0,0.25881904510252074,0,0.9659258262890683]}],%s"
+            "\"images\":[{\"uri\":\"%s\"}],"
+            "\"materials\":[{%s\"pbrMetallicRoughness\":{\"metallicFactor\":0}},{}]}",
+            QUAD_PARTS, png, mat);
+    ck_assert_int_eq(fclose(f), 0);
+}
+
+/* normalTexture (glTF §3.9.3) with generated tangents: the loader's tangent is the quad's +u
+ * direction (1, 0, 0), w = +1 (u right, v down the image); every gbuffer.normal pixel is the
+ * map's constant normal in that frame, n = R_y(30°)·normalize(0.6·T − 0.396·(N × T) + 0.804·N),
+ * within 1e-6 (llvmpipe's normalize against the C one); the CPU hit shading normal
+ * (rt_intersect → scn_normal_at) at each pixel's surface point equals the GPU one within
+ * 1e-6; scale 0 gives exactly the unmapped normal (0, 1, 0) on both sides, as no map does. */
+START_TEST(normal_map_gbuffer_and_hits)
+{
+    mkdir(WORK, 0777);
+    for (int pass = 0; pass < 3; pass++) {
+        const double scale = pass == 0 ? 1.0 : pass == 1 ? 0.0 : -1.0;
+        write_normal_quad(WORK "/normal.gltf", scale);
+        grab g[] = {{"gbuffer.normal", NULL, 0, 0, 0},
+                    {"gbuffer.position", NULL, 0, 0, 0},
+                    {"gbuffer.depth", NULL, 0, 0, 0},
+                    {NULL, NULL, 0, 0, 0}};
+        scn_scene *s = NULL;
+        eng_engine *e = render_top("normal.gltf", "\"gbuffer.normal\", \"gbuffer.position\", \"gbuffer.depth\"", g, &s);
+        ck_assert_ptr_nonnull(g[0].data);
+        const scn_primitive *p = &s->primitives[0];
+        if (pass == 2) {
+            ck_assert_ptr_null(p->tangents);
+        } else {
+            ck_assert_ptr_nonnull(p->tangents);
+            for (uint32_t v = 0; v < p->vertex_count; v++) {
+                const float want[4] = {1, 0, 0, 1};
+                for (int k = 0; k < 4; k++)
+                    ck_assert_float_eq(p->tangents[v * 4 + k], want[k]);
+            }
+        }
+        /* Tangent space (x, y, z) from the 8-bit texel, in the quad's frame T = +x, N = +y,
+         * B = N × T = −z, then turned 30° about +Y (x' = c·x + s·z, z' = −s·x + c·z). */
+        const double sc = scale > 0.0 ? scale : 0.0;
+        double x = (2.0 * 204 / 255 - 1) * sc, y = (2.0 * 77 / 255 - 1) * sc, z = 2.0 * 230 / 255 - 1;
+        double loc[3] = {x, z, -y}, len = sqrt(loc[0] * loc[0] + loc[1] * loc[1] + loc[2] * loc[2]);
+        double c = cos(3.14159265358979323846 / 6), sn = sin(3.14159265358979323846 / 6);
+        double want[3] = {(c * loc[0] + sn * loc[2]) / len, loc[1] / len, (-sn * loc[0] + c * loc[2]) / len};
+        if (scale < 0.0)
+            want[0] = 0.0, want[1] = 1.0, want[2] = 0.0;
+        eng_rt *rt = rt_of_node0(s);
+        int covered = 0;
+        double worst_gpu = 0.0, worst_cpu = 0.0;
+        for (int i = 0; i < 32 * 32; i++) {
+            const float *n = g[0].data + (size_t)i * g[0].channels, *pos = g[1].data + (size_t)i * g[1].channels;
+            if (!(g[2].data[i] > 0.0f))
+                continue; /* background */
+            covered++;
+            for (int k = 0; k < 3; k++)
+                worst_gpu = fmax(worst_gpu, fabs(n[k] - want[k]));
+            const float org[3] = {pos[0], pos[1] + 1.0f, pos[2]}, dir[3] = {0, -1, 0};
+            rt_hit h;
+            ck_assert(rt_intersect(rt, org, dir, 0.0f, 2.0f, &h));
+            for (int k = 0; k < 3; k++)
+                worst_cpu = fmax(worst_cpu, fabs(h.normal[k] - n[k]));
+        }
+        ck_assert_int_gt(covered, 900); /* the turned quad leaves the image corners */
+        /* Measured: 4.7e-8 and 6.0e-8 (one float ulp) at scale 1; exactly 0 at scale 0. */
+        const double tol = scale > 0.0 ? 1e-6 : 0.0;
+        ck_assert_msg(worst_gpu <= tol, "scale %g: gbuffer.normal off the expected normal by %g", scale, worst_gpu);
+        ck_assert_msg(worst_cpu <= tol, "scale %g: CPU hit normal off the GPU one by %g", scale, worst_cpu);
+        rt_destroy(rt);
+        eng_destroy(e);
+        scn_destroy(s);
+        free(g[0].data);
+        free(g[1].data);
+        free(g[2].data);
+    }
+}
+END_TEST
+
+/* scn_normal_at's frame on its own: T, B = (N × T)·w with w = −1 mirrors the map's y, a
+ * tangent along N leaves the normal alone, and scale multiplies x and y only. */
+START_TEST(normal_at_handedness)
+{
+    mkdir(WORK, 0777);
+    write_normal_quad(WORK "/normal.gltf", 0.5);
+    scn_scene *s = NULL;
+    eng_error err;
+    ck_assert_msg(scn_load_gltf(WORK "/normal.gltf", &s, &err) == ENG_OK, "%s", err.msg);
+    const scn_material *m = &s->materials[0];
+    ck_assert_float_eq(m->normal_scale, 0.5f);
+    const float tp[4] = {1, 0, 0, 1}, tm[4] = {1, 0, 0, -1}, tn[4] = {0, 1, 0, 1};
+    float a[3] = {0, 1, 0}, b[3] = {0, 1, 0}, c[3] = {0, 1, 0};
+    ck_assert(scn_normal_at(s, m, &s->primitives[0], 0, 0.2f, 0.3f, tp, tp, tp, a));
+    ck_assert(scn_normal_at(s, m, &s->primitives[0], 0, 0.2f, 0.3f, tm, tm, tm, b));
+    ck_assert(!scn_normal_at(s, m, &s->primitives[0], 0, 0.2f, 0.3f, tn, tn, tn, c));
+    double x = (2.0 * 204 / 255 - 1) * 0.5, y = (2.0 * 77 / 255 - 1) * 0.5, z = 2.0 * 230 / 255 - 1;
+    double len = sqrt(x * x + y * y + z * z);
+    ck_assert_double_eq_tol(a[0], x / len, 1e-6);
+    ck_assert_double_eq_tol(a[1], z / len, 1e-6);
+    ck_assert_double_eq_tol(a[2], -y / len, 1e-6); /* B = N × T = −z */
+    ck_assert_double_eq_tol(b[2], y / len, 1e-6);  /* w = −1: B = +z */
+    ck_assert_float_eq(c[0], 0.0f);
+    ck_assert_float_eq(c[1], 1.0f);
+    scn_destroy(s);
+}
+END_TEST
+
+/* An 8×8 black-and-white checkerboard (sRGB 0 and 255: linear 0 and 1) with a mipmapping,
+ * repeating sampler, tiled 16 times by KHR_texture_transform: every 2×2 block holds two of
+ * each, so every level below the top is exactly grey 0.5. */
+#define CHECKER8_PNG "data:image/png;base64,iVBORw0KGgoAAAANSUhEUgAAAAgAAAAICAYAAADED76LAAAAGElEQVR42mNgYGD4DwI4abySQJphWJgAAAOGn2FVFEfMAAAAAElFTkSuQmCC"
+
+static void write_checker8(const char *path)
+{
+    static const char nearest[] = "\"magFilter\":9728,\"minFilter\":9728,\"wrapS\":33071,\"wrapT\":33071";
+    static const char mipmap[] = "\"magFilter\":9729,\"minFilter\":9987,\"wrapS\":10497,\"wrapT\":10497";
+    const char *at = strstr(QUAD_PARTS, nearest);
+    ck_assert_ptr_nonnull(at);
+    FILE *f = fopen(path, "w");
+    ck_assert_ptr_nonnull(f);
+    fprintf(f,
+            "{\"asset\":{\"version\":\"2.0\"},\"extensionsUsed\":[\"KHR_texture_transform\"],"
+            "\"scenes\":[{\"nodes\":[0]}],\"nodes\":[{\"mesh\":0}],%.*s%s%s"
+            "\"images\":[{\"uri\":\"%s\"}],"
+            "\"materials\":[{\"pbrMetallicRoughness\":{\"baseColorTexture\":{\"index\":0,"
+            "\"extensions\":{\"KHR_texture_transform\":{\"scale\":[16,16]}}},\"metallicFactor\":0}},{}]}",
+            (int)(at - QUAD_PARTS), QUAD_PARTS, mipmap, at + strlen(nearest), CHECKER8_PNG);
+    ck_assert_int_eq(fclose(f), 0);
+}
+
+/* CPU mip levels (texture_mip.c): 4 levels, level 0 the checker, every texel of levels 1..3
+ * exactly 0.5; scn_texture_sample_lod at λ ≤ 0 is the top level's texel, at λ = 1.5 and past
+ * the last level grey; the G-buffer, which samples the same levels (engine.c uploads them),
+ * sees the minified checker as exactly 0.5 at every pixel; a CPU hit's texture at a ray-cone
+ * footprint (rt_hit_textures) is grey too, and the top level's texel without one. */
+START_TEST(mips_average_checker_to_grey)
+{
+    mkdir(WORK, 0777);
+    write_checker8(WORK "/checker8.gltf");
+    grab g[] = {{"gbuffer.albedo", NULL, 0, 0, 0}, {NULL, NULL, 0, 0, 0}};
+    scn_scene *s = NULL;
+    eng_engine *e = render_top("checker8.gltf", "\"gbuffer.albedo\"", g, &s);
+    const scn_texture *t = &s->textures[0];
+    ck_assert_uint_eq(t->levels, 4);
+    for (uint32_t l = 1; l < t->levels; l++) {
+        uint32_t n = (8u >> l) * (8u >> l);
+        for (uint32_t i = 0; i < n * 4; i++)
+            ck_assert_float_eq(t->mips[l][i], i % 4 == 3 ? 1.0f : 0.5f);
+    }
+    float c[4];
+    scn_texture_sample_lod(t, 0.5f / 8, 0.5f / 8, 0.0f, c); /* texel (0, 0): black */
+    ck_assert_float_eq(c[0], 0.0f);
+    scn_texture_sample_lod(t, 1.5f / 8, 0.5f / 8, -1.0f, c); /* texel (1, 0): white */
+    ck_assert_float_eq(c[0], 1.0f);
+    scn_texture_sample_lod(t, 0.3f, 0.7f, 1.5f, c);
+    ck_assert_float_eq(c[0], 0.5f);
+    scn_texture_sample_lod(t, 0.3f, 0.7f, 9.0f, c);
+    ck_assert_float_eq(c[0], 0.5f);
+    ck_assert_ptr_nonnull(g[0].data);
+    for (int i = 0; i < 32 * 32; i++)
+        for (int k = 0; k < 3; k++)
+            ck_assert_msg(g[0].data[(size_t)i * g[0].channels + k] == 0.5f, "pixel %d channel %d: %.9g, want 0.5", i,
+                          k, g[0].data[(size_t)i * g[0].channels + k]);
+    /* A photon's hit at a texel centre of the quad (64 texels per metre): a 3 cm cone is
+     * 1.92 texels, λ = 0.94 (trilinear between the checker and grey); a 10 cm cone (the
+     * default kernel's diameter is 20 cm) is λ = 2.68: grey. */
+    eng_rt *rt = rt_of_node0(s);
+    rt_hit h;
+    const float org[3] = {0.0078125f, 1.0f, -0.4140625f}, dir[3] = {0, -1, 0};
+    ck_assert(rt_intersect(rt, org, dir, 0.0f, 2.0f, &h));
+    ck_assert_msg(fabsf(h.base_tex[0] - 0.5f) > 0.499f, "no footprint: %g, want one texel (0 or 1)", h.base_tex[0]);
+    ck_assert_float_eq_tol(h.world_area, 2.0f, 1e-6f);
+    rt_hit_textures(s, &s->primitives[0], &h, 0.1f);
+    for (int k = 0; k < 3; k++)
+        ck_assert_float_eq(h.base_tex[k], 0.5f);
+    rt_hit_textures(s, &s->primitives[0], &h, 0.03f);
+    ck_assert(h.base_tex[0] > 0.0f && h.base_tex[0] < 1.0f && h.base_tex[0] != 0.5f);
+    rt_destroy(rt);
+    eng_destroy(e);
+    scn_destroy(s);
+    free(g[0].data);
+}
+END_TEST
+
 static Suite *texture_suite(void)
 {
     Suite *s = suite_create("texture");
@@ -384,6 +609,9 @@ static Suite *texture_suite(void)
     tcase_add_test(tc, occlusion_darkens_indirect_only);
     tcase_add_test(tc, photons_carry_texture_colour);
     tcase_add_test(tc, alpha_mask_everywhere);
+    tcase_add_test(tc, normal_map_gbuffer_and_hits);
+    tcase_add_test(tc, normal_at_handedness);
+    tcase_add_test(tc, mips_average_checker_to_grey);
     tcase_set_timeout(tc, 120);
     suite_add_tcase(s, tc);
     return s;

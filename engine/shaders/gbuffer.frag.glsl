@@ -1,7 +1,8 @@
 #version 450 core
 // Eye G-buffer, fragment stage. Outputs (all RGBA32F):
 //   0 world position, w = 1 where a surface was drawn
-//   1 world normal, unit; flipped toward the viewer for double-sided materials; w = the
+//   1 world shading normal (normal texture applied, normal_map.glsl), unit; flipped toward
+//     the viewer for double-sided materials (by the interpolated normal); w = the
 //     surface point's eye depth in the previous frame (not captured; the temporal filter's
 //     disocclusion test, 002_… Eq. 7.1 against the previous depth)
 //   2 albedo (baseColorFactor times texture and COLOR_0, linear; base_color.glsl)
@@ -20,7 +21,9 @@ in float v_prev_eye_depth;
 in vec2 v_uv0;
 in vec2 v_uv1;
 in vec4 v_color;
+in vec4 v_tangent;
 #pragma ispm_include "base_color.glsl"
+#pragma ispm_include "normal_map.glsl"
 
 uniform vec3 u_eye;
 uniform vec4 u_base_color;
@@ -39,8 +42,11 @@ layout(location = 5) out vec4 o_emission;
 
 void main()
 {
+    // Double-sided back faces flip the whole frame (N, T, B), hence the mapped normal.
     vec3 n = normalize(v_normal);
-    if (u_double_sided == 1 && dot(n, u_eye - v_position) < 0.0)
+    bool back = u_double_sided == 1 && dot(n, u_eye - v_position) < 0.0;
+    n = normal_mapped(n);
+    if (back)
         n = -n;
     vec2 ndc = v_clip.xy / v_clip.w;
     vec2 prev_ndc = v_prev_clip.xy / v_prev_clip.w;

@@ -7,6 +7,7 @@ layout(location = 1) in vec3 a_normal;
 layout(location = 2) in vec2 a_uv0;   // TEXCOORD_0 (base_color.glsl)
 layout(location = 3) in vec2 a_uv1;   // TEXCOORD_1
 layout(location = 4) in vec4 a_color; // COLOR_0
+layout(location = 6) in vec4 a_tangent; // TANGENT xyz, handedness w (normal_map.glsl)
 // The previous frame's object-space position: a_position for rigid primitives (their motion
 // is in u_prev_world), the previous deformed pose for skinned and morphed ones (deform_gl.c).
 layout(location = 5) in vec3 a_prev_position;
@@ -24,6 +25,7 @@ out vec3 v_normal;
 out vec2 v_uv0;
 out vec2 v_uv1;
 out vec4 v_color;
+out vec4 v_tangent;
 out vec4 v_clip;
 out vec4 v_prev_clip;
 out float v_eye_depth;
@@ -37,6 +39,7 @@ void main()
     v_uv0 = a_uv0;
     v_uv1 = a_uv1;
     v_color = a_color;
+    v_tangent = vec4(mat3(u_world) * a_tangent.xyz, a_tangent.w);
     v_clip = u_view_proj * wp;
     vec4 prev_wp = u_prev_world * vec4(a_prev_position, 1.0);
     v_prev_clip = u_prev_view_proj * prev_wp;
