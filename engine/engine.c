@@ -1547,7 +1547,7 @@ eng_result eng_frame_trace_inputs(eng_engine *e, int frame, eng_trace_inputs *ou
     out->count = e->bounce_count;
     eng_trace_settings ts = {e->settings.bounces, e->settings.threads, rf.salt, rf.stratified,
                              {rf.offset[0], rf.offset[1], rf.offset[2], rf.offset[3]},
-                                 2.0f * e->settings.kernel_radius};
+                             2.0f * e->settings.kernel_radius};
     out->settings = ts;
     return ENG_OK;
 }
