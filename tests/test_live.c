@@ -172,6 +172,22 @@ START_TEST(the_viewer_follows_the_newest_frame)
 }
 END_TEST
 
+/* Two frames landed before the window opened: without --frame the viewer opens on the newest
+ * and so follows the recording (opened on frame 0 it would count as sent back and stay). */
+START_TEST(a_live_viewer_opens_on_the_newest_frame)
+{
+    ck_assert_int_eq(view_live_start_frame(-1, 1, 2), 1);
+    ck_assert_int_eq(view_live_start_frame(-1, 0, 8), 0); /* a finished run opens at frame 0 */
+    ck_assert_int_eq(view_live_start_frame(0, 1, 2), 0);  /* --frame 0 is kept */
+    ck_assert_int_eq(view_live_start_frame(-1, 1, 0), 0);
+    view_state s;
+    view_state_init(&s, 2, 5, 0);
+    view_state_set_frame(&s, view_live_start_frame(-1, 1, 2));
+    ck_assert_int_eq(view_state_follow(&s, 6), 1);
+    ck_assert_int_eq(s.frame, 5);
+}
+END_TEST
+
 START_TEST(live_poll_through_a_view_run)
 {
     put_runinfo();
@@ -205,6 +221,7 @@ static Suite *live_suite(void)
     tcase_add_checked_fixture(tc, setup, teardown);
     tcase_add_test(tc, a_recording_grows_frame_by_frame);
     tcase_add_test(tc, the_viewer_follows_the_newest_frame);
+    tcase_add_test(tc, a_live_viewer_opens_on_the_newest_frame);
     tcase_add_test(tc, live_poll_through_a_view_run);
     suite_add_tcase(s, tc);
     return s;

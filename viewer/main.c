@@ -103,6 +103,7 @@ static void usage(FILE *f)
                "window for the keys. --list prints frame 0's buffers and exits. The probe shows the\n"
                "pixel's lineage (every buffer at its own coordinate, shadow texels through the light's\n"
                "matrices); --dump-probe FILE also writes it to FILE whenever the probed pixel changes.\n"
+               "A run still being recorded opens on its newest frame (without --frame) and follows it.\n"
                "Exit: 0 ok, 1 no display, 2 bad arguments or unreadable run.\n");
 }
 
@@ -813,7 +814,7 @@ int main(int argc, char **argv)
 {
     const char *run_dir = NULL, *golden = NULL, *buffer = NULL;
     const char *probe_dump = NULL;
-    int frame = 0, win_w = 1280, win_h = 800, list = 0;
+    int frame = -1, win_w = 1280, win_h = 800, list = 0;
     for (int i = 1; i < argc; i++) {
         const char *arg = argv[i];
         if (!strcmp(arg, "--help") || !strcmp(arg, "-h")) {
@@ -827,6 +828,8 @@ int main(int argc, char **argv)
             golden = argv[++i];
         } else if (!strcmp(arg, "--frame") && i + 1 < argc) {
             frame = atoi(argv[++i]);
+            if (frame < 0)
+                frame = 0;
         } else if (!strcmp(arg, "--buffer") && i + 1 < argc) {
             buffer = argv[++i];
         } else if (!strcmp(arg, "--size") && i + 1 < argc) {
@@ -891,7 +894,7 @@ int main(int argc, char **argv)
     }
     ap.lm_ok = lin_manifest_read(run_dir, &ap.lm, &err) == ENG_OK; /* without it, the plain probe */
     view_state_init(&ap.s, view_run_frame_count(ap.a), 0, ap.b != NULL);
-    view_state_set_frame(&ap.s, frame);
+    view_state_set_frame(&ap.s, view_live_start_frame(frame, view_run_live(ap.a), view_run_frame_count(ap.a)));
     snprintf(ap.buffer_name, sizeof ap.buffer_name, "%s", buffer ? buffer : "final.display");
     sync_buffer(&ap);
     if (buffer && strcmp(ap.buffer_name, buffer)) {

@@ -22,6 +22,13 @@ int view_state_follow(view_state *s, int frame_count)
     return 1;
 }
 
+int view_live_start_frame(int asked, int live, int frame_count)
+{
+    if (asked >= 0)
+        return asked;
+    return live && frame_count > 0 ? frame_count - 1 : 0;
+}
+
 int view_live_poll(view_run *r, view_state *s, unsigned now_ms, unsigned *last_ms, unsigned interval_ms,
                    char *err_out, size_t err_n)
 {

@@ -265,6 +265,11 @@ int view_run_refresh(view_run *r, eng_error *err);
  * there (End follows again). Returns 1 if the shown frame changed. */
 int view_state_follow(view_state *s, int frame_count);
 
+/* The frame a viewer opens at: the one asked for (--frame, clamped later), else the newest of a
+ * run still being recorded (so that it follows the recording even when several frames landed
+ * before the window opened), else 0. asked < 0: none asked for. */
+int view_live_start_frame(int asked, int live, int frame_count);
+
 /* Live polling: refreshes r at most every interval_ms (now_ms: a monotonic clock; *last_ms the
  * time of the last refresh, updated), then applies view_state_follow. Returns 1 if anything
  * visible changed (frames added); a refresh error is told once through err_out (may be NULL). */
