@@ -238,8 +238,10 @@ void kd_gather_point(const kd_tree *tree, const eng_photon_map *map, const float
     gather_point(tree, map, r_xy, NULL, radius, compression, 1.0f, px, list, cap, acc, glossy);
 }
 
-/* One row of gather(): the isotropic kernel, or (aniso not NULL) the anisotropic one; two
- * functions so that the choice is made once per row, outside the per-pixel loop. */
+/* One row of gather(): the isotropic kernel, or (aniso not NULL) the anisotropic one, with or
+ * without per-pixel radius scales; one function each so that the choice is made once per row,
+ * outside the per-pixel loop, and the unscaled rows compile without the scale (x·1.0f folds to
+ * x: the k-d gather baseline pays nothing for progressive_radius "pixel"). */
 typedef struct row_ctx {
     const kd_tree *tree;
     const eng_photon_map *map;
@@ -253,7 +255,8 @@ typedef struct row_ctx {
 #if defined(__GNUC__)
 __attribute__((always_inline))
 #endif
-static inline void gather_row(const row_ctx *c, const float *aniso, int y, uint32_t **list, size_t *cap)
+static inline void gather_row(const row_ctx *c, const float *aniso, const float *pscale, int y, uint32_t **list,
+                              size_t *cap)
 {
     for (int x = 0; x < c->w; x++) {
         size_t i = (size_t)y * (size_t)c->w + (size_t)x;
@@ -262,16 +265,24 @@ static inline void gather_row(const row_ctx *c, const float *aniso, int y, uint3
             continue;
         gk_pixel px;
         gk_pixel_init(&px, p, c->normal + 3 * i, c->albedo + 3 * i, c->material + 4 * i, c->eye);
-        gather_point(c->tree, c->map, c->r_xy, aniso, c->radius, c->compression, c->pscale ? c->pscale[i] : 1.0f,
+        gather_point(c->tree, c->map, c->r_xy, aniso, c->radius, c->compression, pscale ? pscale[i] : 1.0f,
                      &px, list, cap, c->out + 4 * i, c->glossy ? c->glossy + 4 * i : NULL);
     }
 }
 
-static void gather_row_iso(const row_ctx *c, int y, uint32_t **list, size_t *cap) { gather_row(c, NULL, y, list, cap); }
+static void gather_row_iso(const row_ctx *c, int y, uint32_t **list, size_t *cap)
+{
+    gather_row(c, NULL, NULL, y, list, cap);
+}
 
 static void gather_row_aniso(const row_ctx *c, int y, uint32_t **list, size_t *cap)
 {
-    gather_row(c, c->aniso, y, list, cap);
+    gather_row(c, c->aniso, NULL, y, list, cap);
+}
+
+static void gather_row_scaled(const row_ctx *c, int y, uint32_t **list, size_t *cap)
+{
+    gather_row(c, c->aniso, c->pscale, y, list, cap);
 }
 
 static eng_result gather(const eng_photon_map *map, const float *radii, const float *aniso, const float *pscale, int w,
@@ -300,7 +311,8 @@ static eng_result gather(const eng_photon_map *map, const float *radii, const fl
     }
     const row_ctx c = {&tree, map, r_xy, aniso, position, normal, albedo, material, eye, radius,
                        s->normal_compression, pscale, w, out, glossy};
-    void (*const row)(const row_ctx *, int, uint32_t **, size_t *) = aniso ? gather_row_aniso : gather_row_iso;
+    void (*const row)(const row_ctx *, int, uint32_t **, size_t *) =
+        pscale ? gather_row_scaled : aniso ? gather_row_aniso : gather_row_iso;
     int threads = s->threads > 0 ? s->threads : 2;
 #pragma omp parallel num_threads(threads)
     {
