@@ -29,16 +29,6 @@ struct eng_deform {
     float *weights, *prev_weights;
 };
 
-static void *xcalloc(size_t n, size_t size)
-{
-    void *p = calloc(n ? n : 1, size);
-    if (!p) {
-        fprintf(stderr, "ispm: out of memory\n");
-        abort();
-    }
-    return p;
-}
-
 static GLuint dynamic_vbo(GLuint location, uint32_t vertices, int comps)
 {
     GLuint b;
@@ -52,7 +42,7 @@ static GLuint dynamic_vbo(GLuint location, uint32_t vertices, int comps)
 
 eng_deform *eng_deform_create(const scn_scene *s, const eng_gpu_prim *gpu)
 {
-    eng_deform *d = xcalloc(1, sizeof *d);
+    eng_deform *d = eng_xcalloc(1, sizeof *d);
     d->scene = s;
     /* The draws in pose_frame's order: nodes in order, each mesh's primitives in order. */
     for (int pass = 0; pass < 2; pass++) {
@@ -75,20 +65,20 @@ eng_deform *eng_deform_create(const scn_scene *s, const eng_gpu_prim *gpu)
         }
         if (pass == 0) {
             d->count = k;
-            d->items = xcalloc(k, sizeof *d->items);
+            d->items = eng_xcalloc(k, sizeof *d->items);
         }
     }
-    d->weights = xcalloc(s->weight_count, sizeof(float));
-    d->prev_weights = xcalloc(s->weight_count, sizeof(float));
+    d->weights = eng_xcalloc(s->weight_count, sizeof(float));
+    d->prev_weights = eng_xcalloc(s->weight_count, sizeof(float));
     for (uint32_t k = 0; k < d->count; k++) {
         deformed *it = &d->items[k];
         const scn_primitive *p = &s->primitives[it->prim];
         const eng_gpu_prim *sg = &gpu[it->prim];
         size_t n3 = (size_t)p->vertex_count * 3;
-        it->pos = xcalloc(n3, sizeof(float));
-        it->nrm = xcalloc(n3, sizeof(float));
-        it->prev_pos = xcalloc(n3, sizeof(float));
-        it->prev_nrm = xcalloc(n3, sizeof(float));
+        it->pos = eng_xcalloc(n3, sizeof(float));
+        it->nrm = eng_xcalloc(n3, sizeof(float));
+        it->prev_pos = eng_xcalloc(n3, sizeof(float));
+        it->prev_nrm = eng_xcalloc(n3, sizeof(float));
         eng_gpu_prim *g = &it->gpu;
         *g = *sg;
         glGenVertexArrays(1, &g->vao);
@@ -98,7 +88,7 @@ eng_deform *eng_deform_create(const scn_scene *s, const eng_gpu_prim *gpu)
         it->vbo_prev = dynamic_vbo(5, p->vertex_count, 3);
         g->vbo_tan = 0;
         if (p->tangents) {
-            it->tan = xcalloc(n3 / 3 * 4, sizeof(float));
+            it->tan = eng_xcalloc(n3 / 3 * 4, sizeof(float));
             g->vbo_tan = dynamic_vbo(6, p->vertex_count, 4);
         }
         const GLuint shared[3] = {sg->vbo_uv[0], sg->vbo_uv[1], sg->vbo_col};

@@ -145,6 +145,8 @@ void eng_deform_destroy(eng_deform *d); /* accepts NULL; needs the GL context cu
 
 /* malloc that ends the process with a message when out of memory (engine.c). */
 void *eng_xmalloc(size_t size);
+/* calloc likewise (n = 0 allocates one element) (engine.c). */
+void *eng_xcalloc(size_t n, size_t size);
 
 /* Sets base_color.glsl's uniforms of prog for drawing d with material m: its base colour
  * texture (bound to texture unit ENG_BASE_TEX_UNIT), texcoord set and transform, COLOR_0,

@@ -145,20 +145,10 @@ static double now_ms(void)
     return (double)ts.tv_sec * 1e3 + (double)ts.tv_nsec * 1e-6;
 }
 
-static void *xcalloc(size_t n, size_t size)
-{
-    void *p = calloc(n ? n : 1, size);
-    if (!p) {
-        fprintf(stderr, "ispm: out of memory\n");
-        abort();
-    }
-    return p;
-}
-
 static void upload_scene(eng_engine *e)
 {
     const scn_scene *s = e->scene;
-    e->gpu = xcalloc(s->primitive_count, sizeof *e->gpu);
+    e->gpu = eng_xcalloc(s->primitive_count, sizeof *e->gpu);
     for (uint32_t i = 0; i < s->primitive_count; i++) {
         const scn_primitive *p = &s->primitives[i];
         eng_gpu_prim *g = &e->gpu[i];
@@ -207,7 +197,7 @@ static void upload_scene(eng_engine *e)
     /* Textures as the loader decoded them (linear RGBA floats, row 0 = v 0), with the mip
      * levels the loader built where their minFilter asks for them (texture_mip.c: the CPU
      * samples the same levels). */
-    e->textures = xcalloc(s->texture_count, sizeof *e->textures);
+    e->textures = eng_xcalloc(s->texture_count, sizeof *e->textures);
     for (uint32_t i = 0; i < s->texture_count; i++) {
         const scn_texture *t = &s->textures[i];
         static const GLint wraps[] = {GL_REPEAT, GL_CLAMP_TO_EDGE, GL_MIRRORED_REPEAT};
@@ -235,7 +225,7 @@ eng_result eng_create(const eng_desc *desc, eng_engine **out, eng_error *err)
     *out = NULL;
     const scn_scene *s = desc->scene;
     const seq_sequence *q = desc->sequence;
-    eng_engine *e = xcalloc(1, sizeof *e);
+    eng_engine *e = eng_xcalloc(1, sizeof *e);
     e->scene = s;
     e->seq = q;
     e->lineage = desc->lineage;
@@ -339,8 +329,8 @@ eng_result eng_create(const eng_desc *desc, eng_engine **out, eng_error *err)
             e->emissive = 1;
     if (r == ENG_OK && e->emissive) {
         size_t n = (size_t)e->width * (size_t)e->height;
-        e->emission_rgba = xcalloc(n * 4, sizeof(float));
-        e->emission_rgb = xcalloc(n * 3, sizeof(float));
+        e->emission_rgba = eng_xcalloc(n * 4, sizeof(float));
+        e->emission_rgb = eng_xcalloc(n * 3, sizeof(float));
         r = ind_cpu_target_create(&e->emission, e->width, e->height, 0, err);
         if (r != ENG_OK)
             e->emissive = 0;
@@ -352,8 +342,8 @@ eng_result eng_create(const eng_desc *desc, eng_engine **out, eng_error *err)
     }
     upload_scene(e);
 
-    e->world = xcalloc((size_t)s->node_count * 16, sizeof(float));
-    e->prev_world = xcalloc((size_t)s->node_count * 16, sizeof(float));
+    e->world = eng_xcalloc((size_t)s->node_count * 16, sizeof(float));
+    e->prev_world = eng_xcalloc((size_t)s->node_count * 16, sizeof(float));
     uint32_t ndraws = 0;
     for (uint32_t i = 0; i < s->node_count; i++)
         if (s->nodes[i].mesh >= 0)
@@ -361,9 +351,9 @@ eng_result eng_create(const eng_desc *desc, eng_engine **out, eng_error *err)
     e->fs.scene = s;
     e->fs.gpu = e->gpu;
     e->fs.textures = e->textures;
-    e->fs.draws = xcalloc(ndraws, sizeof(eng_draw));
+    e->fs.draws = eng_xcalloc(ndraws, sizeof(eng_draw));
     e->fs.draw_count = ndraws;
-    e->fs.lights = xcalloc(nlights, sizeof(eng_light_pose));
+    e->fs.lights = eng_xcalloc(nlights, sizeof(eng_light_pose));
     e->fs.light_count = nlights;
     *out = e;
     return ENG_OK;
@@ -603,7 +593,7 @@ static void scratch_reserve(eng_engine *e, size_t n)
     if (n <= e->scratch_capacity)
         return;
     free(e->scratch);
-    e->scratch = xcalloc(n, sizeof(float));
+    e->scratch = eng_xcalloc(n, sizeof(float));
     e->scratch_capacity = n;
 }
 
@@ -709,6 +699,16 @@ static int any_sized_light(const eng_frame_scene *fs)
 void *eng_xmalloc(size_t size)
 {
     void *p = malloc(size ? size : 1);
+    if (!p) {
+        fprintf(stderr, "ispm: out of memory\n");
+        abort();
+    }
+    return p;
+}
+
+void *eng_xcalloc(size_t n, size_t size)
+{
+    void *p = calloc(n ? n : 1, size);
     if (!p) {
         fprintf(stderr, "ispm: out of memory\n");
         abort();

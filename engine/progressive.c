@@ -1,6 +1,7 @@
 /* progressive.c — running mean of the indirect estimate with PPM's shrinking radius
  * (progressive.h; Hachisuka, Ogaki, Jensen 2008, "Progressive Photon Mapping", §4). */
 #include "progressive.h"
+#include "eng_internal.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -28,19 +29,9 @@ struct prog_state {
     float *scale, *photons;
 };
 
-static void *xcalloc(size_t n, size_t size)
-{
-    void *p = calloc(n ? n : 1, size);
-    if (!p) {
-        fprintf(stderr, "ispm: out of memory\n");
-        abort();
-    }
-    return p;
-}
-
 prog_state *prog_create(void)
 {
-    prog_state *p = xcalloc(1, sizeof *p);
+    prog_state *p = eng_xcalloc(1, sizeof *p);
     return p;
 }
 
@@ -153,10 +144,10 @@ static void copy_gbuffer(ind_gbuffer *dst, const ind_gbuffer *src)
         ind_gbuffer_free(dst);
         dst->width = src->width;
         dst->height = src->height;
-        dst->position = xcalloc(n * 4, sizeof(float));
-        dst->normal = xcalloc(n * 3, sizeof(float));
-        dst->albedo = xcalloc(n * 3, sizeof(float));
-        dst->material = xcalloc(n * 4, sizeof(float));
+        dst->position = eng_xcalloc(n * 4, sizeof(float));
+        dst->normal = eng_xcalloc(n * 3, sizeof(float));
+        dst->albedo = eng_xcalloc(n * 3, sizeof(float));
+        dst->material = eng_xcalloc(n * 4, sizeof(float));
     }
     memcpy(dst->position, src->position, n * 4 * sizeof(float));
     memcpy(dst->normal, src->normal, n * 3 * sizeof(float));
@@ -173,12 +164,12 @@ static void ensure_size(prog_state *p, int w, int h)
     const size_t n = (size_t)w * (size_t)h;
     p->width = w;
     p->height = h;
-    p->count = xcalloc(n, sizeof(uint32_t));
-    p->restart = xcalloc(n, 1);
-    p->r2px = xcalloc(n, sizeof(double));
-    p->npx = xcalloc(n, sizeof(double));
-    p->scale = xcalloc(n, sizeof(float));
-    p->photons = xcalloc(n, sizeof(float));
+    p->count = eng_xcalloc(n, sizeof(uint32_t));
+    p->restart = eng_xcalloc(n, 1);
+    p->r2px = eng_xcalloc(n, sizeof(double));
+    p->npx = eng_xcalloc(n, sizeof(double));
+    p->scale = eng_xcalloc(n, sizeof(float));
+    p->photons = eng_xcalloc(n, sizeof(float));
 }
 
 /* This frame's restarts against gb, once per frame: every pixel after a global restart, else
@@ -220,7 +211,7 @@ void prog_accumulate(prog_state *p, const ind_gbuffer *gb, int attachments, cons
     if (p->attachments != attachments) {
         for (int a = 0; a < 2; a++) {
             free(p->sum[a]);
-            p->sum[a] = a < attachments ? xcalloc(n * 3, sizeof(double)) : NULL;
+            p->sum[a] = a < attachments ? eng_xcalloc(n * 3, sizeof(double)) : NULL;
         }
         p->attachments = attachments;
         p->have_prev = 0; /* a new layout restarts everything */

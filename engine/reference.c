@@ -58,6 +58,7 @@
  * Owns: its settings and listeners; per frame the sums, the photon buffers and the grid. */
 #define _POSIX_C_SOURCE 200809L /* clock_gettime */
 #include "ref.h"
+#include "eng_internal.h"
 
 #include "bsdf.h"
 
@@ -79,16 +80,6 @@ struct ref_renderer {
 };
 
 /* ---------------------------------------------------------------- small helpers */
-
-static void *xcalloc(size_t n, size_t size)
-{
-    void *p = calloc(n ? n : 1, size);
-    if (!p) {
-        fprintf(stderr, "ispm: out of memory\n");
-        abort();
-    }
-    return p;
-}
 
 static double now_ms(void)
 {
@@ -688,7 +679,7 @@ static void photon_pass(const frame_ctx *c, uint32_t pass, float radius, int thr
                         uint64_t *stored_total)
 {
     const emit_plan *pl = c->plan;
-    photon_buf *bufs = xcalloc((size_t)threads, sizeof *bufs);
+    photon_buf *bufs = eng_xcalloc((size_t)threads, sizeof *bufs);
 #pragma omp parallel num_threads(threads)
     {
         photon_buf *mine = &bufs[omp_get_thread_num()];
@@ -699,7 +690,7 @@ static void photon_pass(const frame_ctx *c, uint32_t pass, float radius, int thr
     size_t n = 0;
     for (int t = 0; t < threads; t++)
         n += bufs[t].count;
-    keyed_photon *all = xcalloc(n, sizeof *all);
+    keyed_photon *all = eng_xcalloc(n, sizeof *all);
     size_t at = 0;
     for (int t = 0; t < threads; t++) {
         if (bufs[t].count)
@@ -719,10 +710,10 @@ static void photon_pass(const frame_ctx *c, uint32_t pass, float radius, int thr
     g->radius = radius;
     g->inv_cell = 1.0f / (2.0f * radius);
     g->mask = buckets - 1;
-    g->start = xcalloc((size_t)buckets + 1, sizeof *g->start);
-    g->photons = xcalloc(n, sizeof *g->photons);
+    g->start = eng_xcalloc((size_t)buckets + 1, sizeof *g->start);
+    g->photons = eng_xcalloc(n, sizeof *g->photons);
     g->count = n;
-    uint32_t *bucket_of = xcalloc(n, sizeof *bucket_of);
+    uint32_t *bucket_of = eng_xcalloc(n, sizeof *bucket_of);
     for (size_t i = 0; i < n; i++) {
         int64_t cc[3];
         cell_of(g, all[i].p.position, cc);
@@ -731,7 +722,7 @@ static void photon_pass(const frame_ctx *c, uint32_t pass, float radius, int thr
     }
     for (uint32_t b = 0; b < buckets; b++)
         g->start[b + 1] += g->start[b];
-    uint32_t *fill = xcalloc((size_t)buckets, sizeof *fill);
+    uint32_t *fill = eng_xcalloc((size_t)buckets, sizeof *fill);
     for (size_t i = 0; i < n; i++) {
         uint32_t b = bucket_of[i];
         g->photons[g->start[b] + fill[b]++] = all[i].p;
@@ -1130,7 +1121,7 @@ eng_result ref_create(const ref_desc *desc, ref_renderer **out, eng_error *err)
         if (!(d.radius > 0.0f))
             d.radius = 0.01f;
     }
-    ref_renderer *r = xcalloc(1, sizeof *r);
+    ref_renderer *r = eng_xcalloc(1, sizeof *r);
     r->d = d;
     eng_image_size(d.engine, &r->width, &r->height);
     *out = r;
@@ -1219,7 +1210,7 @@ eng_result ref_render_frame(ref_renderer *r, int frame, eng_error *err)
     int caustics = !d->no_caustics && plan.any;
 
     size_t npix = (size_t)r->width * (size_t)r->height;
-    double *sum_d = xcalloc(npix * 3, sizeof *sum_d), *sum_i = xcalloc(npix * 3, sizeof *sum_i);
+    double *sum_d = eng_xcalloc(npix * 3, sizeof *sum_d), *sum_i = eng_xcalloc(npix * 3, sizeof *sum_i);
     photon_grid grid;
     memset(&grid, 0, sizeof grid);
     double r2 = (double)d->radius * d->radius, photon_ms = 0.0, trace_ms = 0.0;
@@ -1251,7 +1242,7 @@ eng_result ref_render_frame(ref_renderer *r, int frame, eng_error *err)
     free(grid.start);
     free(grid.photons);
 
-    float *img = xcalloc(npix * 9, sizeof *img);
+    float *img = eng_xcalloc(npix * 9, sizeof *img);
     float *fd = img, *fi = img + npix * 3, *ff = img + npix * 6;
     for (size_t i = 0; i < npix * 3; i++) {
         fd[i] = (float)(sum_d[i] / d->spp);
