@@ -253,6 +253,11 @@ eng_result pass_splat_create(int width, int height, int irradiance, pass_splat *
  * every photon's r_xy and r_z at that pixel (progressive photon mapping's per-pixel radius,
  * progressive.h); NULL: none (the default). */
 void pass_splat_set_pixel_scale(pass_splat *p, const float *scale);
+/* Grows the pass's CPU arrays to n photons and builds its index data, calling no GL (so the
+ * photon stage may call it on the overlap worker once the map's size is known; pass_splat_run
+ * grows the GL buffers to match). prefault: touch the new arrays now, so that their page faults
+ * are taken on the calling thread rather than when the GL thread fills them. */
+void pass_splat_reserve(pass_splat *p, size_t n, int prefault);
 /* Uploads w×h scales (top row first) into the R32F texture *tex (created on first use, with
  * *rows its w×h upload scratch): the u_pixel_scale of shaders/pixel_scale.glsl. */
 void pixel_scale_upload(GLuint *tex, float **rows, int w, int h, const float *scale);
@@ -540,6 +545,11 @@ eng_result photon_trace_with(const pt_tracer *tr, const eng_frame_scene *fs, con
                              eng_photon_map *out, eng_trace_stats *stats, eng_error *err);
 /* Frees the photons and zeroes the map; accepts a zeroed map. */
 void photon_map_free(eng_photon_map *m);
+/* Grows m's per-thread trace buffers (for a trace on `threads` threads) and its photon array
+ * towards `photons` photons and touches the new memory, so that a first trace does not take
+ * those page faults; the trace's results do not depend on it (out of memory: leaves m as is).
+ * The frame loop calls it on the overlap worker while the GL thread renders (issue 22 item 3). */
+void photon_map_reserve(eng_photon_map *m, int threads, size_t photons);
 
 /* ---------------------------------------------------------------- Embree scene (rt.c) */
 

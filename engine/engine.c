@@ -220,6 +220,25 @@ static void upload_scene(eng_engine *e)
     e->deform = eng_deform_create(s, e->gpu);
 }
 
+/* The part of eng_create that calls no GL (issue 22 item 3): the ray tracer's scene and, for
+ * an indirect method, the random maps. It writes only e->rt, e->rmaps and its own fields. */
+typedef struct cpu_setup {
+    eng_engine *e;
+    int random_maps;
+    eng_result r;
+    eng_error err;
+} cpu_setup;
+
+static void cpu_setup_run(void *arg)
+{
+    cpu_setup *cs = arg;
+    eng_engine *e = cs->e;
+    cs->r = rt_create(e->scene, e->settings.threads, &e->rt, &cs->err);
+    if (cs->r == ENG_OK && cs->random_maps)
+        cs->r = rmap_create((uint64_t)e->settings.random_seed, (uint32_t)e->settings.random_map_size, &e->rmaps,
+                            &cs->err);
+}
+
 eng_result eng_create(const eng_desc *desc, eng_engine **out, eng_error *err)
 {
     *out = NULL;
@@ -262,9 +281,13 @@ eng_result eng_create(const eng_desc *desc, eng_engine **out, eng_error *err)
     }
 
     eng_pin_determinism(e->settings.threads);
+    /* Embree's scene and the random maps need no GL: with 2+ threads they are built on the
+     * overlap worker while this thread creates the GL context and builds the programs. */
+    e->method = ind_method_of(e->settings.indirect);
+    e->overlap = ovl_create(e->settings.threads);
+    cpu_setup cs = {e, e->method != NULL, ENG_OK, {{0}}};
+    ovl_start(e->overlap, cpu_setup_run, &cs);
     eng_result r = glctx_create_on(desc->gl, desc->gl_use_device, desc->gl_device, &e->gl, err);
-    if (r == ENG_OK)
-        r = rt_create(s, e->settings.threads, &e->rt, err);
     if (r == ENG_OK)
         r = pass_gbuffer_create(e->width, e->height, &e->gbuffer, err);
     if (r == ENG_OK)
@@ -275,11 +298,14 @@ eng_result eng_create(const eng_desc *desc, eng_engine **out, eng_error *err)
         r = pass_direct_create(e->width, e->height, &e->direct, err);
     if (r == ENG_OK)
         r = pass_composite_create(e->width, e->height, &e->composite, err);
-    e->method = ind_method_of(e->settings.indirect);
+    ovl_join(e->overlap);
+    if (r == ENG_OK && cs.r != ENG_OK) {
+        r = cs.r;
+        if (err)
+            *err = cs.err;
+    }
     if (r == ENG_OK && e->method) {
-        r = rmap_create((uint64_t)e->settings.random_seed, (uint32_t)e->settings.random_map_size, &e->rmaps, err);
-        if (r == ENG_OK)
-            r = pass_lightmaps_create(&e->rmaps, &e->lightmaps, err);
+        r = pass_lightmaps_create(&e->rmaps, &e->lightmaps, err);
         const eng_settings *st = &e->settings;
         e->filtered = st->splat_subsample > 1 || st->temporal || st->atrous_iterations > 0;
         int w = e->width, h = e->height;
@@ -295,7 +321,6 @@ eng_result eng_create(const eng_desc *desc, eng_engine **out, eng_error *err)
         if (r == ENG_OK)
             r = e->method->create(w, h, e->filtered, &e->method_state, err);
         e->tracer = pt_method_of(st->photon_trace);
-        e->overlap = ovl_create(st->threads);
         if (r == ENG_OK)
             r = e->tracer->create(st, &e->tracer_state, err);
         if (r == ENG_OK && st->temporal)
@@ -957,6 +982,20 @@ static void photon_stage_run(void *arg)
     }
     ind_photon_radii(&e->pmap, &e->settings, &e->fs, e->width, e->height, e->radius_scale, e->radius);
     e->aniso_on = e->aniso && ind_photon_aniso(&e->pmap, &e->settings, e->aniso);
+    if (e->method->reserve)
+        e->method->reserve(e->method_state, e->pmap.count, e->settings.threads);
+}
+
+/* The first frame's photon buffers and the indirect method's (reserve), grown to a guess at
+ * the map's size: the bounce-map photons and a quarter more (cornell-box-perf: 65,536, 72,670
+ * stored); the trace and the method grow them further when they need to. */
+static void photon_warm_run(void *arg)
+{
+    eng_engine *e = arg;
+    const size_t n = (size_t)e->settings.photon_count;
+    photon_map_reserve(&e->pmap, e->settings.threads, n + n / 4);
+    if (e->method->reserve)
+        e->method->reserve(e->method_state, n + n / 4, e->settings.threads);
 }
 
 /* Announces the photon stage's results after ovl_join: its trace time, statistics and
@@ -1308,6 +1347,11 @@ eng_result eng_render_frame(eng_engine *e, int frame, eng_error *err)
     memcpy(e->stats.camera_view_proj, e->fs.camera.view_proj, sizeof e->stats.camera_view_proj);
     memcpy(e->stats.camera_eye, e->fs.camera.eye, sizeof e->stats.camera_eye);
 
+    /* With 2+ threads the first trace's photon buffers are grown and touched on the overlap
+     * worker while this thread renders the shadow and bounce maps (issue 22 item 3). */
+    if (e->method && e->overlap && e->pmap.capacity == 0)
+        ovl_start(e->overlap, photon_warm_run, e);
+
     /* Shadow maps, one per light. */
     const shadow_map *maps[8] = {0};
     const glu_target *shadow_extra[8] = {0}; /* the shadow method's map per light (shadow.h) */
@@ -1344,6 +1388,7 @@ eng_result eng_render_frame(eng_engine *e, int frame, eng_error *err)
         eng_rmap_frame rf; /* salt and stratum of this frame (002 §4.2), for both processors */
         rmap_frame(&e->settings, frame, &rf);
         eng_result r = light_passes(e, frame, &rf, err);
+        ovl_join(e->overlap); /* photon_warm_run */
         if (r != ENG_OK)
             return r;
         eng_trace_settings ts = {e->settings.bounces, e->settings.threads, rf.salt, rf.stratified,

@@ -21,4 +21,10 @@ static eng_result scatter_run(void *state, const ind_input *in, ind_output *out,
 
 static void scatter_destroy(void *state) { pass_splat_destroy(state); }
 
-const ind_method ind_scatter_method = {"ispm", "splat", "splat", scatter_create, scatter_run, scatter_destroy, 1};
+static void scatter_reserve(void *state, size_t photons, int threads)
+{
+    pass_splat_reserve(state, photons, threads > 1);
+}
+
+const ind_method ind_scatter_method = {"ispm",          "splat",         "splat",         scatter_create,
+                                       scatter_run,     scatter_destroy, 1,               scatter_reserve};

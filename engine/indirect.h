@@ -64,6 +64,9 @@ typedef struct ind_method {
     eng_result (*run)(void *state, const ind_input *in, ind_output *out, eng_error *err);
     void (*destroy)(void *state); /* accepts NULL */
     int per_pixel_radius; /* 1: run honours ind_input.pixel_scale (all but tile-gather-gl) */
+    /* Optional, NULL for none: makes room for `photons` map photons, calling no GL; the photon
+     * stage calls it on the overlap worker with 2+ threads (issue 22 item 3). */
+    void (*reserve)(void *state, size_t photons, int threads);
 } ind_method;
 
 extern const ind_method ind_scatter_method;

@@ -4,6 +4,10 @@
  * a 2-thread run one core idles while the GL thread renders the eye G-buffer and the direct
  * light. The frame loop hands the CPU photon trace (which needs only the bounce maps) to this
  * worker, renders those passes meanwhile, and joins before anything reads the photon map.
+ * It also takes eng_create's GL-free part (Embree's scene, the random maps) while the GL
+ * thread creates the context and builds the programs, and, in the first frame, grows the
+ * photon buffers and the splat's arrays (their page faults) while the GL thread renders the
+ * shadow and bounce maps.
  * The job is the same code on the same inputs either way, so every buffer is bit-identical;
  * only when it runs changes. With fewer than 2 threads there is no worker: ovl_start runs the
  * job at once on the calling thread (a 1-thread run stays a 1-thread run).

@@ -37,7 +37,9 @@ struct pass_splat {
     int use_scale;        /* the next run applies them */
     float *scale_rows;    /* upload scratch, GL row order */
     int irradiance;
-    size_t capacity; /* photons the buffers hold */
+    size_t capacity;    /* photons the CPU arrays hold (pass_splat_reserve) */
+    size_t gl_capacity; /* photons the GL buffers hold (at most capacity) */
+    uint32_t *idx;      /* the index buffer's data for capacity photons */
     float *position;  /* read-back G-buffer positions, GL row order */
     float *packed;    /* SPLAT_VEC4 vec4 per drawn photon */
     splat_bounds *bounds; /* per photon */
@@ -146,32 +148,49 @@ eng_result pass_splat_create(int width, int height, int irradiance, pass_splat *
     return ENG_OK;
 }
 
-/* Grows the photon and index buffers to hold n photons (two triangles of 4 vertices each). */
-static void reserve(pass_splat *p, size_t n)
+void pass_splat_reserve(pass_splat *p, size_t n, int prefault)
 {
     if (n <= p->capacity)
         return;
+    n += n / 8; /* room for the next frames' few more photons */
     p->capacity = n;
     free(p->packed);
     free(p->bounds);
     free(p->keep);
+    free(p->idx);
     p->packed = eng_xmalloc(n * SPLAT_VEC4 * 4 * sizeof(float));
     p->bounds = eng_xmalloc(n * sizeof *p->bounds);
     p->keep = eng_xmalloc(n);
-    glBindBuffer(GL_SHADER_STORAGE_BUFFER, p->ssbo);
-    glBufferData(GL_SHADER_STORAGE_BUFFER, (GLsizeiptr)(n * SPLAT_VEC4 * 4 * sizeof(float)), NULL, GL_STREAM_DRAW);
-    glBindBuffer(GL_SHADER_STORAGE_BUFFER, 0);
-    uint32_t *idx = eng_xmalloc(n * 6 * sizeof *idx);
+    if (prefault) { /* take the page faults here, off the GL thread (pass_splat_reserve) */
+        memset(p->packed, 0, n * SPLAT_VEC4 * 4 * sizeof(float));
+        memset(p->bounds, 0, n * sizeof *p->bounds);
+        memset(p->keep, 0, n);
+    }
+    p->idx = eng_xmalloc(n * 6 * sizeof *p->idx);
     for (size_t i = 0; i < n; i++) {
         const uint32_t b = (uint32_t)(4 * i);
         const uint32_t q[6] = {b, b + 1, b + 2, b + 2, b + 1, b + 3};
-        memcpy(idx + 6 * i, q, sizeof q);
+        memcpy(p->idx + 6 * i, q, sizeof q);
     }
+}
+
+/* Grows the photon and index buffers to hold n photons (two triangles of 4 vertices each) and
+ * a few more, within the CPU arrays' capacity (at least n: pass_splat_reserve). */
+static void reserve_gl(pass_splat *p, size_t n)
+{
+    if (n <= p->gl_capacity)
+        return;
+    n += n / 8;
+    if (n > p->capacity)
+        n = p->capacity;
+    p->gl_capacity = n;
+    glBindBuffer(GL_SHADER_STORAGE_BUFFER, p->ssbo);
+    glBufferData(GL_SHADER_STORAGE_BUFFER, (GLsizeiptr)(n * SPLAT_VEC4 * 4 * sizeof(float)), NULL, GL_STREAM_DRAW);
+    glBindBuffer(GL_SHADER_STORAGE_BUFFER, 0);
     glBindVertexArray(p->vao);
     glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, p->ibo);
-    glBufferData(GL_ELEMENT_ARRAY_BUFFER, (GLsizeiptr)(n * 6 * sizeof *idx), idx, GL_STATIC_DRAW);
+    glBufferData(GL_ELEMENT_ARRAY_BUFFER, (GLsizeiptr)(n * 6 * sizeof *p->idx), p->idx, GL_STATIC_DRAW);
     glBindVertexArray(0);
-    free(idx);
 }
 
 const glu_target *pass_splat_run(pass_splat *p, const eng_frame_scene *fs, const glu_target *gbuf,
@@ -194,7 +213,8 @@ const glu_target *pass_splat_run(pass_splat *p, const eng_frame_scene *fs, const
     const float zero[4] = {0, 0, 0, 0};
     for (int i = 0; i < t->count; i++)
         glClearBufferfv(GL_COLOR, i, zero);
-    reserve(p, map->count);
+    pass_splat_reserve(p, map->count, 0);
+    reserve_gl(p, map->count);
     /* Bounds per photon on the CPU threads (independent), then the drawn ones packed in
      * photon order: the order the blending sums them in. */
     const long n = (long)map->count;
@@ -297,6 +317,7 @@ void pass_splat_destroy(pass_splat *p)
     free(p->packed);
     free(p->bounds);
     free(p->keep);
+    free(p->idx);
     splat_tiles_free(&p->tiles);
     free(p);
 }

@@ -229,6 +229,56 @@ static void add_counts(eng_trace_counts *a, const eng_trace_counts *b)
     a->agree += b->agree;
 }
 
+static int trace_threads(int threads) { return threads > 0 ? (threads < 1024 ? threads : 1024) : 1; }
+
+/* out has a trace buffer per thread; 0 when out of memory. */
+static int ensure_bufs(eng_photon_map *out, int threads)
+{
+    if (out->trace_buf_count < threads) {
+        pt_buf *more = realloc(out->trace_bufs, (size_t)threads * sizeof *more);
+        if (!more)
+            return 0;
+        memset(more + out->trace_buf_count, 0, (size_t)(threads - out->trace_buf_count) * sizeof *more);
+        out->trace_bufs = more;
+        out->trace_buf_count = threads;
+    }
+    return 1;
+}
+
+/* Grows *p (holding *cap photons) to want photons and zeroes the new ones, so that their pages
+ * are touched now; left as is when out of memory. */
+static void grow_touched(eng_photon **p, size_t *cap, size_t want)
+{
+    if (want <= *cap)
+        return;
+    eng_photon *q = realloc(*p, want * sizeof *q);
+    if (!q)
+        return;
+    memset(q + *cap, 0, (want - *cap) * sizeof *q);
+    *p = q;
+    *cap = want;
+}
+
+void photon_map_reserve(eng_photon_map *m, int threads, size_t photons)
+{
+    threads = trace_threads(threads);
+    if (!ensure_bufs(m, threads))
+        return;
+    /* Each thread's buffer grown and touched by that thread (its OpenMP team is then the one
+     * the trace will use); a buffer only grows, by the doubling pt_push would have done. */
+    const size_t per = photons / (size_t)threads + 1;
+    pt_buf *bufs = m->trace_bufs;
+#pragma omp parallel num_threads(threads)
+    {
+        pt_buf *b = &bufs[omp_get_thread_num()];
+        size_t cap = b->cap ? b->cap : 1024;
+        while (cap < per)
+            cap *= 2;
+        grow_touched(&b->p, &b->cap, cap);
+    }
+    grow_touched(&m->photons, &m->capacity, photons);
+}
+
 eng_result photon_trace_with(const pt_tracer *tr, const eng_frame_scene *fs, const eng_random_maps *rm,
                              const eng_bounce_photon *in, size_t count, const eng_trace_settings *s,
                              eng_photon_map *out, eng_trace_stats *stats, eng_error *err)
@@ -238,17 +288,9 @@ eng_result photon_trace_with(const pt_tracer *tr, const eng_frame_scene *fs, con
                         ENG_PHOTON_MAX_HITS);
     if (rm->size == 0 || (rm->size & (rm->size - 1)) != 0 || !rm->uniform || !rm->cosine)
         return eng_fail(err, ENG_ERR_INVALID, "photon trace: random maps not created");
-    const int threads = s->threads > 0 ? (s->threads < 1024 ? s->threads : 1024) : 1;
+    const int threads = trace_threads(s->threads);
     pt_path *paths = malloc((count ? count : 1) * sizeof *paths);
-    if (paths && out->trace_buf_count < threads) {
-        pt_buf *more = realloc(out->trace_bufs, (size_t)threads * sizeof *more);
-        if (more) {
-            memset(more + out->trace_buf_count, 0, (size_t)(threads - out->trace_buf_count) * sizeof *more);
-            out->trace_bufs = more;
-            out->trace_buf_count = threads;
-        }
-    }
-    if (!paths || out->trace_buf_count < threads) {
+    if (!paths || !ensure_bufs(out, threads)) {
         free(paths);
         return eng_fail(err, ENG_ERR_NOMEM, "photon trace: out of memory for %zu photons", count);
     }

@@ -657,16 +657,25 @@ START_TEST(bsdf_params_match_material)
 }
 END_TEST
 
+/* The Cornell box with its short box, random maps of 2^16 entries and `want` bounce photons
+ * (*in, to free); returns how many were made. */
+static size_t cornell_with_photons(cornell *c, eng_random_maps *rm, size_t want, eng_bounce_photon **in)
+{
+    eng_error err;
+    cornell_open(c, CORNELL_GLTF, "shortBox");
+    ck_assert_int_eq(rmap_create(0x15B3, 1u << 16, rm, &err), ENG_OK);
+    *in = calloc(want, sizeof **in);
+    return cornell_bounce_photons(c, rm, want, *in);
+}
+
 START_TEST(determinism_threads)
 {
     cornell c;
-    cornell_open(&c, CORNELL_GLTF, "shortBox");
     eng_random_maps rm;
     eng_error err;
-    ck_assert_int_eq(rmap_create(0x15B3, 1u << 16, &rm, &err), ENG_OK);
     const size_t want = 20000;
-    eng_bounce_photon *in = calloc(want, sizeof *in);
-    size_t n = cornell_bounce_photons(&c, &rm, want, in);
+    eng_bounce_photon *in;
+    size_t n = cornell_with_photons(&c, &rm, want, &in);
     ck_assert_uint_eq(n, want);
     in[5].power[0] = in[5].power[1] = in[5].power[2] = 0.0f; /* absorbed in the bounce map */
     eng_photon_map a = {0}, b = {0};
@@ -716,6 +725,45 @@ START_TEST(determinism_threads)
     ck_assert_uint_gt(beyond3, 100);
     photon_map_free(&a);
     photon_map_free(&b);
+    free(in);
+    rmap_destroy(&rm);
+    cornell_close(&c);
+}
+END_TEST
+
+/* photon_map_reserve (issue 22 item 3: the first frame's buffers grown on the overlap worker)
+ * changes no map: traces into maps reserved for fewer photons than stored, for many more, for
+ * another thread count, and into an unreserved map are bit-identical, and the reserved room is
+ * there (a trace buffer per thread and the photon array). */
+START_TEST(reserve_changes_no_map)
+{
+    cornell c;
+    eng_random_maps rm;
+    eng_error err;
+    eng_bounce_photon *in;
+    size_t n = cornell_with_photons(&c, &rm, 4000, &in);
+    eng_trace_settings s2 = {.max_bounces = 0, .threads = 2};
+    eng_photon_map ref = {0};
+    eng_trace_stats sr, sm;
+    ck_assert_int_eq(photon_trace(c.rt, &c.fs, &rm, in, n, &s2, &ref, &sr, &err), ENG_OK);
+    ck_assert_uint_gt(ref.count, 100);
+    const size_t guesses[3] = {100, ref.count, 4 * ref.count};
+    const int threads[3] = {2, 3, 1};
+    for (int g = 0; g < 3; g++) {
+        eng_photon_map m = {0};
+        photon_map_reserve(&m, threads[g], guesses[g]);
+        ck_assert_int_ge(m.trace_buf_count, threads[g]);
+        ck_assert_uint_ge(m.capacity, guesses[g]);
+        ck_assert_int_eq(photon_trace(c.rt, &c.fs, &rm, in, n, &s2, &m, &sm, &err), ENG_OK);
+        ck_assert_uint_eq(m.count, ref.count);
+        ck_assert_int_eq(memcmp(m.photons, ref.photons, ref.count * sizeof(eng_photon)), 0);
+        ck_assert_int_eq(memcmp(&sm, &sr, sizeof sr), 0);
+        photon_map_reserve(&m, 2, 2 * guesses[g]); /* a used map: still the same next trace */
+        ck_assert_int_eq(photon_trace(c.rt, &c.fs, &rm, in, n, &s2, &m, NULL, &err), ENG_OK);
+        ck_assert_int_eq(memcmp(m.photons, ref.photons, ref.count * sizeof(eng_photon)), 0);
+        photon_map_free(&m);
+    }
+    photon_map_free(&ref);
     free(in);
     rmap_destroy(&rm);
     cornell_close(&c);
@@ -1141,6 +1189,7 @@ static Suite *photon_suite(void)
     tcase_add_test(tc, truncation_counted);
     tcase_add_test(tc, bsdf_params_match_material);
     tcase_add_test(tc, determinism_threads);
+    tcase_add_test(tc, reserve_changes_no_map);
     tcase_add_test(tc, packets_match_single_rays);
     tcase_add_test(tc, frame_coherence);
     tcase_add_test(tc, glass_caustics);
