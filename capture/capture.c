@@ -972,6 +972,8 @@ static cJSON *manifest_json(const cap_capture *c)
     jadd(st, "progressive", cJSON_CreateBool(s.progressive));
     if (s.progressive_pixel) /* only when set: runs without keep their manifests */
         jadd(st, "progressive_radius", jstr("pixel"));
+    if (s.bounce_strata > 1) /* only when set: runs without keep their manifests */
+        jadd(st, "bounce_strata", cJSON_CreateNumber(s.bounce_strata));
     jadd(st, "boundary", jstr(eng_boundary_name(s.boundary)));
     jadd(st, "photon_trace", jstr(eng_trace_name(s.photon_trace)));
     if (s.photon_trace == ENG_TRACE_MULTI_IMAGE) {

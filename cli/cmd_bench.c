@@ -299,7 +299,7 @@ static const char *const SETTING_KEYS[] = {
     "temporal_alpha", "atrous_iterations", "atrous_detail", "atrous_gamma", "random", "random_map_size",
     "random_seed", "stratified_cycle", "shadow_map_size", "pcf_radius", "shadow_bias", "exposure", "threads",
     "kernel_scaling", "progressive", "boundary", "specular", "specular_depth", "photon_trace", "multi_image_maps",
-    "multi_image_size", "multi_image_miss", "multi_image_compare", "progressive_radius", NULL};
+    "multi_image_size", "multi_image_miss", "multi_image_compare", "progressive_radius", "bounce_strata", NULL};
 
 /* The value the engine uses for a settings key, as text; 0 for a key it does not know. */
 static int setting_text(const eng_settings *s, const char *key, char *out, size_t size)
@@ -344,6 +344,7 @@ static int setting_text(const eng_settings *s, const char *key, char *out, size_
     INT_KEY(random_map_size)
     INT_KEY(random_seed)
     INT_KEY(stratified_cycle)
+    INT_KEY(bounce_strata)
     INT_KEY(shadow_map_size)
     INT_KEY(pcf_radius)
     INT_KEY(threads)

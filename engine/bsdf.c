@@ -255,3 +255,6 @@ void bsdf_stratify(const float u[4], const float offset[4], float out_u[4], floa
     out_cosdir[2] = z;
     out_cosdir[3] = z / BSDF_PI;
 }
+
+/* bsdf_permute and bsdf_strata: one definition for C and GLSL. */
+#include "shaders/bsdf_strata.glsl"

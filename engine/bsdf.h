@@ -84,6 +84,24 @@ bsdf_lobe bsdf_scatter_params(const bsdf_params *m, const float n[3], const floa
  * come from rmap_stratum. */
 void bsdf_stratify(const float u[4], const float offset[4], float out_u[4], float out_cosdir[4]);
 
+/* Stratified first bounces within one frame (`"bounce_strata"`; 002_558366c451cd32fd.txt §4.2
+ * stratifies across frames, this within one): the N² = 4^log2n bounce-map texels of an N×N
+ * block share one pattern (a hash of the block) and each takes sample `index` (its place in the
+ * block, 0..N²−1) of a correlated multi-jittered set (Kensler, "Correlated Multi-Jittered
+ * Sampling", Pixar Technical Memo 13-01, 2013, §5–6: the pattern's own permutations, the
+ * sample order permuted too): out_u[BSDF_U_DIR0..1] lie one in each cell of the N×N grid and
+ * one in each of the N² columns and rows; out_u[BSDF_U_LOBE] and out_u[BSDF_U_ROULETTE] one in
+ * each of N² intervals (permuted independently). The event's own numbers u are the jitter
+ * within the stratum: out_u = (stratum + u)·N⁻², the sum rounded to float (u keeps 24 − 2·log2n
+ * bits at worst), the scaling exact (N² is a power of two), at most 1 − 2⁻²⁴.
+ * The cosine-weighted direction then comes from out_u by bsdf_stratify's concentric map, after
+ * the frame's Cranley–Patterson rotation (zero offsets without "random": "stratified"). Both
+ * are defined once, in shaders/bsdf_strata.glsl (valid C and GLSL), for bsdf.c and the
+ * bounce-map shader. */
+void bsdf_strata(const float u[4], uint32_t index, uint32_t log2n, uint32_t pattern, float out_u[4]);
+/* Kensler 2013 §3's hashed permutation of [0, l): element i of permutation p. */
+uint32_t bsdf_permute(uint32_t i, uint32_t l, uint32_t p);
+
 /* Does the material have a diffuse or glossy lobe with non-zero probability? The photon map
  * keeps photons only on such surfaces: the final gather estimates radiance from photons with
  * a smooth BRDF, and a photon on a purely specular surface (mirror, glass) would only be

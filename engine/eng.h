@@ -493,6 +493,9 @@ typedef struct eng_settings {
     /* Issue 13: `"progressive_radius": "pixel"` (1): progressive photon mapping's radius per pixel
      * (progressive.h; every method but tile-gather-gl); "frame" (0, default): one scale per frame. */
     int progressive_pixel;
+    /* Issue 13: `"bounce_strata": N` (2, 4, …, 64): the bounce map's first-bounce numbers
+     * stratified within each N×N block of texels (bsdf_strata, bsdf.h); 0 (default) or 1: off. */
+    int bounce_strata;
 } eng_settings;
 
 void eng_settings_defaults(eng_settings *s);

@@ -388,6 +388,14 @@ void rmap_destroy(eng_random_maps *rm);
 uint32_t rmap_hash3(const float p[3], uint32_t salt);
 /* Same for a light position and a bounce-map pixel (x, y, face): the bounce map's seed. */
 uint32_t rmap_hash_pixel(const float light[3], uint32_t x, uint32_t y, uint32_t face, uint32_t salt);
+/* Stratified bounces (`"bounce_strata"`, bsdf_strata in bsdf.h): bounce-map texel (x, y) of
+ * `face` lies in the 2^log2n-wide block (x, y) >> log2n; *index is its place in the block,
+ * (y mod n)·n + x mod n, and *pattern the block's seed, rmap_hash_pixel(light, block, face,
+ * strata_salt) with eng_rmap_frame's strata_salt: it depends on nothing but the light, the block,
+ * the frame's salt and random_seed, so static parts of a scene keep their photons. The
+ * bounce-map shader computes the same. */
+void rmap_strata_texel(const float light[3], uint32_t x, uint32_t y, uint32_t face, uint32_t strata_salt, int log2n,
+                       uint32_t *index, uint32_t *pattern);
 
 /* How one frame reads the random maps, the same for the bounce-map shader and the CPU trace:
  * the salt of its seeds, and with stratified sampling across frames (002_… §4.2) the
@@ -396,6 +404,10 @@ typedef struct eng_rmap_frame {
     uint32_t salt;     /* 0 = precomputed random maps; frame-dependent for per-frame random */
     int stratified;    /* 1: rotate every event's numbers by offset (bsdf_stratify) */
     float offset[4];   /* per random dimension, in [0,1) */
+    int strata_log2;   /* "bounce_strata" = 2^strata_log2 (bsdf_strata); 0 = off */
+    uint32_t strata_salt; /* salt of the blocks' patterns (rmap_strata_texel): the frame's salt,
+                           * BSDF_STRATA_SALT and random_seed, so that another seed draws other
+                           * permutations as well as other jitter */
 } eng_rmap_frame;
 
 /* The frame's eng_rmap_frame under settings s (random, stratified_cycle). Stratified: frame f

@@ -147,6 +147,8 @@ eng_result pass_lightmaps_run(pass_lightmaps *p, const eng_frame_scene *fs, uint
     glUniform1ui(glGetUniformLocation(g, "u_salt"), rf->salt);
     glUniform1i(glGetUniformLocation(g, "u_stratified"), rf->stratified);
     glUniform4fv(glGetUniformLocation(g, "u_offset"), 1, rf->offset);
+    glUniform1i(glGetUniformLocation(g, "u_strata_log2"), rf->strata_log2);
+    glUniform1ui(glGetUniformLocation(g, "u_strata_salt"), rf->strata_salt);
     GLint u_layer = glGetUniformLocation(g, "u_layer");
     for (int i = 0; i < 4; i++) {
         glActiveTexture(GL_TEXTURE0 + i);

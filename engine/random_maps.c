@@ -17,6 +17,7 @@
  * Hashes: XXH32 (libxxhash) of the little-endian words of the input, seeded by the salt.
  * Floats enter as their IEEE-754 bits with −0.0 replaced by +0.0, so the two zeros seed the
  * same path. The GLSL bounce-map shader computes the same XXH32 of the same words. */
+#include "bsdf.h"
 #include "eng_internal.h"
 
 #include <math.h>
@@ -141,6 +142,14 @@ uint32_t rmap_hash_pixel(const float light[3], uint32_t x, uint32_t y, uint32_t 
     return hash_words(w, 6, salt);
 }
 
+void rmap_strata_texel(const float light[3], uint32_t x, uint32_t y, uint32_t face, uint32_t strata_salt, int log2n,
+                       uint32_t *index, uint32_t *pattern)
+{
+    uint32_t n = 1u << log2n;
+    *index = (y & (n - 1u)) * n + (x & (n - 1u));
+    *pattern = rmap_hash_pixel(light, x >> log2n, y >> log2n, face, strata_salt);
+}
+
 static int gcd(int a, int b)
 {
     while (b) {
@@ -154,8 +163,12 @@ static int gcd(int a, int b)
 void rmap_frame(const eng_settings *s, int frame, eng_rmap_frame *out)
 {
     memset(out, 0, sizeof *out);
+    for (int k = 1; k <= BSDF_STRATA_MAX_LOG2; k++)
+        if (s->bounce_strata == 1 << k)
+            out->strata_log2 = k;
     if (s->random == ENG_RANDOM_PER_FRAME)
         out->salt = (uint32_t)frame + 1u;
+    out->strata_salt = out->salt ^ BSDF_STRATA_SALT ^ ((uint32_t)s->random_seed * 0x9e3779b9u);
     if (s->random != ENG_RANDOM_STRATIFIED)
         return;
     int K = s->stratified_cycle > 0 ? s->stratified_cycle : 1;

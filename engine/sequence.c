@@ -161,7 +161,7 @@ static eng_result parse_settings(parser *P, const cJSON *obj, eng_settings *s)
                                        "specular", "specular_depth",
                                        "photon_trace", "multi_image_maps", "multi_image_size",
                                        "multi_image_miss", "multi_image_compare", "capture_compression", "temporal_window",
-                                       "progressive_radius", NULL};
+                                       "progressive_radius", "bounce_strata", NULL};
     char v[80];
     eng_result r;
     if (!cJSON_IsObject(obj))
@@ -232,6 +232,12 @@ static eng_result parse_settings(parser *P, const cJSON *obj, eng_settings *s)
     if ((it = cJSON_GetObjectItemCaseSensitive(obj, "stratified_cycle")) &&
         (r = get_int(P, it, "settings.stratified_cycle", 1, 4096, &s->stratified_cycle)))
         return r;
+    if ((it = cJSON_GetObjectItemCaseSensitive(obj, "bounce_strata"))) {
+        if ((r = get_int(P, it, "settings.bounce_strata", 1, 64, &s->bounce_strata)))
+            return r;
+        if (s->bounce_strata & (s->bounce_strata - 1))
+            return bad(P, "settings.bounce_strata: %s is not a power of two (1, 2, 4, …, 64)", show(it, v, sizeof v));
+    }
     if ((it = cJSON_GetObjectItemCaseSensitive(obj, "random_seed")) &&
         (r = get_int(P, it, "settings.random_seed", 1, 2147483647, &s->random_seed)))
         return r;

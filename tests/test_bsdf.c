@@ -5,7 +5,8 @@
  * context, and must choose the same lobe and return the same direction, weight, path-density
  * factor and medium; bsdf_stratify (stratified sampling across frames, 002_… §4.2) likewise.
  * Also the stratification itself: rmap_frame's offsets put every dimension in each of the K
- * strata once per cycle and repeat every K frames. */
+ * strata once per cycle and repeat every K frames. And stratified first bounces within a frame
+ * (bsdf_strata): C and GLSL bit-identical, every block covering each stratum once. */
 #include "bsdf.h"
 #include "eng_internal.h"
 
@@ -112,7 +113,7 @@ START_TEST(glsl_matches_c)
     eng_random_maps rm;
     ck_assert_int_eq(rmap_create(7, 1u << 16, &rm, &err), ENG_OK);
 
-    enum { T_BASE, T_MAT, T_N, T_WI, T_U, T_COS, T_OFF, T_COUNT };
+    enum { T_BASE, T_MAT, T_N, T_WI, T_U, T_COS, T_OFF, T_STRATA, T_COUNT };
     float *in[T_COUNT];
     for (int t = 0; t < T_COUNT; t++)
         in[t] = calloc(N * 4, sizeof(float));
@@ -133,12 +134,19 @@ START_TEST(glsl_matches_c)
             in[T_U][4 * i + d] = test_uniform(&st);
             in[T_OFF][4 * i + d] = (float)(test_rng(&st) % 16) / 16.0f;
         }
+        /* bsdf_strata: a block size 2..16, a place in the block, a 32-bit pattern (two halves). */
+        uint32_t log2n = 1u + (uint32_t)(test_rng(&st) % BSDF_STRATA_MAX_LOG2), pattern = (uint32_t)test_rng(&st);
+        in[T_STRATA][4 * i] = (float)(test_rng(&st) % (1u << (2 * log2n)));
+        in[T_STRATA][4 * i + 1] = (float)log2n;
+        in[T_STRATA][4 * i + 2] = (float)(pattern & 0xffffu);
+        in[T_STRATA][4 * i + 3] = (float)(pattern >> 16);
         memcpy(in[T_COS] + 4 * i, rm.cosine + 4 * (i & (rm.size - 1)), 4 * sizeof(float));
     }
 
     glu_pass p;
-    ck_assert_msg(glu_pass_create(&p, "bsdf_probe.frag.glsl", 5, W, H, &err) == ENG_OK, "%s", err.msg);
-    static const char *const names[T_COUNT] = {"u_base", "u_mat", "u_n", "u_wi", "u_u", "u_cosdir", "u_offset"};
+    ck_assert_msg(glu_pass_create(&p, "bsdf_probe.frag.glsl", 6, W, H, &err) == ENG_OK, "%s", err.msg);
+    static const char *const names[T_COUNT] = {"u_base", "u_mat", "u_n", "u_wi", "u_u", "u_cosdir", "u_offset",
+                                                 "u_strata"};
     GLuint tex[T_COUNT];
     glUseProgram(p.program);
     for (int t = 0; t < T_COUNT; t++) {
@@ -150,7 +158,18 @@ START_TEST(glsl_matches_c)
     glFinish();
     float *o_wo = download(p.target.color[0]), *o_w = download(p.target.color[1]);
     float *o_eta = download(p.target.color[2]), *o_su = download(p.target.color[3]);
-    float *o_scd = download(p.target.color[4]);
+    float *o_scd = download(p.target.color[4]), *o_strata = download(p.target.color[5]);
+
+    /* bsdf_strata is integer hashing and exact float arithmetic: bit-identical. */
+    size_t strata_diff = 0;
+    for (size_t i = 0; i < N; i++) {
+        const float *stv = in[T_STRATA] + 4 * i;
+        float su[4];
+        bsdf_strata(in[T_U] + 4 * i, (uint32_t)stv[0], (uint32_t)stv[1], (uint32_t)stv[2] | (uint32_t)stv[3] << 16, su);
+        strata_diff += memcmp(su, o_strata + 4 * i, sizeof su) != 0;
+    }
+    printf("bsdf: bsdf_strata: %zu of %zu samples differ between C and GLSL\n", strata_diff, N);
+    ck_assert_msg(strata_diff == 0, "bsdf_strata: %zu samples differ between C and GLSL", strata_diff);
 
     /* Lobe choice is exact arithmetic on the inputs except where Russian roulette or the
      * Fresnel choice compares u with a computed value (llvmpipe's sin/cos/atan are not
@@ -205,6 +224,7 @@ START_TEST(glsl_matches_c)
     free(o_eta);
     free(o_su);
     free(o_scd);
+    free(o_strata);
     glDeleteTextures(T_COUNT, tex);
     glu_pass_destroy(&p);
     for (int t = 0; t < T_COUNT; t++)
@@ -265,6 +285,79 @@ START_TEST(stratified_offsets)
 }
 END_TEST
 
+/* Stratified first bounces (bsdf_strata, Kensler 2013 correlated multi-jitter): bsdf_permute is
+ * a permutation; over one block's N² samples the direction pair has one sample in each cell of
+ * the N×N grid and in each of the N² columns and rows, the lobe and roulette numbers one in each
+ * of N² intervals; the patterns of two blocks differ; the jitter is the place within its stratum; a
+ * jitter next to 1 gives a number below 1. */
+START_TEST(strata_cover_each_stratum_once)
+{
+    for (uint32_t l = 1; l <= 300; l += (l < 20 ? 1 : 37))
+        for (uint32_t p = 0; p < 5; p++) {
+            uint32_t pattern = p * 0x9e3779b9u + 12345u;
+            unsigned char seen[300] = {0};
+            for (uint32_t i = 0; i < l; i++) {
+                uint32_t j = bsdf_permute(i, l, pattern);
+                ck_assert_uint_lt(j, l);
+                ck_assert_msg(!seen[j], "bsdf_permute(·, %u, %u) is not a permutation", l, pattern);
+                seen[j] = 1;
+            }
+        }
+    uint64_t st = 5;
+    for (uint32_t k = 1; k <= BSDF_STRATA_MAX_LOG2; k++) {
+        uint32_t n = 1u << k, m = n * n;
+        int differs = 0;
+        static float first[4096][4];
+        for (int block = 0; block < 8; block++) {
+            uint32_t pattern = (uint32_t)test_rng(&st);
+            static int cell[4096], col[4096], row[4096], lobe[4096], rr[4096];
+            memset(cell, 0, sizeof cell);
+            memset(col, 0, sizeof col);
+            memset(row, 0, sizeof row);
+            memset(lobe, 0, sizeof lobe);
+            memset(rr, 0, sizeof rr);
+            for (uint32_t i = 0; i < m; i++) {
+                float u[4], out[4];
+                for (int d = 0; d < 4; d++)
+                    u[d] = test_uniform(&st) * 0.999f; /* clear of the round-up next to 1, below */
+                bsdf_strata(u, i, k, pattern, out);
+                for (int d = 0; d < 4; d++) {
+                    ck_assert(out[d] >= 0.0f && out[d] < 1.0f);
+                    /* the jitter is the position within the stratum, exactly */
+                    float f = out[d] * (float)m;
+                    /* up to the float spacing of the sum stratum + u (< m) */
+                    ck_assert_msg(fabsf(f - floorf(f) - u[d]) <= (float)m * 0x1p-23f,
+                                  "jitter %g became %g", (double)u[d], (double)(f - floorf(f)));
+                }
+                uint32_t fx = (uint32_t)(out[BSDF_U_DIR0] * (float)m), fy = (uint32_t)(out[BSDF_U_DIR1] * (float)m);
+                cell[(fy / n) * n + fx / n]++;
+                col[fx]++;
+                row[fy]++;
+                lobe[(uint32_t)(out[BSDF_U_LOBE] * (float)m)]++;
+                rr[(uint32_t)(out[BSDF_U_ROULETTE] * (float)m)]++;
+                if (block == 0)
+                    memcpy(first[i], out, sizeof out);
+                else
+                    differs |= fabsf(first[i][BSDF_U_DIR0] - out[BSDF_U_DIR0]) * (float)n >= 1.0f;
+            }
+            for (uint32_t j = 0; j < m; j++) {
+                ck_assert_msg(cell[j] == 1, "N=%u: grid cell %u holds %d samples", n, j, cell[j]);
+                ck_assert_msg(col[j] == 1 && row[j] == 1, "N=%u: column/row %u: %d/%d samples", n, j, col[j], row[j]);
+                ck_assert_msg(lobe[j] == 1 && rr[j] == 1, "N=%u: 1D stratum %u: %d/%d samples", n, j, lobe[j], rr[j]);
+            }
+        }
+        ck_assert_msg(differs, "N=%u: every block puts each texel in the same coarse stratum", n);
+        const float top[4] = {0x1.fffffep-1f, 0x1.fffffep-1f, 0x1.fffffep-1f, 0x1.fffffep-1f};
+        for (uint32_t i = 0; i < m; i++) {
+            float out[4];
+            bsdf_strata(top, i, k, 77u, out);
+            for (int d = 0; d < 4; d++)
+                ck_assert(out[d] < 1.0f);
+        }
+    }
+}
+END_TEST
+
 static Suite *bsdf_suite(void)
 {
     Suite *s = suite_create("bsdf");
@@ -272,6 +365,7 @@ static Suite *bsdf_suite(void)
     tcase_set_timeout(tc, 600);
     tcase_add_test(tc, glsl_matches_c);
     tcase_add_test(tc, stratified_offsets);
+    tcase_add_test(tc, strata_cover_each_stratum_once);
     suite_add_tcase(s, tc);
     return s;
 }

@@ -567,11 +567,11 @@ static kept copy_kept(const kept *k)
  * the photon map and the indirect buffer are bit-identical from frame to frame; when the short
  * box moves, photons whose paths never touch it keep their exact values; per-frame random
  * changes (nearly) everything. fps 0.5 puts frames 1 and 2 after the animation's end. */
-static void coherence(const char *random, size_t *static_diff, double *moved_same)
+static void coherence(const char *random, const char *more, size_t *static_diff, double *moved_same)
 {
     fixture f;
-    char extra[128];
-    snprintf(extra, sizeof extra, "\"photon_count\":2048,\"random\":\"%s\"", random);
+    char extra[256];
+    snprintf(extra, sizeof extra, "\"photon_count\":2048,\"random\":\"%s\"%s", random, more);
     setup_cornell(&f, 32, 3, 0.5, extra);
     render(&f, 1);
     kept pm1 = copy_kept(find(&f.keep, "photons.map")), in1 = copy_kept(find(&f.keep, "indirect.radiance"));
@@ -602,12 +602,12 @@ START_TEST(random_maps_give_frame_coherence)
 {
     size_t diff;
     double same;
-    coherence("maps", &diff, &same);
+    coherence("maps", "", &diff, &same);
     fprintf(stderr, "random maps: static frames differ in %zu buffers; %.1f%% of photons unchanged when the box moves\n",
             diff, same * 100);
     ck_assert_int_eq(diff, 0);
     ck_assert_msg(same > 0.3, "only %.1f%% of photons kept their values", same * 100);
-    coherence("per-frame", &diff, &same);
+    coherence("per-frame", "", &diff, &same);
     fprintf(stderr, "per-frame random: static frames differ in %zu buffers; %.1f%% of photons unchanged\n", diff,
             same * 100);
     ck_assert_int_eq(diff, 2);
@@ -618,7 +618,7 @@ END_TEST
 /* Stratified sampling across frames (002 §4.2) through the whole engine, bounce-map shader
  * included: with the box at rest (frames 2..5 at 0.5 fps) and a cycle of 2 frames, frames 2
  * and 4 (stratum 0) give bit-identical bounce maps, photon maps and indirect light, while
- * frame 3 (stratum 1) differs in all three. */
+ * frame 3 (stratum 1) differs in all three; the same with "bounce_strata" (issue 13). */
 static kept copy_named(const keeper *k, const char *a, const char *b)
 {
     const kept *x = find(k, a);
@@ -634,10 +634,10 @@ static int same_kept(const kept *a, const kept *b)
            memcmp(a->data, b->data, (size_t)a->w * a->h * a->n * sizeof(float)) == 0;
 }
 
-START_TEST(stratified_frames_repeat_each_cycle)
+static void stratified_cycle_repeats(const char *extra)
 {
     fixture f;
-    setup_cornell(&f, 32, 6, 0.5, "\"photon_count\":2048,\"random\":\"stratified\",\"stratified_cycle\":2");
+    setup_cornell(&f, 32, 6, 0.5, extra);
     static const char *const names[3][2] = {
         {"bounce.light0", "bounce.light0.face0"}, {"photons.map", "photons.map"}, {"indirect.radiance", "indirect.radiance"}};
     kept k[3][3];
@@ -656,7 +656,48 @@ START_TEST(stratified_frames_repeat_each_cycle)
             free(k[fr][b].data);
     teardown(&f);
 }
+
+START_TEST(stratified_frames_repeat_each_cycle)
+{
+    stratified_cycle_repeats("\"photon_count\":2048,\"random\":\"stratified\",\"stratified_cycle\":2");
+    /* with stratified first bounces within the frame too (issue 13): the rotation still applies */
+    stratified_cycle_repeats("\"photon_count\":2048,\"random\":\"stratified\",\"stratified_cycle\":2,"
+                             "\"bounce_strata\":4");
+}
 END_TEST
+
+/* Stratified first bounces (issue 13, "bounce_strata"): a texel's stratum depends only on the
+ * light, its block and the frame's salt, so static frames still repeat bit for bit and photons
+ * whose paths miss the moving box keep their values; the photon map is the same for 1 and 3
+ * threads; and it differs from the map without strata. */
+START_TEST(bounce_strata_keep_frame_coherence)
+{
+    size_t diff;
+    double same;
+    coherence("maps", ",\"bounce_strata\":8", &diff, &same);
+    fprintf(stderr, "bounce strata 8: static frames differ in %zu buffers; %.1f%% of photons unchanged when the box "
+                    "moves\n",
+            diff, same * 100);
+    ck_assert_int_eq(diff, 0);
+    ck_assert_msg(same > 0.3, "only %.1f%% of photons kept their values", same * 100);
+    kept map[3];
+    const char *const extra[3] = {"\"photon_count\":2048,\"bounce_strata\":8,\"threads\":1",
+                                  "\"photon_count\":2048,\"bounce_strata\":8,\"threads\":3",
+                                  "\"photon_count\":2048,\"threads\":1"};
+    for (int i = 0; i < 3; i++) {
+        fixture f;
+        setup_cornell(&f, 16, 1, 8, extra[i]);
+        render(&f, 0);
+        map[i] = copy_kept(find(&f.keep, "photons.map"));
+        teardown(&f);
+    }
+    ck_assert_msg(same_kept(&map[0], &map[1]), "bounce strata: 1 and 3 threads give different photon maps");
+    ck_assert_msg(!same_kept(&map[0], &map[2]), "bounce strata change nothing");
+    for (int i = 0; i < 3; i++)
+        free(map[i].data);
+}
+END_TEST
+
 
 /* Frame shards (issue 20): a history rebuilt from eng_set_history_start's frame. With
  * temporal_window 4, frame 5's state begins at frame 4, so a rebuild from frame 3 gives the
@@ -766,10 +807,10 @@ END_TEST
  * uses (bsdf_sample.glsl, the twin of bsdf.c): recompute, on the CPU with bsdf_scatter, the
  * Lambertian photons of the face looking down (−Y) and compare with what the shader stored:
  * same Russian-roulette decision, same outgoing direction, power factor and path density. */
-START_TEST(bounce_map_uses_the_random_maps_at_hashed_seeds)
+static void check_bounce_map(const char *extra, int log2n)
 {
     fixture f;
-    setup_cornell(&f, 16, 1, 8, "\"photon_count\":6144");
+    setup_cornell(&f, 16, 1, 8, extra);
     render(&f, 0);
     const kept *bm = find(&f.keep, "bounce.light0.face3");
     const kept *lp = find(&f.keep, "lightgbuffer.light0.face3.position");
@@ -796,6 +837,24 @@ START_TEST(bounce_map_uses_the_random_maps_at_hashed_seeds)
                 n[c] /= nl;
             uint32_t seed = rmap_hash_pixel(light, (uint32_t)x, (uint32_t)(size - 1 - row), 3, 0);
             bsdf_sample rnd = {rm.uniform + 4 * (seed & 65535u), rm.cosine + 4 * (seed & 65535u)};
+            float su[4], scd[4];
+            if (log2n > 0) { /* stratified within the frame: bsdf_strata, then the concentric map */
+                uint32_t index, pattern;
+                const float zero[4] = {0, 0, 0, 0};
+                eng_settings st;
+                memset(&st, 0, sizeof st);
+                st.bounce_strata = 1 << log2n;
+                st.random_seed = 1;
+                eng_rmap_frame rf;
+                rmap_frame(&st, 0, &rf);
+                ck_assert_int_eq(rf.strata_log2, log2n);
+                rmap_strata_texel(light, (uint32_t)x, (uint32_t)(size - 1 - row), 3, rf.strata_salt, log2n, &index,
+                                  &pattern);
+                bsdf_strata(rnd.u, index, (uint32_t)log2n, pattern, su);
+                bsdf_stratify(su, zero, su, scd);
+                rnd.u = su;
+                rnd.cosdir = scd;
+            }
             scn_material m;
             memset(&m, 0, sizeof m);
             memcpy(m.base_color, la->data + 3 * i, 3 * sizeof(float));
@@ -818,11 +877,25 @@ START_TEST(bounce_map_uses_the_random_maps_at_hashed_seeds)
             ck_assert_float_eq(b[7], 1.0f);
             checked++;
         }
-    fprintf(stderr, "bounce map: %d photons recomputed on the CPU, %d absorbed\n", checked, absorbed);
+    fprintf(stderr, "bounce map (strata 2^%d): %d photons recomputed on the CPU, %d absorbed\n", log2n, checked,
+            absorbed);
     ck_assert_int_gt(checked, 100);
     ck_assert_int_gt(absorbed, 10);
     rmap_destroy(&rm);
     teardown(&f);
+}
+
+START_TEST(bounce_map_uses_the_random_maps_at_hashed_seeds)
+{
+    check_bounce_map("\"photon_count\":6144", 0);
+}
+END_TEST
+
+/* "bounce_strata": 4 (issue 13): the same, with each 4×4 block of texels stratified by
+ * bsdf_strata at the block's hashed pattern (rmap_strata_texel) before the concentric map. */
+START_TEST(bounce_map_strata_match_the_cpu)
+{
+    check_bounce_map("\"photon_count\":6144,\"bounce_strata\":4", 2);
 }
 END_TEST
 
@@ -1065,8 +1138,10 @@ static Suite *engine_suite(void)
     tcase_set_timeout(ind, 600);
     tcase_add_test(ind, kernel_integrates_to_one_over_the_surface_plane);
     tcase_add_test(ind, bounce_map_uses_the_random_maps_at_hashed_seeds);
+    tcase_add_test(ind, bounce_map_strata_match_the_cpu);
     tcase_add_test(ind, photon_volumes_equal_a_cpu_gather);
     tcase_add_test(ind, random_maps_give_frame_coherence);
+    tcase_add_test(ind, bounce_strata_keep_frame_coherence);
     tcase_add_test(ind, stratified_frames_repeat_each_cycle);
     tcase_add_test(ind, history_start_and_temporal_window);
     tcase_add_test(ind, settings_change_what_they_should);

@@ -539,6 +539,13 @@ static const struct {
     {"{\"scene\":\"a.gltf\",\"frames\":8,\"fps\":24,\"resolution\":[8,8],\"camera\":{\"node\":\"C\"},"
      "\"settings\":{\"threads\":65}}",
      ENG_ERR_INVALID},
+    /* bounce_strata: a power of two, 1..64 */
+    {"{\"scene\":\"a.gltf\",\"frames\":8,\"fps\":24,\"resolution\":[8,8],\"camera\":{\"node\":\"C\"},"
+     "\"settings\":{\"bounce_strata\":3}}",
+     ENG_ERR_INVALID},
+    {"{\"scene\":\"a.gltf\",\"frames\":8,\"fps\":24,\"resolution\":[8,8],\"camera\":{\"node\":\"C\"},"
+     "\"settings\":{\"bounce_strata\":128}}",
+     ENG_ERR_INVALID},
     {"{\"scene\":\"a.gltf\",\"frames\":8,\"fps\":24,\"resolution\":[8,8],\"camera\":{\"node\":\"C\"},\"capture\":[]}",
      ENG_ERR_INVALID},
     {"{\"name\":\"../x\",\"scene\":\"a.gltf\",\"frames\":8,\"fps\":24,\"resolution\":[8,8],\"camera\":{\"node\":\"C\"}}",

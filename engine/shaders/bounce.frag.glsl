@@ -43,6 +43,8 @@ uniform float u_radius;          // light size: sphere radius (m) or tan of the 
 uniform uint u_salt;
 uniform int u_stratified;        // 1: rotate the random numbers by u_offset (bsdf_stratify)
 uniform vec4 u_offset;
+uniform int u_strata_log2;       // "bounce_strata" = 2^u_strata_log2; 0 = off (bsdf_strata)
+uniform uint u_strata_salt;      // eng_rmap_frame's strata_salt
 
 layout(location = 0) out vec4 o_power;     // Φ_o RGB, path density ρp
 layout(location = 1) out vec4 o_direction; // ω_o, index of refraction of the medium after the bounce
@@ -84,6 +86,7 @@ vec4 rmap(int table, uint seed, uint k)
 
 #pragma ispm_include "bsdf_constants.glsl"
 #pragma ispm_include "bsdf_sample.glsl"
+#pragma ispm_include "bsdf_strata.glsl"
 
 void main()
 {
@@ -127,8 +130,9 @@ void main()
     vec3 albedo = texelFetch(u_lalb, ivec3(px, u_layer), 0).rgb;
     vec4 mat = texelFetch(u_lmat, ivec3(px, u_layer), 0); // roughness, metallic, transmission, ior
     vec3 lp = u_light_position;
-    uint seed = xxh32_6(lp.x == 0.0 ? 0u : floatBitsToUint(lp.x), lp.y == 0.0 ? 0u : floatBitsToUint(lp.y),
-                        lp.z == 0.0 ? 0u : floatBitsToUint(lp.z), uint(px.x), uint(px.y), uint(u_layer), u_salt);
+    uint lx = lp.x == 0.0 ? 0u : floatBitsToUint(lp.x), ly = lp.y == 0.0 ? 0u : floatBitsToUint(lp.y);
+    uint lz = lp.z == 0.0 ? 0u : floatBitsToUint(lp.z);
+    uint seed = xxh32_6(lx, ly, lz, uint(px.x), uint(px.y), uint(u_layer), u_salt);
     vec4 u = rmap(0, seed, 0u);
     vec4 cosdir = rmap(1, seed, 0u);
     if (u_radius > 0.0) {
@@ -143,7 +147,13 @@ void main()
         vec3 off = u_radius * r * (cos(phi) * t + sin(phi) * b);
         wi = u_type == 2 ? normalize(wi + off) : normalize(u_light_position + off - x);
     }
-    if (u_stratified != 0)
+    if (u_strata_log2 > 0) {
+        uint k = uint(u_strata_log2), mask = (1u << k) - 1u;
+        uint index = ((uint(px.y) & mask) << k) + (uint(px.x) & mask);
+        uint pattern = xxh32_6(lx, ly, lz, uint(px.x) >> k, uint(px.y) >> k, uint(u_layer), u_strata_salt);
+        bsdf_strata(u, index, k, pattern, u);
+    }
+    if (u_stratified != 0 || u_strata_log2 > 0) // u_offset is zero unless stratified
         bsdf_stratify(u, u_offset, u, cosdir);
     // The photon arrives from the light through air.
     float eta = 1.0;

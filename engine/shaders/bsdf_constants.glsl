@@ -32,4 +32,12 @@
 #define BSDF_DENSITY_DIFFUSE 1000.0f
 #define BSDF_DENSITY_GLOSSY 10.0f
 
+// Stratified first bounces within one frame (`"bounce_strata"`, bsdf_strata): blocks of
+// 2^k × 2^k bounce-map texels, k = 1..BSDF_STRATA_MAX_LOG2; a block's permutations are seeded
+// by the texel hash of its block coordinates with this salt XORed into the frame's salt (and
+// random_seed·0x9e3779b9; rmap_frame), so that they do not repeat the random-map entry of the
+// texel with the same coordinates.
+#define BSDF_STRATA_MAX_LOG2 6
+#define BSDF_STRATA_SALT 0x5bd1e995u
+
 #endif

@@ -192,3 +192,4 @@ void bsdf_stratify(vec4 u, vec4 offset, out vec4 out_u, out vec4 out_cosdir)
     float z = sqrt(max(0.0, 1.0 - x * x - y * y));
     out_cosdir = vec4(x, y, z, z / BSDF_PI);
 }
+
