@@ -114,7 +114,8 @@ eng_result cap_finish(cap_capture *c, eng_error *err);
 void cap_destroy(cap_capture *c); /* accepts NULL */
 
 /* Writes one multi-part scanline EXR: part i is bufs[i], named bufs[i]->name, with its
- * channels as FLOAT, ZIP-compressed (lossless), data window (0,0)-(w-1,h-1), row 0 = top
+ * channels as FLOAT, ZIP-compressed (lossless; frame files follow capture_compression),
+ * data window (0,0)-(w-1,h-1), row 0 = top
  * (INCREASING_Y). The display window, which the format requires to be the same in every
  * part, is (0,0)-(W-1,H-1) with W, H the largest width and height among the buffers. count >= 1, names unique, 1..ENG_MAX_CHANNELS distinct non-empty channel
  * names per buffer, width and height > 0; otherwise ENG_ERR_INVALID and nothing is written.
@@ -123,6 +124,19 @@ void cap_destroy(cap_capture *c); /* accepts NULL */
  * the folder for that. A one-part file is a plain single-part EXR that still carries the
  * part name. */
 eng_result cap_write_exr(const char *path, const eng_buffer *const *bufs, int count, eng_error *err);
+
+/* The EXR file src written again as dst with every part compressed with m (lossless: none,
+ * rle, zips, zip, piz; DEFAULT is rle): the same parts in the same order, every attribute
+ * copied (ispm:frame, ispm:time, windows, channels and their types), the pixels decoded and
+ * encoded again in their own type, so dst decodes to src's bits. Used by ispm bless, which
+ * keeps goldens in zip whatever the run was recorded with. Atomic as cap_write_exr (dst.tmp,
+ * fsync, rename; the rename not made durable), and verified before the rename: dst.tmp is
+ * decoded again and must hold src's parts bit for bit in the new compression (else
+ * ENG_ERR_IO). When every part of src already has that compression nothing is written and
+ * *rewritten is 0 (copy the file instead); else *rewritten is 1 on success. Tiled, deep or subsampled parts are ENG_ERR_INVALID; an
+ * unreadable src or a failed write ENG_ERR_IO; the message names the file. */
+eng_result cap_recompress_exr(const char *src, const char *dst, eng_capture_compression m, int *rewritten,
+                              eng_error *err);
 
 #ifdef __cplusplus
 }

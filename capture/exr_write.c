@@ -6,13 +6,19 @@
  * descriptor can be fsynced before the rename that publishes the file; the errno of a
  * failing write (ENOSPC, EFBIG, EIO) is kept, so the message says what went wrong instead
  * of the library's generic "write failed"; and the library's error callback is captured
- * instead of printed, so a failure is reported once, through eng_error. Pixels are float32
- * in and float32 out (FLOAT channels, ZIP or the lossless compression the meta names), so what is written is bit-exact what was
- * announced, NaN payloads and -0.0 included, and replay's digests match capture's.
+ * instead of printed, so a failure is reported once, through eng_error. The library's many
+ * small writes are coalesced in a write-behind buffer (issue 22). Pixels are float32 in and
+ * float32 out (FLOAT channels, the lossless compression capture_compression names: rle by
+ * default, ZIP for cap_write_exr), so what is written is bit-exact what was announced, NaN
+ * payloads and -0.0 included, and replay's digests match capture's.
  *
  * Parts are scanline images with INCREASING_Y line order: file row 0 is the top row, which
  * is the announced layout, so rows are handed to the encoder as they are, interleaved
- * channels described by pixel and line strides. */
+ * channels described by pixel and line strides.
+ *
+ * cap_recompress_exr (ispm bless: goldens in ZIP) reads a file through the same C API, each
+ * part decoded into planes of its channels' own types, and writes it again with every
+ * attribute copied and another compression, then decodes its result to compare. */
 #define _POSIX_C_SOURCE 200809L
 
 #include "cap_internal.h"
@@ -31,19 +37,28 @@
 /* Names longer than this need the EXR "long names" flag (older readers refuse those). */
 #define EXR_SHORT_NAME_MAX 31
 
-/* The output stream: a file descriptor plus the first failure seen on it. */
+/* The library's writes coalesced into runs of this many bytes at most (issue 22): it writes
+ * the header attribute by attribute and each chunk as a few small pieces, over 11,000
+ * pwrite calls for one 43-part frame with one-scanline chunks (none, rle, zips). */
+#define SINK_BUFFER (256 * 1024)
+
+/* The output stream: a file descriptor, a write-behind buffer, and the first failure seen on
+ * it. The buffer holds bytes for offsets [buf_off, buf_off + buf_len); a write that does not
+ * continue it flushes it first, so the file receives the library's writes in their order
+ * (a later write over an earlier one, such as the chunk table, still wins). */
 typedef struct exr_sink {
     int fd;
     int write_errno;        /* errno of the first failed pwrite, 0 if none */
     exr_result_t lib_code;  /* first error the library reported through the callback */
     char lib_msg[512];
+    char *buf;              /* SINK_BUFFER bytes */
+    size_t buf_len;
+    uint64_t buf_off;
 } exr_sink;
 
-static int64_t sink_write(exr_const_context_t ctxt, void *user, const void *buffer, uint64_t sz,
-                          uint64_t offset, exr_stream_error_func_ptr_t error_cb)
+/* pwrite of all n bytes at offset; 0, or the errno (kept as the sink's first). */
+static int sink_pwrite(exr_sink *s, const char *p, uint64_t sz, uint64_t offset)
 {
-    exr_sink *s = user;
-    const char *p = buffer;
     uint64_t done = 0;
     while (done < sz) {
         size_t n = sz - done > ((uint64_t)1 << 30) ? (size_t)1 << 30 : (size_t)(sz - done);
@@ -56,10 +71,39 @@ static int64_t sink_write(exr_const_context_t ctxt, void *user, const void *buff
             int e = w < 0 ? errno : ENOSPC;
             if (!s->write_errno)
                 s->write_errno = e;
-            error_cb(ctxt, EXR_ERR_WRITE_IO, "%s", strerror(e));
-            return -1;
+            return e;
         }
         done += (uint64_t)w;
+    }
+    return 0;
+}
+
+/* Writes out what the buffer holds; 0 or the errno. */
+static int sink_flush(exr_sink *s)
+{
+    int e = s->buf_len ? sink_pwrite(s, s->buf, s->buf_len, s->buf_off) : 0;
+    s->buf_len = 0;
+    return e;
+}
+
+static int64_t sink_write(exr_const_context_t ctxt, void *user, const void *buffer, uint64_t sz,
+                          uint64_t offset, exr_stream_error_func_ptr_t error_cb)
+{
+    exr_sink *s = user;
+    int e = 0;
+    if (s->buf_len && (offset != s->buf_off + s->buf_len || sz > SINK_BUFFER - s->buf_len))
+        e = sink_flush(s);
+    if (!e && sz >= SINK_BUFFER)
+        e = sink_pwrite(s, buffer, sz, offset);
+    else if (!e && sz) {
+        if (!s->buf_len)
+            s->buf_off = offset;
+        memcpy(s->buf + s->buf_len, buffer, (size_t)sz);
+        s->buf_len += (size_t)sz;
+    }
+    if (e) {
+        error_cb(ctxt, EXR_ERR_WRITE_IO, "%s", strerror(e));
+        return -1;
     }
     return (int64_t)sz;
 }
@@ -116,14 +160,6 @@ eng_result cap__check_buffer(const char *where, const eng_buffer *b, eng_error *
     return ENG_OK;
 }
 
-static int channel_index(const eng_buffer *b, const char *name)
-{
-    for (int i = 0; i < b->channel_count; i++)
-        if (strcmp(b->channels[i], name) == 0)
-            return i;
-    return -1;
-}
-
 /* The library's compressor for the chunk being encoded on this thread (see zip_safe_compress). */
 static _Thread_local exr_result_t (*library_compress)(exr_encode_pipeline_t *);
 
@@ -142,8 +178,41 @@ static exr_result_t zip_safe_compress(exr_encode_pipeline_t *enc)
     return rv;
 }
 
-/* Encodes every scanline chunk of one part, top to bottom. */
-static exr_result_t write_part_pixels(exr_context_t ctxt, int part, const eng_buffer *b)
+/* Where the encoder takes one channel's pixels from: the sample of row y, column x is at
+ * base + (y - y0) * line_stride + x * pixel_stride (x from the data window's left edge), in
+ * the channel's own type. */
+typedef struct exr_plane {
+    const char *name;
+    const uint8_t *base;
+    int32_t pixel_stride, line_stride;
+    int16_t bytes; /* 2 (HALF) or 4 */
+    uint16_t type; /* exr_pixel_type_t */
+} exr_plane;
+
+/* Points a coding channel at its plane (found by name among planes[0..n-1]) for the chunk
+ * starting at row start_y: sets the user layout and returns where the chunk's first sample is,
+ * or NULL if no plane has that name (the library lists exactly the channels defined, so only a
+ * file disagreeing with itself). */
+static const uint8_t *bind_plane(exr_coding_channel_info_t *ch, const exr_plane *planes, int n, int y0,
+                                 int start_y)
+{
+    const exr_plane *pl = NULL;
+    for (int i = 0; i < n && !pl; i++)
+        if (strcmp(planes[i].name, ch->channel_name) == 0)
+            pl = &planes[i];
+    if (!pl)
+        return NULL;
+    ch->user_bytes_per_element = pl->bytes;
+    ch->user_data_type = pl->type;
+    ch->user_pixel_stride = pl->pixel_stride;
+    ch->user_line_stride = pl->line_stride;
+    return pl->base + (size_t)(start_y - y0) * (size_t)pl->line_stride;
+}
+
+/* Encodes every scanline chunk of one part, top (row y0) to bottom, from planes[0..n-1],
+ * found by channel name. */
+static exr_result_t write_part_pixels(exr_context_t ctxt, int part, int y0, int height, const exr_plane *planes,
+                                      int n)
 {
     int32_t lines = 0;
     exr_result_t rv = exr_get_scanlines_per_chunk(ctxt, part, &lines);
@@ -151,11 +220,9 @@ static exr_result_t write_part_pixels(exr_context_t ctxt, int part, const eng_bu
         return rv;
     if (lines < 1)
         return EXR_ERR_INVALID_ARGUMENT;
-    size_t nc = (size_t)b->channel_count;
-    size_t row = (size_t)b->width * nc; /* floats per row */
     exr_encode_pipeline_t enc = EXR_ENCODE_PIPELINE_INITIALIZER;
     int initialized = 0, routines = 0;
-    for (int y = 0; y < b->height && rv == EXR_ERR_SUCCESS; y += lines) {
+    for (int y = y0; y - y0 < height && rv == EXR_ERR_SUCCESS; y += lines) {
         exr_chunk_info_t ci;
         rv = exr_write_scanline_chunk_info(ctxt, part, y, &ci);
         if (rv != EXR_ERR_SUCCESS)
@@ -165,18 +232,10 @@ static exr_result_t write_part_pixels(exr_context_t ctxt, int part, const eng_bu
         if (rv != EXR_ERR_SUCCESS)
             break;
         initialized = 1;
-        for (int k = 0; k < enc.channel_count; k++) {
-            exr_coding_channel_info_t *ch = &enc.channels[k];
-            int src = channel_index(b, ch->channel_name);
-            if (src < 0) { /* the library lists exactly the channels added: cannot happen */
+        for (int k = 0; k < enc.channel_count && rv == EXR_ERR_SUCCESS; k++) {
+            enc.channels[k].encode_from_ptr = bind_plane(&enc.channels[k], planes, n, y0, ci.start_y);
+            if (!enc.channels[k].encode_from_ptr)
                 rv = EXR_ERR_INVALID_ARGUMENT;
-                break;
-            }
-            ch->user_bytes_per_element = (int16_t)sizeof(float);
-            ch->user_data_type = EXR_PIXEL_FLOAT;
-            ch->user_pixel_stride = (int32_t)(nc * sizeof(float));
-            ch->user_line_stride = (int32_t)(row * sizeof(float));
-            ch->encode_from_ptr = (const uint8_t *)(b->data + (size_t)ci.start_y * row + (size_t)src);
         }
         if (rv != EXR_ERR_SUCCESS)
             break;
@@ -197,22 +256,43 @@ static exr_result_t write_part_pixels(exr_context_t ctxt, int part, const eng_bu
     return rv;
 }
 
-static exr_compression_t exr_compression(const cap_exr_meta *meta)
+/* An announced buffer's pixels as planes (interleaved float32 channels, top row first). */
+static exr_result_t write_buffer_pixels(exr_context_t ctxt, int part, const eng_buffer *b)
 {
-    switch (meta ? meta->compression : ENG_COMPRESSION_DEFAULT) {
-    case ENG_COMPRESSION_NONE: return EXR_COMPRESSION_NONE;
-    case ENG_COMPRESSION_RLE: return EXR_COMPRESSION_RLE;
-    case ENG_COMPRESSION_ZIPS: return EXR_COMPRESSION_ZIPS;
-    case ENG_COMPRESSION_PIZ: return EXR_COMPRESSION_PIZ;
-    case ENG_COMPRESSION_ZIP:
-    case ENG_COMPRESSION_DEFAULT: break;
-    }
-    return EXR_COMPRESSION_ZIP;
+    exr_plane planes[ENG_MAX_CHANNELS];
+    size_t nc = (size_t)b->channel_count;
+    for (size_t c = 0; c < nc; c++)
+        planes[c] = (exr_plane){b->channels[c], (const uint8_t *)(b->data + c), (int32_t)(nc * sizeof(float)),
+                                (int32_t)((size_t)b->width * nc * sizeof(float)), (int16_t)sizeof(float),
+                                EXR_PIXEL_FLOAT};
+    return write_part_pixels(ctxt, part, 0, b->height, planes, (int)nc);
 }
 
-/* Defines the parts, writes the header and every part's pixels into the sink. */
-static exr_result_t write_exr_stream(exr_sink *s, const char *path, const eng_buffer *const *bufs,
-                                     int count, const cap_exr_meta *meta)
+static exr_compression_t exr_type(eng_capture_compression m)
+{
+    switch (m) {
+    case ENG_COMPRESSION_NONE: return EXR_COMPRESSION_NONE;
+    case ENG_COMPRESSION_ZIPS: return EXR_COMPRESSION_ZIPS;
+    case ENG_COMPRESSION_ZIP: return EXR_COMPRESSION_ZIP;
+    case ENG_COMPRESSION_PIZ: return EXR_COMPRESSION_PIZ;
+    case ENG_COMPRESSION_RLE:
+    case ENG_COMPRESSION_DEFAULT: break;
+    }
+    return EXR_COMPRESSION_RLE;
+}
+
+/* cap_write_exr (no meta) keeps its documented ZIP; frame files follow the setting. */
+static exr_compression_t exr_compression(const cap_exr_meta *meta)
+{
+    return meta ? exr_type(meta->compression) : EXR_COMPRESSION_ZIP;
+}
+
+/* What one file holds: defines the parts in ctxt (a context started for writing), writes
+ * the header and every part's pixels. */
+typedef exr_result_t (*exr_fill_fn)(exr_context_t ctxt, void *arg);
+
+/* A write context over the sink, filled by fill, then finished. */
+static exr_result_t write_exr_stream(exr_sink *s, const char *path, exr_fill_fn fill, void *arg)
 {
     exr_context_initializer_t init = EXR_DEFAULT_CONTEXT_INITIALIZER;
     init.error_handler_fn = on_exr_error;
@@ -220,11 +300,27 @@ static exr_result_t write_exr_stream(exr_sink *s, const char *path, const eng_bu
     init.write_fn = sink_write;
     exr_context_t ctxt = NULL;
     exr_result_t rv = exr_start_write(&ctxt, path, EXR_WRITE_FILE_DIRECTLY, &init);
-    if (rv != EXR_ERR_SUCCESS) {
-        if (ctxt)
-            exr_finish(&ctxt);
-        return rv;
-    }
+    if (rv == EXR_ERR_SUCCESS)
+        rv = fill(ctxt, arg);
+    /* exr_finish writes the chunk offset tables, so its result matters on success. */
+    exr_result_t frv = ctxt ? exr_finish(&ctxt) : EXR_ERR_SUCCESS;
+    return rv != EXR_ERR_SUCCESS ? rv : frv;
+}
+
+/* The buffers of cap__write_exr. */
+typedef struct exr_frame {
+    const eng_buffer *const *bufs;
+    int count;
+    const cap_exr_meta *meta;
+} exr_frame;
+
+static exr_result_t fill_frame(exr_context_t ctxt, void *arg)
+{
+    const exr_frame *f = arg;
+    const eng_buffer *const *bufs = f->bufs;
+    int count = f->count;
+    const cap_exr_meta *meta = f->meta;
+    exr_result_t rv = EXR_ERR_SUCCESS;
     int long_names = 0;
     for (int i = 0; i < count; i++)
         for (int c = 0; c < bufs[i]->channel_count; c++)
@@ -270,10 +366,57 @@ static exr_result_t write_exr_stream(exr_sink *s, const char *path, const eng_bu
     if (rv == EXR_ERR_SUCCESS)
         rv = exr_write_header(ctxt);
     for (int i = 0; i < count && rv == EXR_ERR_SUCCESS; i++)
-        rv = write_part_pixels(ctxt, i, bufs[i]);
-    /* exr_finish writes the chunk offset tables, so its result matters on success. */
-    exr_result_t frv = exr_finish(&ctxt);
-    return rv != EXR_ERR_SUCCESS ? rv : frv;
+        rv = write_buffer_pixels(ctxt, i, bufs[i]);
+    return rv;
+}
+
+/* Checks the written temp file before it is renamed into place (NULL: none). */
+typedef eng_result (*exr_check_fn)(const char *tmp, void *arg, eng_error *err);
+
+/* Writes path atomically: "<path>.tmp" filled through the sink, flushed, fsynced, closed,
+ * checked and renamed over path; on any failure the temp file is removed and path left as it
+ * was. */
+static eng_result write_atomic(const char *path, exr_fill_fn fill, exr_check_fn check, void *arg, eng_error *err)
+{
+    char *tmp = cap__xmalloc(strlen(path) + 5);
+    sprintf(tmp, "%s.tmp", path);
+    eng_result res = ENG_OK;
+    exr_sink s = {.fd = open(tmp, O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0666)};
+    if (s.fd < 0) {
+        res = eng_fail(err, ENG_ERR_IO, "%s: cannot create: %s", tmp, strerror(errno));
+        free(tmp);
+        return res;
+    }
+
+    s.buf = cap__xmalloc(SINK_BUFFER);
+    exr_sink *outer = current_sink;
+    current_sink = &s;
+    exr_result_t rv = write_exr_stream(&s, path, fill, arg);
+    current_sink = outer;
+    if (rv == EXR_ERR_SUCCESS)
+        sink_flush(&s); /* a failure is s.write_errno */
+    free(s.buf);
+    if (s.write_errno)
+        res = eng_fail(err, ENG_ERR_IO, "%s: %s", path, strerror(s.write_errno));
+    else if (rv == EXR_ERR_OUT_OF_MEMORY)
+        res = eng_fail(err, ENG_ERR_NOMEM, "%s: OpenEXR: out of memory", path);
+    else if (rv != EXR_ERR_SUCCESS)
+        res = eng_fail(err, ENG_ERR_IO, "%s: OpenEXR: %s", path,
+                       s.lib_code != EXR_ERR_SUCCESS ? s.lib_msg : exr_get_default_error_message(rv));
+    else if (fsync(s.fd) != 0)
+        res = eng_fail(err, ENG_ERR_IO, "%s: cannot sync: %s", path, strerror(errno));
+
+    /* close() can be where a deferred write error (NFS, quota) finally shows. */
+    if (close(s.fd) != 0 && res == ENG_OK)
+        res = eng_fail(err, ENG_ERR_IO, "%s: %s", path, strerror(errno));
+    if (res == ENG_OK && check)
+        res = check(tmp, arg, err);
+    if (res == ENG_OK && rename(tmp, path) != 0)
+        res = eng_fail(err, ENG_ERR_IO, "%s: cannot rename %s into place: %s", path, tmp, strerror(errno));
+    if (res != ENG_OK)
+        unlink(tmp);
+    free(tmp);
+    return res;
 }
 
 eng_result cap__write_exr(const char *path, const eng_buffer *const *bufs, int count,
@@ -293,41 +436,244 @@ eng_result cap__write_exr(const char *path, const eng_buffer *const *bufs, int c
                                 bufs[i]->name);
     }
 
-    char *tmp = cap__xmalloc(strlen(path) + 5);
-    sprintf(tmp, "%s.tmp", path);
-    eng_result res = ENG_OK;
-    exr_sink s = {.fd = open(tmp, O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0666)};
-    if (s.fd < 0) {
-        res = eng_fail(err, ENG_ERR_IO, "%s: cannot create: %s", tmp, strerror(errno));
-        free(tmp);
-        return res;
-    }
-
-    current_sink = &s;
-    exr_result_t rv = write_exr_stream(&s, path, bufs, count, meta);
-    current_sink = NULL;
-    if (s.write_errno)
-        res = eng_fail(err, ENG_ERR_IO, "%s: %s", path, strerror(s.write_errno));
-    else if (rv == EXR_ERR_OUT_OF_MEMORY)
-        res = eng_fail(err, ENG_ERR_NOMEM, "%s: OpenEXR: out of memory", path);
-    else if (rv != EXR_ERR_SUCCESS)
-        res = eng_fail(err, ENG_ERR_IO, "%s: OpenEXR: %s", path,
-                       s.lib_code != EXR_ERR_SUCCESS ? s.lib_msg : exr_get_default_error_message(rv));
-    else if (fsync(s.fd) != 0)
-        res = eng_fail(err, ENG_ERR_IO, "%s: cannot sync: %s", path, strerror(errno));
-
-    /* close() can be where a deferred write error (NFS, quota) finally shows. */
-    if (close(s.fd) != 0 && res == ENG_OK)
-        res = eng_fail(err, ENG_ERR_IO, "%s: %s", path, strerror(errno));
-    if (res == ENG_OK && rename(tmp, path) != 0)
-        res = eng_fail(err, ENG_ERR_IO, "%s: cannot rename %s into place: %s", path, tmp, strerror(errno));
-    if (res != ENG_OK)
-        unlink(tmp);
-    free(tmp);
-    return res;
+    exr_frame f = {bufs, count, meta};
+    return write_atomic(path, fill_frame, NULL, &f, err);
 }
 
 eng_result cap_write_exr(const char *path, const eng_buffer *const *bufs, int count, eng_error *err)
 {
     return cap__write_exr(path, bufs, count, NULL, err);
+}
+
+/* ---------------------------------------------------------------- recompression */
+
+/* One part of the file being recompressed, decoded: its channels as planes in their own type. */
+typedef struct exr_part_pixels {
+    int y0, height, count;
+    exr_plane planes[ENG_MAX_CHANNELS];
+    uint8_t *data; /* every plane, one after the other */
+} exr_part_pixels;
+
+typedef struct exr_recode {
+    exr_context_t in;
+    int count;
+    exr_part_pixels *parts;
+    exr_compression_t comp;
+    int long_names;
+} exr_recode;
+
+/* Largest part recompressed, in bytes (as replay's REP_MAX_FLOATS floats): a lying header must
+ * not exhaust memory. */
+#define RECODE_MAX_BYTES ((size_t)1 << 30)
+
+static int16_t pixel_bytes(exr_pixel_type_t t)
+{
+    return t == EXR_PIXEL_HALF ? 2 : 4;
+}
+
+/* Decodes part p of r->in into r->parts[p]; why gets the reason a part cannot be recompressed
+ * (EXR_ERR_INVALID_ARGUMENT with why set), else the library's error. */
+static exr_result_t read_part(exr_recode *r, int p, char *why, size_t why_size)
+{
+    exr_part_pixels *pp = &r->parts[p];
+    exr_storage_t storage;
+    const exr_attr_chlist_t *chl = NULL;
+    exr_attr_box2i_t dw;
+    int32_t lines = 0;
+    exr_result_t rv = exr_get_storage(r->in, p, &storage);
+    if (rv == EXR_ERR_SUCCESS && storage != EXR_STORAGE_SCANLINE) {
+        snprintf(why, why_size, "part %d is not a scanline image (tiled or deep): not recompressed", p);
+        return EXR_ERR_INVALID_ARGUMENT;
+    }
+    if (rv == EXR_ERR_SUCCESS)
+        rv = exr_get_channels(r->in, p, &chl);
+    if (rv == EXR_ERR_SUCCESS)
+        rv = exr_get_data_window(r->in, p, &dw);
+    if (rv == EXR_ERR_SUCCESS)
+        rv = exr_get_scanlines_per_chunk(r->in, p, &lines);
+    if (rv != EXR_ERR_SUCCESS)
+        return rv;
+    int64_t w = (int64_t)dw.max.x - dw.min.x + 1, h = (int64_t)dw.max.y - dw.min.y + 1;
+    if (chl->num_channels < 1 || chl->num_channels > ENG_MAX_CHANNELS || w < 1 || h < 1 || lines < 1 ||
+        (size_t)w * (size_t)h > RECODE_MAX_BYTES / 4 / (size_t)chl->num_channels) {
+        snprintf(why, why_size, "part %d: %d channels over %lldx%lld pixels: not recompressed", p,
+                 chl->num_channels, (long long)w, (long long)h);
+        return EXR_ERR_INVALID_ARGUMENT;
+    }
+    for (int c = 0; c < chl->num_channels; c++) {
+        const exr_attr_chlist_entry_t *e = &chl->entries[c];
+        if (e->x_sampling != 1 || e->y_sampling != 1) {
+            snprintf(why, why_size, "part %d: channel \"%s\" is subsampled: not recompressed", p, e->name.str);
+            return EXR_ERR_INVALID_ARGUMENT;
+        }
+        if (e->name.length > EXR_SHORT_NAME_MAX)
+            r->long_names = 1;
+    }
+    pp->y0 = dw.min.y;
+    pp->height = (int)h;
+    pp->count = chl->num_channels;
+    pp->data = cap__xmalloc((size_t)w * (size_t)h * 4 * (size_t)pp->count);
+    size_t offset = 0;
+    for (int c = 0; c < pp->count; c++) {
+        const exr_attr_chlist_entry_t *e = &chl->entries[c];
+        int16_t bytes = pixel_bytes(e->pixel_type);
+        pp->planes[c] = (exr_plane){e->name.str, pp->data + offset, bytes, (int32_t)(w * bytes), bytes,
+                                    (uint16_t)e->pixel_type};
+        offset += (size_t)w * (size_t)h * (size_t)bytes;
+    }
+
+    exr_decode_pipeline_t dec = EXR_DECODE_PIPELINE_INITIALIZER;
+    int initialized = 0, routines = 0;
+    for (int64_t y = dw.min.y; y <= dw.max.y && rv == EXR_ERR_SUCCESS; y += lines) {
+        exr_chunk_info_t ci;
+        rv = exr_read_scanline_chunk_info(r->in, p, (int)y, &ci);
+        if (rv != EXR_ERR_SUCCESS)
+            break;
+        rv = initialized ? exr_decoding_update(r->in, p, &ci, &dec) : exr_decoding_initialize(r->in, p, &ci, &dec);
+        if (rv != EXR_ERR_SUCCESS)
+            break;
+        initialized = 1;
+        for (int k = 0; k < dec.channel_count && rv == EXR_ERR_SUCCESS; k++) {
+            /* The planes are pp->data, which is ours to write. */
+            const uint8_t *to = bind_plane(&dec.channels[k], pp->planes, pp->count, pp->y0, ci.start_y);
+            dec.channels[k].decode_to_ptr = (uint8_t *)(uintptr_t)to;
+            if (!to)
+                rv = EXR_ERR_INVALID_ARGUMENT;
+        }
+        if (rv == EXR_ERR_SUCCESS && !routines) {
+            rv = exr_decoding_choose_default_routines(r->in, p, &dec);
+            routines = 1;
+        }
+        if (rv == EXR_ERR_SUCCESS)
+            rv = exr_decoding_run(r->in, p, &dec);
+    }
+    if (initialized)
+        exr_decoding_destroy(r->in, &dec);
+    return rv;
+}
+
+/* The parts of r->in again, every attribute copied, compression r->comp, pixels from r->parts. */
+static exr_result_t fill_recode(exr_context_t ctxt, void *arg)
+{
+    exr_recode *r = arg;
+    exr_result_t rv = EXR_ERR_SUCCESS;
+    for (int p = 0; p < r->count && rv == EXR_ERR_SUCCESS; p++) {
+        int32_t n = 0;
+        rv = exr_get_attribute_count(r->in, p, &n);
+        for (int32_t i = 0; i < n && rv == EXR_ERR_SUCCESS; i++) {
+            const exr_attribute_t *a = NULL;
+            rv = exr_get_attribute_by_index(r->in, p, EXR_ATTR_LIST_FILE_ORDER, i, &a);
+            if (rv == EXR_ERR_SUCCESS && (strlen(a->name) > EXR_SHORT_NAME_MAX || strlen(a->type_name) > EXR_SHORT_NAME_MAX))
+                r->long_names = 1;
+        }
+    }
+    if (rv == EXR_ERR_SUCCESS && r->long_names)
+        rv = exr_set_longname_support(ctxt, 1);
+    for (int p = 0; p < r->count && rv == EXR_ERR_SUCCESS; p++) {
+        const char *name = NULL;
+        int part = -1;
+        rv = exr_get_name(r->in, p, &name);
+        if (rv == EXR_ERR_SUCCESS)
+            rv = exr_add_part(ctxt, name, EXR_STORAGE_SCANLINE, &part);
+        /* Every attribute as it was (chunkCount, which depends on the compression, is set
+         * again by exr_write_header), then the new compression over the copied one. */
+        if (rv == EXR_ERR_SUCCESS)
+            rv = exr_copy_unset_attributes(ctxt, part, r->in, p);
+        if (rv == EXR_ERR_SUCCESS)
+            rv = exr_set_compression(ctxt, part, r->comp);
+    }
+    if (rv == EXR_ERR_SUCCESS)
+        rv = exr_write_header(ctxt);
+    for (int p = 0; p < r->count && rv == EXR_ERR_SUCCESS; p++)
+        rv = write_part_pixels(ctxt, p, r->parts[p].y0, r->parts[p].height, r->parts[p].planes, r->parts[p].count);
+    return rv;
+}
+
+/* Opens path into r (r->in, r->count) and decodes every part into r->parts, unless skip_same
+ * and every part already has r->comp (*same then 1, nothing decoded). */
+static eng_result load_exr(const char *path, exr_recode *r, int skip_same, int *same, eng_error *err)
+{
+    exr_sink rs = {.fd = -1}; /* only for the reader's messages */
+    exr_sink *outer = current_sink;
+    current_sink = &rs;
+    exr_context_initializer_t init = EXR_DEFAULT_CONTEXT_INITIALIZER;
+    init.error_handler_fn = on_exr_error;
+    exr_result_t rv = exr_start_read(&r->in, path, &init);
+    if (rv == EXR_ERR_SUCCESS)
+        rv = exr_get_count(r->in, &r->count);
+    *same = rv == EXR_ERR_SUCCESS;
+    for (int p = 0; p < r->count && rv == EXR_ERR_SUCCESS; p++) {
+        exr_compression_t c;
+        rv = exr_get_compression(r->in, p, &c);
+        *same = *same && rv == EXR_ERR_SUCCESS && c == r->comp;
+    }
+    char why[300] = "";
+    if (rv == EXR_ERR_SUCCESS && !(skip_same && *same)) {
+        r->parts = cap__xcalloc((size_t)r->count, sizeof *r->parts);
+        for (int p = 0; p < r->count && rv == EXR_ERR_SUCCESS; p++)
+            rv = read_part(r, p, why, sizeof why);
+    }
+    current_sink = outer;
+    if (why[0])
+        return eng_fail(err, ENG_ERR_INVALID, "%s: %s", path, why);
+    if (rv == EXR_ERR_OUT_OF_MEMORY)
+        return eng_fail(err, ENG_ERR_NOMEM, "%s: OpenEXR: out of memory", path);
+    if (rv != EXR_ERR_SUCCESS)
+        return eng_fail(err, ENG_ERR_IO, "%s: OpenEXR: %s", path,
+                        rs.lib_code != EXR_ERR_SUCCESS ? rs.lib_msg : exr_get_default_error_message(rv));
+    return ENG_OK;
+}
+
+static void free_recode(exr_recode *r)
+{
+    for (int p = 0; r->parts && p < r->count; p++)
+        free(r->parts[p].data);
+    free(r->parts);
+    if (r->in)
+        exr_finish(&r->in);
+}
+
+/* The recompressed file, before it is renamed into place: decoded again, it holds the source's
+ * parts in the new compression, every channel the same type and bytes. */
+static eng_result check_recode(const char *tmp, void *arg, eng_error *err)
+{
+    const exr_recode *r = arg;
+    exr_recode back = {.comp = r->comp};
+    int same = 0;
+    eng_result res = load_exr(tmp, &back, 0, &same, err);
+    int bad = res == ENG_OK && (!same || back.count != r->count) ? 0 : -1;
+    for (int p = 0; res == ENG_OK && bad < 0 && p < r->count; p++) {
+        const exr_part_pixels *a = &r->parts[p], *b = &back.parts[p];
+        int ok = a->y0 == b->y0 && a->height == b->height && a->count == b->count;
+        for (int c = 0; ok && c < a->count; c++) {
+            const exr_plane *x = &a->planes[c], *y = &b->planes[c];
+            ok = strcmp(x->name, y->name) == 0 && x->type == y->type && x->line_stride == y->line_stride &&
+                 memcmp(x->base, y->base, (size_t)x->line_stride * (size_t)a->height) == 0;
+        }
+        if (!ok)
+            bad = p;
+    }
+    if (bad >= 0)
+        res = eng_fail(err, ENG_ERR_IO, "%s: the file written does not decode to the source's pixels (part %d)", tmp, bad);
+    free_recode(&back);
+    return res;
+}
+
+eng_result cap_recompress_exr(const char *src, const char *dst, eng_capture_compression m, int *rewritten,
+                              eng_error *err)
+{
+    if (rewritten)
+        *rewritten = 0;
+    if (!src || !src[0] || !dst || !dst[0])
+        return eng_fail(err, ENG_ERR_INVALID, "cap_recompress_exr: no path");
+    exr_recode r = {.comp = exr_type(m)};
+    int same = 0;
+    eng_result res = load_exr(src, &r, 1, &same, err);
+    if (res == ENG_OK && !same) {
+        res = write_atomic(dst, fill_recode, check_recode, &r, err);
+        if (res == ENG_OK && rewritten)
+            *rewritten = 1;
+    }
+    free_recode(&r);
+    return res;
 }

@@ -184,10 +184,10 @@ void eng_settings_defaults(eng_settings *s)
     if (s->multi_image_miss == ENG_MISS_DEFAULT) s->multi_image_miss = ENG_MISS_EMBREE;
     if (s->specular == ENG_SPECULAR_DEFAULT) s->specular = ENG_SPECULAR_TRACED;
     if (s->specular_depth == 0) s->specular_depth = 4;
-    if (s->capture_compression == ENG_COMPRESSION_DEFAULT) s->capture_compression = ENG_COMPRESSION_ZIP;
+    if (s->capture_compression == ENG_COMPRESSION_DEFAULT) s->capture_compression = ENG_COMPRESSION_RLE;
 }
 
-static const char *const COMPRESSION_NAMES[] = {"zip", "none", "rle", "zips", "zip", "piz"};
+static const char *const COMPRESSION_NAMES[] = {"rle", "none", "rle", "zips", "zip", "piz"};
 
 const char *eng_compression_name(eng_capture_compression m)
 {

@@ -9,6 +9,15 @@
  * or the new one, never a mixture. Only manifest.json and the frame files are copied: a
  * replay/ report folder inside the run is not part of a golden.
  *
+ * Goldens are committed, so their frame files are ZIP whatever the run was recorded with
+ * (record writes rle by default, issue 22: 3-6x cheaper to encode, 47 % larger): a frame file
+ * that is not ZIP throughout is recompressed part by part through OpenEXR (cap_recompress_exr:
+ * every attribute and every bit kept), the golden's manifest then says "capture":
+ * {"compression": "zip"} (nothing else in it changes), and the new golden is verified before
+ * it is swapped in: each file decodes to the run's pixels bit for bit (checked by
+ * cap_recompress_exr before its rename) and, read back as replay reads it, to its manifest
+ * digests. A run already in ZIP is copied byte for byte, as before.
+ *
  * A golden moves only with a written review: the run is first replayed against the golden it
  * would replace (provenance, pixels, timing; the HTML review with thumbnails goes to the run's
  * bless/ folder, outside the committed golden). A bit-exact run made from the same inputs
@@ -18,6 +27,10 @@
 #define _XOPEN_SOURCE 700
 
 #include "rep_internal.h"
+
+#include "cap.h"
+
+#include <cjson/cJSON.h>
 
 #include <dirent.h>
 #include <errno.h>
@@ -61,6 +74,40 @@ static eng_result make_parent(const char *path, eng_error *err)
     return r;
 }
 
+/* The run's manifest as the golden's, "capture": {"compression": "zip"} in it (the only
+ * change; cJSON prints the rest as capture wrote it). */
+static eng_result write_zip_manifest(const rep_run *run, const char *dst, eng_error *err)
+{
+    char *text = NULL;
+    size_t len = 0;
+    eng_result r = eng_read_file(run->manifest_path, REP_MAX_JSON_BYTES, &text, &len, err);
+    if (r != ENG_OK)
+        return r;
+    cJSON *root = cJSON_ParseWithLength(text, len);
+    free(text);
+    if (!cJSON_IsObject(root)) {
+        cJSON_Delete(root);
+        return eng_fail(err, ENG_ERR_PARSE, "%s: not a JSON object", run->manifest_path);
+    }
+    cJSON *cap = cJSON_GetObjectItemCaseSensitive(root, "capture");
+    if (!cJSON_IsObject(cap)) {
+        cJSON_DeleteItemFromObjectCaseSensitive(root, "capture");
+        cap = cJSON_AddObjectToObject(root, "capture");
+    }
+    cJSON_DeleteItemFromObjectCaseSensitive(cap, "compression");
+    char *out = cJSON_AddStringToObject(cap, "compression", "zip") ? cJSON_Print(root) : NULL;
+    cJSON_Delete(root);
+    if (!out) {
+        fprintf(stderr, "ispm: out of memory\n");
+        abort();
+    }
+    char *doc = rep_xprintf("%s\n", out);
+    cJSON_free(out);
+    r = rep_write_atomic(dst, doc, strlen(doc), err);
+    free(doc);
+    return r;
+}
+
 static eng_result build_tmp(const rep_run *run, const char *golden, const char *tmp, eng_error *err)
 {
     eng_result r = rep_remove_tree(tmp, err);
@@ -68,15 +115,30 @@ static eng_result build_tmp(const rep_run *run, const char *golden, const char *
         r = rep_mkdirs(tmp, err);
     if (r != ENG_OK)
         return r;
-    char *dst = rep_path_join(tmp, "manifest.json");
-    r = rep_copy_file(run->manifest_path, dst, err);
-    free(dst);
+    int recompressed = 0;
     for (int i = 0; i < run->frame_count && r == ENG_OK; i++) {
-        dst = rep_path_join(tmp, run->frames[i].file);
+        char *dst = rep_path_join(tmp, run->frames[i].file);
+        int rewritten = 0;
         r = make_parent(dst, err);
         if (r == ENG_OK)
+            r = cap_recompress_exr(run->frames[i].path, dst, ENG_COMPRESSION_ZIP, &rewritten, err);
+        if (r == ENG_OK && !rewritten)
             r = rep_copy_file(run->frames[i].path, dst, err);
+        recompressed |= rewritten;
         free(dst);
+    }
+    char *dst = rep_path_join(tmp, "manifest.json");
+    if (r == ENG_OK)
+        r = recompressed ? write_zip_manifest(run, dst, err) : rep_copy_file(run->manifest_path, dst, err);
+    free(dst);
+    if (r == ENG_OK && recompressed) {
+        /* Read back as replay reads it: every frame decodes to its manifest's digests
+         * (cap_recompress_exr has compared each file with the run's bit for bit). A failure here
+         * is one of writing. */
+        rep_run *g = NULL;
+        if (verify_run(tmp, &g, err) != ENG_OK)
+            r = ENG_ERR_IO;
+        rep_run_close(g);
     }
     if (r != ENG_OK)
         return r;

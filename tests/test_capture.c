@@ -1174,7 +1174,7 @@ START_TEST(test_compression)
         ck_assert_int_eq(m, ENG_COMPRESSION_NONE + i);
         ck_assert_str_eq(eng_compression_name(m), names[i]);
     }
-    ck_assert_str_eq(eng_compression_name(ENG_COMPRESSION_DEFAULT), "zip");
+    ck_assert_str_eq(eng_compression_name(ENG_COMPRESSION_DEFAULT), "rle"); /* record's default (issue 22) */
     m = ENG_COMPRESSION_RLE;
     ck_assert(!eng_compression_parse("b44", &m)); /* lossy for floats: refused */
     ck_assert(!eng_compression_parse("ZIP", &m));
@@ -1234,6 +1234,85 @@ START_TEST(test_compression)
 }
 END_TEST
 
+/* Issue 22: record writes rle by default; ispm bless recompresses the frame files to zip with
+ * cap_recompress_exr: same parts, order, attributes and bits, only the compression changes. */
+START_TEST(test_recompress)
+{
+    char dir[256], run[300], src[400], zip[400], back[400], again[400];
+    make_tmpdir(dir);
+    snprintf(run, sizeof run, "%s/run", dir);
+    record_fake(run, 2, 1, ENG_COMPRESSION_DEFAULT);
+    snprintf(src, sizeof src, "%s/frames/000001.exr", run);
+    snprintf(zip, sizeof zip, "%s/zip.exr", dir);
+    snprintf(back, sizeof back, "%s/back.exr", dir);
+    snprintf(again, sizeof again, "%s/again.exr", dir);
+    cJSON *man = load_manifest(run);
+    ck_assert_str_eq(gets(get(man, "capture"), "compression"), "rle");
+    cJSON_Delete(man);
+
+    eng_error err = {{0}};
+    int rewritten = -1;
+    ck_assert_msg(cap_recompress_exr(src, zip, ENG_COMPRESSION_ZIP, &rewritten, &err) == ENG_OK, "%s", err.msg);
+    ck_assert_int_eq(rewritten, 1);
+    ck_assert_int_eq(count_suffix(dir, ".tmp"), 0);
+    rd_part *a = NULL, *z = NULL;
+    int na = read_exr(src, &a), nz = read_exr(zip, &z);
+    ck_assert_int_eq(na, 4);
+    ck_assert_int_eq(nz, 4);
+    fake_frame f;
+    fake_init(&f, 1, 24, 20);
+    const eng_buffer *order[] = {&f.bpos, &f.bshadow, &f.balb, &f.brad};
+    for (int i = 0; i < 4; i++) {
+        ck_assert_int_eq(a[i].compression, EXR_COMPRESSION_RLE);
+        ck_assert_int_eq(z[i].compression, EXR_COMPRESSION_ZIP);
+        assert_part_equals(&z[i], order[i]); /* names, order, channels, bits, digest */
+        ck_assert_int_eq(z[i].frame, 1);
+        ck_assert(z[i].time == a[i].time);
+        ck_assert_mem_eq(&z[i].display, &a[i].display, sizeof z[i].display);
+        ck_assert_int_eq(z[i].lineorder, a[i].lineorder);
+    }
+    fake_free(&f);
+    free_parts(a, na);
+    free_parts(z, nz);
+    struct stat sr, sz;
+    ck_assert_int_eq(stat(src, &sr), 0);
+    ck_assert_int_eq(stat(zip, &sz), 0);
+    ck_assert_int_lt(sz.st_size, sr.st_size);
+
+    /* Already zip: nothing written. */
+    ck_assert_int_eq(cap_recompress_exr(zip, again, ENG_COMPRESSION_ZIP, &rewritten, &err), ENG_OK);
+    ck_assert_int_eq(rewritten, 0);
+    ck_assert_int_ne(stat(again, &sz), 0);
+    /* Back to rle: the very bytes capture wrote (every attribute carried over as it was). */
+    ck_assert_msg(cap_recompress_exr(zip, back, ENG_COMPRESSION_DEFAULT, &rewritten, &err) == ENG_OK, "%s", err.msg);
+    ck_assert_int_eq(rewritten, 1);
+    size_t l1 = 0, l2 = 0;
+    char *x = slurp(run, "frames/000001.exr", &l1), *y = slurp(dir, "back.exr", &l2);
+    ck_assert_msg(l1 == l2 && memcmp(x, y, l1) == 0, "rle -> zip -> rle changed the file");
+    free(x);
+    free(y);
+
+    /* A missing or non-EXR source: an I/O error naming it; the target left alone. */
+    char missing[400];
+    snprintf(missing, sizeof missing, "%s/missing.exr", dir);
+    ck_assert_int_eq(cap_recompress_exr(missing, again, ENG_COMPRESSION_ZIP, &rewritten, &err), ENG_ERR_IO);
+    ck_assert_msg(strstr(err.msg, missing), "%s", err.msg);
+    char manifest[400];
+    snprintf(manifest, sizeof manifest, "%s/manifest.json", run);
+    ck_assert_int_eq(cap_recompress_exr(manifest, again, ENG_COMPRESSION_ZIP, &rewritten, &err), ENG_ERR_IO);
+    ck_assert_msg(strstr(err.msg, manifest), "%s", err.msg);
+    ck_assert_int_eq(rewritten, 0);
+    ck_assert_int_ne(stat(again, &sz), 0);
+    /* An unwritable target: the write's error, no temp file left. */
+    char nodir[400];
+    snprintf(nodir, sizeof nodir, "%s/no/such/dir.exr", dir);
+    ck_assert_int_eq(cap_recompress_exr(src, nodir, ENG_COMPRESSION_ZIP, &rewritten, &err), ENG_ERR_IO);
+    ck_assert_msg(strstr(err.msg, "no/such/dir.exr"), "%s", err.msg);
+    ck_assert_int_eq(count_suffix(dir, ".tmp"), 0);
+    rm_rf(dir);
+}
+END_TEST
+
 static Suite *capture_suite(void)
 {
     Suite *s = suite_create("capture");
@@ -1254,6 +1333,7 @@ static Suite *capture_suite(void)
     tcase_add_test(run, test_bad_buffers_rejected);
     tcase_add_test(run, test_writers_same_bytes);
     tcase_add_test(run, test_compression);
+    tcase_add_test(run, test_recompress);
     suite_add_tcase(s, run);
     return s;
 }

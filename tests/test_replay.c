@@ -19,8 +19,11 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include "cap.h"
 #include "rep.h"
 #include "rep_internal.h"
+
+#include <openexr.h>
 
 /* ---------------------------------------------------------------- helpers */
 
@@ -1346,6 +1349,98 @@ START_TEST(e2e_bless_then_replay_passes)
 }
 END_TEST
 
+/* The compression of every part of an EXR if they all share one, else -1. */
+static int exr_compression_of(const char *path)
+{
+    exr_context_initializer_t init = EXR_DEFAULT_CONTEXT_INITIALIZER;
+    exr_context_t c = NULL;
+    ck_assert_int_eq(exr_start_read(&c, path, &init), EXR_ERR_SUCCESS);
+    int n = 0, out = -2;
+    ck_assert_int_eq(exr_get_count(c, &n), EXR_ERR_SUCCESS);
+    for (int p = 0; p < n; p++) {
+        exr_compression_t t;
+        ck_assert_int_eq(exr_get_compression(c, p, &t), EXR_ERR_SUCCESS);
+        out = out == -2 || out == (int)t ? (int)t : -1;
+    }
+    exr_finish(&c);
+    return out;
+}
+
+/* Issue 22: record writes rle, goldens stay ZIP. bless recompresses a run's frame files to ZIP
+ * (same pixels and digests, verified), its manifest then says so and nothing else changes; the
+ * run is left as it was; a golden blessed from a ZIP run replays bit-exact against the same
+ * pixels in rle (re-blessing is "unchanged"); a ZIP run is still copied byte for byte. */
+START_TEST(e2e_bless_recompresses_to_zip)
+{
+    char *zrun = make_run(); /* OpenImageIO writes ZIP */
+    fx_run r;
+    fx_make(&r);
+    char *run = tpath("run-rle");
+    fx_write(&r, run);
+    fx_free(&r);
+    eng_error err = {{0}};
+    for (int i = 0; i < FX_FRAMES; i++) {
+        char file[64];
+        snprintf(file, sizeof file, "frames/%06d.exr", i);
+        char *p = rep_path_join(run, file);
+        int rewritten = 0;
+        ck_assert_msg(cap_recompress_exr(p, p, ENG_COMPRESSION_RLE, &rewritten, &err) == ENG_OK, "%s", err.msg);
+        ck_assert_int_eq(rewritten, 1);
+        ck_assert_int_eq(exr_compression_of(p), EXR_COMPRESSION_RLE);
+        free(p);
+    }
+    char *gold = tpath("goldens/from-rle");
+    ck_assert_msg(rep_bless(run, gold, &err) == ENG_OK, "%s", err.msg);
+    for (int i = 0; i < FX_FRAMES; i++) {
+        char file[64];
+        snprintf(file, sizeof file, "frames/%06d.exr", i);
+        char *g = rep_path_join(gold, file), *p = rep_path_join(run, file);
+        ck_assert_int_eq(exr_compression_of(g), EXR_COMPRESSION_ZIP);
+        ck_assert_int_eq(exr_compression_of(p), EXR_COMPRESSION_RLE); /* the run untouched */
+        free(g);
+        free(p);
+    }
+    char *gm = rep_path_join(gold, "manifest.json"), *rm = rep_path_join(run, "manifest.json");
+    cJSON *gj = load_json(gm), *rj = load_json(rm);
+    ck_assert_str_eq(str_of(cJSON_GetObjectItem(gj, "capture"), "compression"), "zip");
+    cJSON_DeleteItemFromObject(gj, "capture");
+    ck_assert(cJSON_Compare(gj, rj, 1)); /* nothing else in the manifest changed */
+    cJSON_Delete(gj);
+    cJSON_Delete(rj);
+    free(gm);
+    free(rm);
+    ck_assert_msg(replay(run, gold, &err) == REP_OK, "%s", err.msg);
+    cJSON *rep = report_of(run);
+    ck_assert_double_eq(num_of(cJSON_GetObjectItem(rep, "counts"), "bit-exact"), 9);
+    cJSON_Delete(rep);
+
+    /* A golden blessed from the ZIP run: bit-exact against the rle run, nothing to bless. */
+    char *zgold = tpath("goldens/from-zip");
+    ck_assert_msg(rep_bless(zrun, zgold, &err) == ENG_OK, "%s", err.msg);
+    const char *names[] = {"manifest.json", "frames/000000.exr", "frames/000002.exr"};
+    for (int i = 0; i < 3; i++) {
+        char *a = rep_path_join(zrun, names[i]), *b = rep_path_join(zgold, names[i]);
+        char *x = NULL, *y = NULL;
+        size_t lx = 0, ly = 0;
+        ck_assert_int_eq(eng_read_file(a, 1 << 24, &x, &lx, &err), ENG_OK);
+        ck_assert_int_eq(eng_read_file(b, 1 << 24, &y, &ly, &err), ENG_OK);
+        ck_assert_msg(lx == ly && memcmp(x, y, lx) == 0, "%s: not copied byte for byte", names[i]);
+        free(x);
+        free(y);
+        free(a);
+        free(b);
+    }
+    rep_bless_options o = {run, zgold, 0, NULL};
+    rep_bless_outcome out;
+    ck_assert_msg(rep_bless_reviewed(&o, NULL, &out, &err) == ENG_OK, "%s", err.msg);
+    ck_assert_int_eq(out, REP_BLESS_SAME);
+    free(zgold);
+    free(gold);
+    free(run);
+    free(zrun);
+}
+END_TEST
+
 /* A manifest with only what provenance reads: settings, tool, frames with two passes p and q. */
 static char *prov_manifest(const char *name, double a, int threads, const char *git, double q_ms)
 {
@@ -1909,6 +2004,7 @@ static Suite *replay_suite(void)
     tcase_add_test(files, e2e_bad_tolerances_are_unreadable);
     tcase_add_test(files, e2e_no_golden_integrity_only);
     tcase_add_test(files, e2e_bless_then_replay_passes);
+    tcase_add_test(files, e2e_bless_recompresses_to_zip);
     tcase_add_test(files, e2e_bless_keeps_tolerances);
     tcase_add_test(files, e2e_bless_reviewed_refuses_without_accept);
     tcase_add_test(files, prov_settings_warn_git_and_threads_inform);
