@@ -64,6 +64,7 @@ static void usage(FILE *f)
 {
     fprintf(f,
             "usage: ispm bench CONFIG.json -o OUTDIR [--quiet]\n"
+            "       ispm bench --check CONFIG.json\n"
             "\n"
             "Renders every grid point of every method of CONFIG in-process, times each pass\n"
             "(median over frames x repeats), measures indirect.radiance and composite.radiance\n"
@@ -73,6 +74,8 @@ static void usage(FILE *f)
             "\n"
             "  -o, --output OUTDIR  where the results go (created if needed)\n"
             "  -q, --quiet          no per-point progress\n"
+            "      --check          validate CONFIG, its sequence and scene and every point's\n"
+            "                       settings, render nothing, need no reference run\n"
             "  -h, --help           this text\n"
             "\n"
             "exit: 0 done; 1 rendering or writing failed; 2 bad arguments, config, sequence or\n"
@@ -1260,19 +1263,20 @@ int cmd_bench(int argc, char **argv, const char *command_line)
 {
     static const struct option opts[] = {
         {"output", required_argument, NULL, 'o'}, {"quiet", no_argument, NULL, 'q'},
-        {"help", no_argument, NULL, 'h'}, {NULL, 0, NULL, 0},
+        {"help", no_argument, NULL, 'h'}, {"check", no_argument, NULL, 'c'}, {NULL, 0, NULL, 0},
     };
     const char *outdir = NULL;
-    int quiet = 0, opt;
+    int quiet = 0, check = 0, opt;
     while ((opt = getopt_long(argc, argv, "o:qh", opts, NULL)) != -1) {
         switch (opt) {
         case 'o': outdir = optarg; break;
         case 'q': quiet = 1; break;
+        case 'c': check = 1; break;
         case 'h': usage(stdout); return B_OK;
         default: usage(stderr); return B_INPUT;
         }
     }
-    if (optind + 1 != argc || !outdir) {
+    if (optind + 1 != argc || (!outdir && !check)) {
         usage(stderr);
         return B_INPUT;
     }
@@ -1331,6 +1335,15 @@ int cmd_bench(int argc, char **argv, const char *command_line)
             if (c.frames[i] >= pts[0].seq->frame_count)
                 r = eng_fail(&err, ENG_ERR_INVALID, "%s: frame %d requested, the sequence %s has %d frames", c.path,
                              c.frames[i], c.sequence, pts[0].seq->frame_count);
+    if (r == ENG_OK && check) { /* everything but the reference run and the rendering */
+        r = seq_load_scene(pts[0].seq, &scene, &err);
+        if (r == ENG_OK)
+            printf("ispm bench: %s: %d points (%d methods) valid\n", c.path, n, c.method_count);
+        else
+            fprintf(stderr, "ispm bench: %s\n", err.msg);
+        rc = r == ENG_OK ? B_OK : B_INPUT;
+        goto done;
+    }
     if (r == ENG_OK && (r = load_reference(&c, pts[0].seq->width, pts[0].seq->height, &ref, &err)) != ENG_OK) {
         eng_error inner = err;
         eng_fail(&err, r, "%s: reference: %s", c.path, inner.msg);

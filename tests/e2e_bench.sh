@@ -191,4 +191,12 @@ expect_bad dup.json '{"sequence": "seq.json", "reference": "refrun", "frames": 1
 "$ISPM" record seq.json -o plainrun --quiet > /dev/null || fail "record plain run"
 expect_bad notref.json "{\"sequence\": \"seq.json\", \"reference\": \"plainrun\", \"frames\": 1, $GOOD_M}" plainrun
 "$ISPM" bench > /dev/null 2>&1; [ $? -eq 2 ] || fail "bench without arguments must exit 2"
+# --check: validates without a reference run or rendering; every config the project ships
+# (bench/*.json, the README's tables come from them) must pass it.
+"$ISPM" bench --check badsetting.json > /dev/null 2> err.txt; rc=$?
+[ $rc -eq 2 ] && grep -qF badsetting.json err.txt || { cat err.txt; fail "bench --check of a bad config: exit $rc"; }
+for f in "$SRC"/bench/*.json; do
+  "$ISPM" bench --check "$f" > check.out 2> err.txt || { cat err.txt; fail "bench --check $f"; }
+  grep -q " valid$" check.out || fail "bench --check $f printed: $(cat check.out)"
+done
 echo "e2e_bench: ok"
