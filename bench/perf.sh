@@ -10,13 +10,15 @@
 #   4. photon trace rays/s vs Embree's raw rtcIntersect1 (`ispm tracebench`, issue 22 item 4,
 #      when the tool has it)                                                                goal ≥ 70 %
 #
-# usage: bench/perf.sh [OUTDIR]     (from the repository root; ISPM=path/to/ispm, RUNS=N)
+# usage: bench/perf.sh [OUTDIR]     (from the repository root; ISPM=path/to/ispm, RUNS=N,
+#        ROWS=24 to measure rows 2 and 4 only: row 2 then records its run once, untimed)
 # Everything it writes goes to OUTDIR (default: a fresh folder under /tmp). Wall times on a
 # loaded machine vary by ±50 %; the ratios of alternated pairs are what to read.
 set -eu
 
 ISPM=${ISPM:-build/cli/ispm}
 RUNS=${RUNS:-3}
+ROWS=${ROWS:-1234}
 OUT=${1:-$(mktemp -d /tmp/ispm-perf.XXXXXX)}
 CI=scenes/cornell-box/cornell-box-ci.json
 PERF=scenes/cornell-box/cornell-box-perf.json
@@ -62,13 +64,20 @@ verdict() { awk -v r="$1" -v g="$3" -v op="$2" 'BEGIN { ok = op == "le" ? r <= g
 
 echo "bench/perf.sh: $RUNS runs per side, alternating; $(nproc) CPUs, load $(cut -d' ' -f1-3 /proc/loadavg); output in $OUT"
 
+row() { case "$ROWS" in *"$1"*) return 0 ;; esac; return 1; }
+
+if row 1; then
 echo "1. record $CI: all buffers vs final.display only"
 pair "all buffers" "final.display only" \
     "$ISPM record $CI -o $OUT/all --force --quiet" \
     "$ISPM record $CI -o $OUT/display --force --quiet --capture final.display"
 r=$(ratio "$A_MED" "$B_MED")
 echo "  ratio all / display-only: ${r}x   (goal <= 1.2x: $(verdict "$r" le 1.2))"
+elif row 2; then
+    "$ISPM" record $CI -o "$OUT/all" --force --quiet >>"$OUT/log" 2>&1
+fi
 
+if row 2; then
 frames=$(ls "$OUT/all/frames/"*.exr | wc -l)
 idiff_all() { # RUN GOLDEN: idiff -a over every frame pair
     echo "for f in $1/frames/*.exr; do idiff -a \"\$f\" $2/frames/\$(basename \"\$f\"); done"
@@ -108,16 +117,20 @@ if [ -x "$MUTATE" ]; then
 else
     echo "  (same-buffer differing pair: $MUTATE not built)"
 fi
+fi
 
+if row 3; then
 echo "3. record $PERF (3 frames, 65,536 photons, final.display): 1 thread vs 2 threads"
 pair "--threads 1" "--threads 2" \
     "$ISPM record $PERF -o $OUT/t1 --force --quiet --threads 1 --capture final.display" \
     "$ISPM record $PERF -o $OUT/t2 --force --quiet --threads 2 --capture final.display"
 r=$(ratio "$A_MED" "$B_MED")
 echo "  2 threads are ${r}x faster   (goal >= 1.8x: $(verdict "$r" ge 1.8))"
+fi
 
 # Row 4 belongs to issue 22 item 4 (the photon-trace helper): its `ispm tracebench` prints the
 # photon trace's rays/s against raw rtcIntersect1 on the same rays.
+row 4 || exit 0
 echo "4. photon trace rays/s vs raw Embree rtcIntersect1 (ispm tracebench)"
 if "$ISPM" tracebench --help >/dev/null 2>&1; then
     "$ISPM" tracebench "$PERF" 2>&1 | sed 's/^/  /'

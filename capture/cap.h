@@ -124,6 +124,9 @@ void cap_destroy(cap_capture *c); /* accepts NULL */
  * the folder for that. A one-part file is a plain single-part EXR that still carries the
  * part name. */
 eng_result cap_write_exr(const char *path, const eng_buffer *const *bufs, int count, eng_error *err);
+/* cap_write_exr without the fsync, for files whose durability nobody relies on (replay's
+ * stability run, which is renamed into place whole): the same bytes, without waiting on the disk. */
+eng_result cap_write_exr_unsynced(const char *path, const eng_buffer *const *bufs, int count, eng_error *err);
 
 /* The EXR file src written again as dst with every part compressed with m (lossless: none,
  * rle, zips, zip, piz; DEFAULT is rle): the same parts in the same order, every attribute

@@ -375,8 +375,9 @@ typedef eng_result (*exr_check_fn)(const char *tmp, void *arg, eng_error *err);
 
 /* Writes path atomically: "<path>.tmp" filled through the sink, flushed, fsynced, closed,
  * checked and renamed over path; on any failure the temp file is removed and path left as it
- * was. */
-static eng_result write_atomic(const char *path, exr_fill_fn fill, exr_check_fn check, void *arg, eng_error *err)
+ * was. sync 0: no fsync (files that need not survive a crash). */
+static eng_result write_atomic(const char *path, exr_fill_fn fill, exr_check_fn check, void *arg, int sync,
+                               eng_error *err)
 {
     char *tmp = cap__xmalloc(strlen(path) + 5);
     sprintf(tmp, "%s.tmp", path);
@@ -403,7 +404,7 @@ static eng_result write_atomic(const char *path, exr_fill_fn fill, exr_check_fn 
     else if (rv != EXR_ERR_SUCCESS)
         res = eng_fail(err, ENG_ERR_IO, "%s: OpenEXR: %s", path,
                        s.lib_code != EXR_ERR_SUCCESS ? s.lib_msg : exr_get_default_error_message(rv));
-    else if (fsync(s.fd) != 0)
+    else if (sync && fsync(s.fd) != 0)
         res = eng_fail(err, ENG_ERR_IO, "%s: cannot sync: %s", path, strerror(errno));
 
     /* close() can be where a deferred write error (NFS, quota) finally shows. */
@@ -419,8 +420,9 @@ static eng_result write_atomic(const char *path, exr_fill_fn fill, exr_check_fn 
     return res;
 }
 
-eng_result cap__write_exr(const char *path, const eng_buffer *const *bufs, int count,
-                          const cap_exr_meta *meta, eng_error *err)
+/* cap__write_exr, with the fsync before the rename or (sync 0) without. */
+static eng_result write_exr_file(const char *path, const eng_buffer *const *bufs, int count,
+                                 const cap_exr_meta *meta, int sync, eng_error *err)
 {
     if (!path || !path[0])
         return eng_fail(err, ENG_ERR_INVALID, "cap_write_exr: no path");
@@ -437,7 +439,13 @@ eng_result cap__write_exr(const char *path, const eng_buffer *const *bufs, int c
     }
 
     exr_frame f = {bufs, count, meta};
-    return write_atomic(path, fill_frame, NULL, &f, err);
+    return write_atomic(path, fill_frame, NULL, &f, sync, err);
+}
+
+eng_result cap__write_exr(const char *path, const eng_buffer *const *bufs, int count,
+                          const cap_exr_meta *meta, eng_error *err)
+{
+    return write_exr_file(path, bufs, count, meta, 1, err);
 }
 
 eng_result cap_write_exr(const char *path, const eng_buffer *const *bufs, int count, eng_error *err)
@@ -670,10 +678,15 @@ eng_result cap_recompress_exr(const char *src, const char *dst, eng_capture_comp
     int same = 0;
     eng_result res = load_exr(src, &r, 1, &same, err);
     if (res == ENG_OK && !same) {
-        res = write_atomic(dst, fill_recode, check_recode, &r, err);
+        res = write_atomic(dst, fill_recode, check_recode, &r, 1, err);
         if (res == ENG_OK && rewritten)
             *rewritten = 1;
     }
     free_recode(&r);
     return res;
+}
+
+eng_result cap_write_exr_unsynced(const char *path, const eng_buffer *const *bufs, int count, eng_error *err)
+{
+    return write_exr_file(path, bufs, count, NULL, 0, err);
 }

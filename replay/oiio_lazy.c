@@ -16,6 +16,7 @@
 #include <pthread.h>
 #include <stdio.h>
 #include <stdlib.h>
+#include <string.h>
 
 #ifndef ISPM_OIIO_MODULE_PATH
 #error "ISPM_OIIO_MODULE_PATH (the built libispm_oiio.so) must be defined by the build"
@@ -84,16 +85,21 @@ eng_result rep_oiio_read_parts(const char *path, size_t max_floats, rep_part **p
     return g_mod.read_parts(path, max_floats, parts, count, err);
 }
 
+void rep_part_clear(rep_part *p)
+{
+    free(p->name);
+    for (int c = 0; c < ENG_MAX_CHANNELS; c++)
+        free(p->channels[c]);
+    free(p->data);
+    memset(p, 0, sizeof *p);
+}
+
 void rep_parts_free(rep_part *parts, int count)
 {
     if (!parts)
         return;
-    for (int i = 0; i < count; i++) {
-        free(parts[i].name);
-        for (int c = 0; c < ENG_MAX_CHANNELS; c++)
-            free(parts[i].channels[c]);
-        free(parts[i].data);
-    }
+    for (int i = 0; i < count; i++)
+        rep_part_clear(&parts[i]);
     free(parts);
 }
 

@@ -43,6 +43,27 @@ eng_result rep_oiio_read_parts(const char *path, size_t max_floats, rep_part **p
                                eng_error *err);
 
 void rep_parts_free(rep_part *parts, int count);
+/* Frees what one part owns and zeroes it (for a part that is not in an array of its own). */
+void rep_part_clear(rep_part *p);
+
+/* Reads every part of a frame file as rep_oiio_read_parts does, and gives the same parts (names,
+ * channel names in OpenImageIO's order, bit-identical floats), but through OpenEXR's C API
+ * (exr_read.c) when the file is one that reader takes (scanline float32 parts at the origin),
+ * so that reading a run needs no OpenImageIO; any other file, and any file that reader fails
+ * on, goes to rep_oiio_read_parts, which decides (so errors are OpenImageIO's, as before). The
+ * reader every tool and replay use for frame files. */
+eng_result rep_read_parts(const char *path, size_t max_floats, rep_part **parts, int *count, eng_error *err);
+
+/* The OpenEXR C API reader alone: ENG_OK with the parts as above; ENG_ERR_UNSUPPORTED (err says
+ * why) for a file it leaves to OpenImageIO (tiled, deep, non-float, subsampled or offset parts,
+ * limits exceeded, or an error while decoding); or rep_exr_check_header's refusal. */
+eng_result rep_exr_read_parts(const char *path, size_t max_floats, rep_part **parts, int *count, eng_error *err);
+
+/* Walks the header(s) of the EXR at path before any library parses them (exr_check.c): refuses
+ * (ENG_ERR_INVALID, or ENG_ERR_IO when truncated) attributes, chunk counts, data windows or
+ * channel pixel types the file cannot hold, which OpenEXR 3.1 would believe (allocating
+ * gigabytes) or OpenImageIO 2.4 would abort on. Missing and non-EXR files pass (ENG_OK). */
+eng_result rep_exr_check_header(const char *path, eng_error *err);
 
 /* Loads the OpenImageIO module now (the other calls load it on first use). A program that opens
  * a window calls this first: some of the libraries OpenImageIO pulls in initialise Xlib's

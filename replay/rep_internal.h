@@ -276,6 +276,9 @@ float *rep_flip_buffers(const eng_buffer *run, const eng_buffer *golden, const r
                         int *exposures);
 rep_verdict rep_compare_flip(const eng_buffer *run, const eng_buffer *golden, const rep_tol *tol, rep_verdict v,
                              int skip, rep_metrics *m, rep_flip_kind *kind, rep_flip_stats *s);
+/* rep_compare_flip that hands the map over in *map (NULL when none was computed; caller frees). */
+rep_verdict rep_compare_flip_map(const eng_buffer *run, const eng_buffer *golden, const rep_tol *tol, rep_verdict v,
+                                 int skip, rep_metrics *m, rep_flip_kind *kind, rep_flip_stats *s, float **map);
 
 /* ---------------------------------------------------------------- provenance.c */
 
@@ -370,6 +373,37 @@ typedef struct rep_entry {
     rep_flip_stats flip;     /* zero without computing when the buffer is bit-exact */
 } rep_entry;
 
+/* ---------------------------------------------------------------- keep.c */
+
+/* What replay's walk keeps for report.html (keep.c): decoded parts and ꟻLIP maps by frame,
+ * side and buffer name, in frame order, at most REP_KEEP_MAX_FLOATS floats in all (128 MiB)
+ * and REP_KEEP_MAX_ITEMS items. */
+#define REP_KEEP_MAX_FLOATS ((size_t)1 << 25)
+#define REP_KEEP_MAX_ITEMS 4096
+enum { REP_KEEP_RUN = 0, REP_KEEP_GOLDEN = 1 };
+
+typedef struct rep_kept {
+    int frame, side;
+    char *name;
+    rep_part part; /* data NULL: not kept */
+    float *flip;   /* run side only: the ꟻLIP map against the golden, or NULL */
+} rep_kept;
+
+typedef struct rep_keep {
+    rep_kept *items;
+    size_t count, cap;
+    size_t floats; /* held, parts and maps */
+} rep_keep;
+
+/* Moves *p (zeroed after) into k unless it is already there or k is full (then *p stays). */
+void rep_keep_part(rep_keep *k, int frame, int side, rep_part *p);
+/* Takes map (floats values) as the run's ꟻLIP map of a buffer: 1 if taken, 0 (caller frees). */
+int rep_keep_flip(rep_keep *k, int frame, const char *name, float *map, size_t floats);
+/* What k holds, or NULL (k may be NULL). */
+const rep_part *rep_keep_find_part(const rep_keep *k, int frame, int side, const char *name);
+const float *rep_keep_find_flip(const rep_keep *k, int frame, const char *name);
+void rep_keep_free(rep_keep *k); /* accepts NULL */
+
 typedef struct rep_report {
     const char *run_dir;
     const char *golden_dir;  /* NULL: integrity-only */
@@ -392,6 +426,7 @@ typedef struct rep_report {
      * differ; then the buffers were compared under the cross-renderer tolerances. */
     char *run_renderer, *golden_renderer; /* owned; NULL if not recorded */
     int renderer_differs;
+    rep_keep *keep;          /* owned: parts and ꟻLIP maps kept for report.html, or NULL */
 } rep_report;
 
 /* ---------------------------------------------------------------- renderer.c */
@@ -468,6 +503,12 @@ typedef struct rep_thumb_map {
     char ch[3][REP_CHANNEL_NAME_MAX];        /* their names */
     double lo, hi;                           /* DATA: finite range over both buffers */
 } rep_thumb_map;
+
+/* Writes an 8-bit image (w*h*nch bytes, interleaved, top row first; nch 1 or 3) as a PNG at
+ * path, whatever its extension, with libpng (png_write.c): the chunks and filtered rows
+ * OpenImageIO's PNG writer (rep_oiio_write_png) makes from the same pixels, deflated at zlib
+ * level 1. Overwrites path. */
+eng_result rep_png_write(const char *path, int w, int h, int nch, const unsigned char *pixels, eng_error *err);
 
 /* The kind from the buffer's name: "*.display", "*.radiance", anything else is data. */
 rep_thumb_kind rep_thumb_kind_of(const char *buffer);

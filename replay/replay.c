@@ -21,6 +21,9 @@
 #include "stability_internal.h"
 
 #include <fnmatch.h>
+#ifdef __GLIBC__
+#include <malloc.h>
+#endif
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -141,7 +144,8 @@ static cmp_job *compare_prepare(rep_report *r, const rep_tolerances *tols, const
     return jobs;
 }
 
-static void compare_one(rep_entry *e, const cmp_job *jb, const rep_part *rp, const rep_part *gp, int no_flip)
+static void compare_one(rep_entry *e, const cmp_job *jb, const rep_part *rp, const rep_part *gp, int no_flip,
+                        float **flip_map)
 {
     eng_buffer a = rep_part_buffer(&rp[jb->j]), b = rep_part_buffer(&gp[jb->k]);
     if (rep_is_photon_map(&a) && rep_is_photon_map(&b)) {
@@ -149,7 +153,8 @@ static void compare_one(rep_entry *e, const cmp_job *jb, const rep_part *rp, con
         e->verdict = rep_photon_compare(&a, &b, &e->tol, &e->m, &e->pd);
     } else {
         e->verdict = rep_compare(&a, &b, &e->tol, &e->m);
-        e->verdict = rep_compare_flip(&a, &b, &e->tol, e->verdict, no_flip, &e->m, &e->flip_kind, &e->flip);
+        e->verdict = rep_compare_flip_map(&a, &b, &e->tol, e->verdict, no_flip, &e->m, &e->flip_kind, &e->flip,
+                                          flip_map);
     }
     if (e->verdict == REP_V_SIZE) {
         e->run_shape = shape(a.width, a.height, a.channel_count, a.channels);
@@ -296,6 +301,56 @@ static eng_result stab_end(stab_walk *w, rep_report *r, const rep_run *run, cons
     return res;
 }
 
+/* The name of the buffer report.html previews in frame i (report_html.c's final_buffer): the
+ * run's final.display, else its last buffer (the golden's when the run lacks the frame). */
+static const char *preview_buffer(const rep_frame_info *rf, const rep_frame_info *gf)
+{
+    const rep_frame_info *f = rf ? rf : gf;
+    if (!f)
+        return NULL;
+    int k = rep_frame_find(f, "final.display");
+    if (k < 0)
+        k = f->buffer_count - 1;
+    return k >= 0 ? f->buffers[k].name : NULL;
+}
+
+/* Moves the part named name of each side into r->keep (keep.c), if the side has it. */
+static void keep_both(rep_report *r, int i, const char *name, const rep_frame_info *rf, rep_part *rp,
+                      const rep_frame_info *gf, rep_part *gp)
+{
+    int j = rf && rp ? rep_frame_find(rf, name) : -1;
+    if (j >= 0)
+        rep_keep_part(r->keep, i, REP_KEEP_RUN, &rp[j]);
+    int k = gf && gp ? rep_frame_find(gf, name) : -1;
+    if (k >= 0)
+        rep_keep_part(r->keep, i, REP_KEEP_GOLDEN, &gp[k]);
+}
+
+/* After frame i's comparisons: what report.html will show of it (keep.c) moves into r->keep,
+ * the listed entries' parts and ꟻLIP maps and, in the first and last frames, the preview
+ * buffer; maps not kept are freed. first: the frame's first entry. */
+static void keep_frame(rep_report *r, int i, size_t first, const rep_frame_info *rf, rep_part *rp,
+                       const rep_frame_info *gf, rep_part *gp, const cmp_job *jobs, float **maps, int njobs)
+{
+    if (!r->keep)
+        r->keep = rep_xcalloc(1, sizeof *r->keep);
+    for (int k = 0; k < njobs; k++) {
+        const rep_entry *e = &r->entries[jobs[k].entry];
+        if (maps[k] && (!rep_entry_listed(e) ||
+                        !rep_keep_flip(r->keep, i, e->buffer, maps[k], (size_t)rp[jobs[k].j].width * (size_t)rp[jobs[k].j].height)))
+            free(maps[k]);
+        maps[k] = NULL;
+    }
+    for (size_t x = first; x < r->count; x++)
+        if (rep_entry_listed(&r->entries[x]))
+            keep_both(r, i, r->entries[x].buffer, rf, rp, gf, gp);
+    if (i == 0 || i == r->frames - 1) {
+        const char *b = preview_buffer(rf, gf);
+        if (b)
+            keep_both(r, i, b, rf, rp, gf, gp);
+    }
+}
+
 /* The decoded parts of one frame of the run and of the golden, with what decoding them gave. */
 typedef struct frame_parts {
     rep_part *rp, *gp;
@@ -419,6 +474,7 @@ static eng_result walk(const rep_options *o, const char *report_dir, rep_report 
         if (res == ENG_OK) {
             cmp_job *jobs = NULL;
             int njobs = 0;
+            size_t first = r->count;
             if (!gold)
                 integrity_only(r, o->buffers, rf, cur.rp);
             else if (!rf)
@@ -428,6 +484,7 @@ static eng_result walk(const rep_options *o, const char *report_dir, rep_report 
             else
                 jobs = compare_prepare(r, use, o->buffers, rf, gf, &njobs);
             rep_entry *entries = r->entries; /* no entry is added below: the array stays put */
+            float **maps = rep_xcalloc((size_t)njobs + 1, sizeof *maps);
             int golden_ok = 1;
             eng_result sres = ENG_OK;
             fetching = ni < r->frames;
@@ -442,8 +499,8 @@ static eng_result walk(const rep_options *o, const char *report_dir, rep_report 
                     frame_fetch_side(gold, ni, &nxt.gp, &nxt.gres, &nxt.gerr);
                 }
                 for (int k = 0; k < njobs; k++) {
-#pragma omp task firstprivate(k) shared(jobs, entries, rp, gp)
-                    compare_one(&entries[jobs[k].entry], &jobs[k], rp, gp, o->no_flip);
+#pragma omp task firstprivate(k) shared(jobs, entries, rp, gp, maps)
+                    compare_one(&entries[jobs[k].entry], &jobs[k], rp, gp, o->no_flip, &maps[k]);
                 }
                 /* temporal stability: the golden's measure and the run's are independent */
 #pragma omp task shared(sw, golden_ok)
@@ -452,6 +509,8 @@ static eng_result walk(const rep_options *o, const char *report_dir, rep_report 
 #pragma omp task shared(sw, sres)
                 sres = stab_run_frame(&sw, i, rf, rp, err);
             }
+            keep_frame(r, i, first, rf, cur.rp, gf, cur.gp, jobs, maps, njobs);
+            free(maps);
             free(jobs);
             if (!golden_ok)
                 sw.golden_on = 0;
@@ -481,8 +540,22 @@ done:
     return res;
 }
 
+/* A replay allocates and frees a frame's worth of buffers (6 MB for the CI run) per frame and
+ * side. glibc serves each from fresh mmap'd or trimmed-and-regrown memory, so every page of every
+ * buffer is faulted in anew (24,000 faults, a tenth of the CPU time of a replay of the CI run on
+ * the build machine's VM); kept in the heap instead, freed buffers are reused. Process-wide, but
+ * only how freed memory is kept: no result depends on it. */
+static void keep_freed_memory(void)
+{
+#ifdef __GLIBC__
+    mallopt(M_MMAP_THRESHOLD, 32 << 20); /* glibc's largest */
+    mallopt(M_TRIM_THRESHOLD, 512 << 20);
+#endif
+}
+
 rep_exit rep_replay_report(const rep_options *o, rep_report *r, eng_error *err)
 {
+    keep_freed_memory();
     memset(r, 0, sizeof *r);
     r->digest_frame = -1;
     if (!o || !o->run_dir) {

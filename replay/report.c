@@ -48,6 +48,8 @@ void rep_report_free(rep_report *r)
     r->stab = NULL;
     rep_prov_free(r->prov);
     r->prov = NULL;
+    rep_keep_free(r->keep);
+    r->keep = NULL;
     free(r->flags_text);
     free(r->scope_text);
     r->flags_text = r->scope_text = NULL;

@@ -148,7 +148,7 @@ static void write_image(image *im)
 {
     char *tmp = rep_xprintf("%s.tmp.%ld", im->path, (long)getpid());
     eng_error err;
-    im->ok = rep_oiio_write_png(tmp, im->w, im->h, 3, im->px, &err) == ENG_OK && rename(tmp, im->path) == 0;
+    im->ok = rep_png_write(tmp, im->w, im->h, 3, im->px, &err) == ENG_OK && rename(tmp, im->path) == 0;
     if (!im->ok)
         unlink(tmp);
     free(tmp);
@@ -162,23 +162,28 @@ static const rep_part *find_part(const rep_part *parts, int n, const char *name)
     return NULL;
 }
 
-/* The ꟻLIP heat map of a colour buffer that differs (flip.h's ramp, box maximum). */
-static void flip_thumb(const job *jb, const eng_buffer *a, const eng_buffer *b, job_images *ji)
+/* The ꟻLIP heat map of a colour buffer that differs (flip.h's ramp, box maximum): the map the
+ * comparison made, when the walk kept it (keep.c), else the same map computed again. */
+static void flip_thumb(const job *jb, const rep_keep *keep, const eng_buffer *a, const eng_buffer *b,
+                       job_images *ji)
 {
     const rep_entry *e = jb->e;
     if (!e || e->flip_kind == REP_FLIP_NONE || e->verdict == REP_V_BITEXACT)
         return;
-    float *map = rep_flip_buffers(a, b, &e->tol, e->flip_kind, NULL);
+    const float *kept = rep_keep_find_flip(keep, jb->frame, jb->buffer);
+    float *own = kept ? NULL : rep_flip_buffers(a, b, &e->tol, e->flip_kind, NULL);
+    const float *map = kept ? kept : own;
     if (!map)
         return;
     int w, h;
     unsigned char *px = rep_flip_heat(map, a->width, a->height, REP_THUMB_MAX_SIDE, &w, &h);
     add_image(ji, px, w, h, "flip", &jb->t->flip);
-    free(map);
+    free(own);
 }
 
 /* The pixels of a job's thumbnails (touches only the job's own tset and ji). */
-static void make_thumbs(const job *jb, const rep_part *rp, int rn, const rep_part *gp, int gn, job_images *ji)
+static void make_thumbs(const job *jb, const rep_keep *keep, const rep_part *rp, int rn, const rep_part *gp, int gn,
+                        job_images *ji)
 {
     tset *t = jb->t;
     const rep_part *a = rp ? find_part(rp, rn, jb->buffer) : NULL;
@@ -210,7 +215,7 @@ static void make_thumbs(const job *jb, const rep_part *rp, int rn, const rep_par
         unsigned char *px = rep_thumb_diff(&av, &bv, &t->scale, &w, &h);
         if (px)
             add_image(ji, px, w, h, "diff", &t->diff);
-        flip_thumb(jb, &av, &bv, ji);
+        flip_thumb(jb, keep, &av, &bv, ji);
     }
 }
 
@@ -222,8 +227,41 @@ static int by_frame(const void *pa, const void *pb)
     return a->t < b->t ? -1 : a->t > b->t;
 }
 
-/* Decodes each frame that has jobs once per side (both side by side) and makes its thumbnails:
- * pixels on OpenMP threads, names in job order, PNGs on OpenMP threads. */
+/* The parts of one side of frame f that the m jobs show, as the walk kept them (keep.c): a
+ * borrowed array (free the array only), or NULL when one is missing (*n = -1) or the side has
+ * no frame f (*n = 0). */
+static rep_part *kept_parts(const page *pg, const rep_run *side, int which, int f, const job *jobs, size_t m, int *n)
+{
+    *n = 0;
+    if (!side || f >= side->frame_count)
+        return NULL;
+    rep_part *a = rep_xcalloc(m + 1, sizeof *a);
+    for (size_t k = 0; k < m; k++) {
+        if (which == REP_KEEP_RUN ? !jobs[k].want_run : !jobs[k].want_golden)
+            continue;
+        const rep_part *p = rep_keep_find_part(pg->r->keep, f, which, jobs[k].buffer);
+        if (!p) {
+            free(a);
+            *n = -1;
+            return NULL;
+        }
+        a[(*n)++] = *p;
+    }
+    return a;
+}
+
+/* Frame f of one side decoded for its thumbnails (the walk did not keep all of them); *bad when
+ * the side has frame f and it cannot be decoded. */
+static void decode_side(const rep_run *side, int f, rep_part **parts, int *n, int *bad)
+{
+    eng_error err;
+    *bad = side && f < side->frame_count &&
+           rep_read_parts(side->frames[f].path, REP_MAX_FLOATS, parts, n, &err) != ENG_OK;
+}
+
+/* Makes the thumbnails of each frame that has jobs from the parts the walk kept, or else from
+ * the frame decoded again (both sides side by side): pixels on OpenMP threads, names in job
+ * order, PNGs on OpenMP threads. Either way the same parts, so the same images. */
 static void run_jobs(page *pg, job *jobs, size_t n)
 {
     qsort(jobs, n, sizeof *jobs, by_frame);
@@ -235,15 +273,21 @@ static void run_jobs(page *pg, job *jobs, size_t n)
             j++;
         rep_part *rp = NULL, *gp = NULL;
         int rn = 0, gn = 0, rbad = 0, gbad = 0;
-        eng_error rerr, gerr;
+        rp = kept_parts(pg, pg->run, REP_KEEP_RUN, f, jobs + i, j - i, &rn);
+        gp = kept_parts(pg, pg->golden, REP_KEEP_GOLDEN, f, jobs + i, j - i, &gn);
+        int kept = rn >= 0 && gn >= 0;
+        if (!kept) {
+            free(rp);
+            free(gp);
+            rp = gp = NULL;
+            rn = gn = 0;
 #pragma omp parallel sections
-        {
+            {
 #pragma omp section
-            rbad = pg->run && f < pg->run->frame_count &&
-                   rep_oiio_read_parts(pg->run->frames[f].path, REP_MAX_FLOATS, &rp, &rn, &rerr) != ENG_OK;
+                decode_side(pg->run, f, &rp, &rn, &rbad);
 #pragma omp section
-            gbad = pg->golden && f < pg->golden->frame_count &&
-                   rep_oiio_read_parts(pg->golden->frames[f].path, REP_MAX_FLOATS, &gp, &gn, &gerr) != ENG_OK;
+                decode_side(pg->golden, f, &gp, &gn, &gbad);
+            }
         }
         const char *note = gbad ? "the golden's frame file could not be decoded"
                            : rbad ? "the run's frame file could not be decoded" : NULL;
@@ -252,10 +296,15 @@ static void run_jobs(page *pg, job *jobs, size_t n)
         for (long k = 0; k < m; k++) {
             if (note)
                 jobs[i + (size_t)k].t->note = note;
-            make_thumbs(&jobs[i + (size_t)k], rp, rn, gp, gn, &ji[i + (size_t)k]);
+            make_thumbs(&jobs[i + (size_t)k], pg->r->keep, rp, rn, gp, gn, &ji[i + (size_t)k]);
         }
-        rep_parts_free(rp, rn);
-        rep_parts_free(gp, gn);
+        if (kept) {
+            free(rp);
+            free(gp);
+        } else {
+            rep_parts_free(rp, rn);
+            rep_parts_free(gp, gn);
+        }
         i = j;
     }
     /* names in job order, then every PNG of the page at once */

@@ -376,7 +376,7 @@ eng_result rep_run_read_frame(const rep_run *run, int frame, rep_part **out, eng
     const rep_frame_info *f = &run->frames[frame];
     rep_part *parts = NULL;
     int count = 0;
-    eng_result r = rep_oiio_read_parts(f->path, REP_MAX_FLOATS, &parts, &count, err);
+    eng_result r = rep_read_parts(f->path, REP_MAX_FLOATS, &parts, &count, err);
     if (r != ENG_OK)
         return r;
     rep_part *sorted = rep_xcalloc((size_t)f->buffer_count, sizeof *sorted);

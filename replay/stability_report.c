@@ -8,6 +8,7 @@
  */
 #define _POSIX_C_SOURCE 200809L
 
+#include "cap.h"
 #include "plot.h"
 #include "stability_internal.h"
 
@@ -154,8 +155,14 @@ eng_result rep_stab_write_frame(const char *run_dir, const rep_frame_info *f, co
         cJSON_AddNumberToObject(b, "inf", 0);
         cJSON_AddItemToArray(jb, b);
     }
-    eng_result r = count > 0 ? rep_oiio_write_parts(path, bufs, count, err)
+    /* Written like a recorded frame (capture's OpenEXR writer), so replay loads no OpenImageIO;
+     * unsynced, as OpenImageIO wrote it (the folder is renamed into place whole). */
+    const eng_buffer **ptrs = rep_xcalloc((size_t)(count ? count : 1), sizeof *ptrs);
+    for (int k = 0; k < count; k++)
+        ptrs[k] = &bufs[k];
+    eng_result r = count > 0 ? cap_write_exr_unsynced(path, ptrs, count, err)
                              : eng_fail(err, ENG_ERR_INVALID, "%s: no image pass to measure", path);
+    free(ptrs);
     if (r == ENG_OK)
         *rec = print_json(o);
     cJSON_Delete(o);

@@ -345,6 +345,34 @@ START_TEST(test_exr_zip_same_size_chunk)
 }
 END_TEST
 
+/* cap_write_exr_unsynced (replay's stability run) writes the very bytes cap_write_exr writes. */
+START_TEST(test_exr_unsynced_same_bytes)
+{
+    char dir[256], a[512], b[512];
+    make_tmpdir(dir);
+    snprintf(a, sizeof a, "%s/a.exr", dir);
+    snprintf(b, sizeof b, "%s/b.exr", dir);
+    float *d = pattern(7, 5, 1, 0.5f);
+    static const char *const y[] = {"Y"};
+    eng_buffer buf = {"stability.final.display", 7, 5, 1, y, d};
+    const eng_buffer *bufs[] = {&buf};
+    eng_error err = {{0}};
+    ck_assert_int_eq(cap_write_exr(a, bufs, 1, &err), ENG_OK);
+    ck_assert_int_eq(cap_write_exr_unsynced(b, bufs, 1, &err), ENG_OK);
+    char *x = NULL, *z = NULL;
+    size_t lx = 0, lz = 0;
+    ck_assert_int_eq(eng_read_file(a, 1 << 20, &x, &lx, &err), ENG_OK);
+    ck_assert_int_eq(eng_read_file(b, 1 << 20, &z, &lz, &err), ENG_OK);
+    ck_assert_uint_eq(lx, lz);
+    ck_assert_int_eq(memcmp(x, z, lx), 0);
+    ck_assert(!exists(dir, "b.exr.tmp"));
+    free(x);
+    free(z);
+    free(d);
+    rm_rf(dir);
+}
+END_TEST
+
 START_TEST(test_exr_single_part_keeps_name)
 {
     char dir[256], path[512];
@@ -1319,6 +1347,7 @@ static Suite *capture_suite(void)
     TCase *exr = tcase_create("exr");
     tcase_add_test(exr, test_exr_roundtrip);
     tcase_add_test(exr, test_exr_single_part_keeps_name);
+    tcase_add_test(exr, test_exr_unsynced_same_bytes);
     tcase_add_test(exr, test_exr_zip_same_size_chunk);
     tcase_add_test(exr, test_exr_rejects_bad_input);
     suite_add_tcase(s, exr);

@@ -542,6 +542,27 @@ START_TEST(cmp_identical_is_bitexact)
 }
 END_TEST
 
+/* Negative thresholds make even equal values fail: the shortcut for bit-identical values
+ * (compare.c) must then not apply. */
+START_TEST(cmp_negative_thresholds_fail_equal_values)
+{
+    cmp_pair p;
+    pair_init(&p, 0.5f);
+    rep_tol t;
+    rep_tol_builtin(&t);
+    t.fail = -1;
+    t.failrelative = -1;
+    rep_metrics m;
+    rep_compare(&p.run, &p.golden, &t, &m);
+    ck_assert_uint_eq(m.fail_pixels, m.pixels);
+    ck_assert_int_eq(m.first_fail_x, 0);
+    ck_assert_int_eq(m.first_fail_y, 0);
+    rep_tol_builtin(&t);
+    rep_compare(&p.run, &p.golden, &t, &m);
+    ck_assert_uint_eq(m.fail_pixels, 0);
+}
+END_TEST
+
 START_TEST(cmp_tiny_diff_within_or_warn)
 {
     cmp_pair p;
@@ -809,6 +830,26 @@ START_TEST(shim_rejects_garbage)
 }
 END_TEST
 
+/* Frame 0 of the fixture, with a NaN, a -Inf and a -0 in direct.radiance, written through
+ * OpenImageIO to tpath(name) (returned), its bytes in *bytes (caller frees). */
+static char *fx_exr_file(const char *name, char **bytes, size_t *len)
+{
+    fx_run r;
+    fx_make(&r);
+    *fx_at(&r, 0, 1, 2, 3, 1) = NAN;
+    *fx_at(&r, 0, 1, 2, 4, 0) = -INFINITY;
+    *fx_at(&r, 0, 1, 2, 5, 2) = -0.0f;
+    eng_buffer v[3];
+    for (int j = 0; j < 3; j++)
+        v[j] = fx_view(&r.f[0].bufs[j]);
+    char *path = tpath(name);
+    eng_error err;
+    ck_assert_msg(rep_oiio_write_parts(path, v, 3, &err) == ENG_OK, "%s", err.msg);
+    ck_assert_int_eq(eng_read_file(path, 1 << 24, bytes, len, &err), ENG_OK);
+    fx_free(&r);
+    return path;
+}
+
 /* Offset of the first occurrence of needle (len bytes) in hay, or -1. */
 static long find_bytes(const char *hay, size_t n, const char *needle, size_t len)
 {
@@ -824,17 +865,10 @@ static long find_bytes(const char *hay, size_t n, const char *needle, size_t len
  * quickly and with one line naming the attribute. */
 START_TEST(shim_rejects_lying_header_sizes)
 {
-    fx_run r;
-    fx_make(&r);
-    eng_buffer v[3];
-    for (int j = 0; j < 3; j++)
-        v[j] = fx_view(&r.f[0].bufs[j]);
-    char *path = tpath("lying.exr");
-    eng_error err;
-    ck_assert_msg(rep_oiio_write_parts(path, v, 3, &err) == ENG_OK, "%s", err.msg);
     char *orig = NULL;
     size_t len = 0;
-    ck_assert_int_eq(eng_read_file(path, 1 << 24, &orig, &len, &err), ENG_OK);
+    char *path = fx_exr_file("lying.exr", &orig, &len);
+    eng_error err;
     static const struct { const char *key; size_t key_len; size_t at; uint32_t value; const char *says; } cases[] = {
         {"name\0string", 12, 12, 0x7ffffff0u, "claims"},           /* the attribute's size field */
         {"chunkCount\0int\0\4\0\0\0", 19, 19, 0x7fffffffu, "chunkCount"}, /* its value */
@@ -855,6 +889,12 @@ START_TEST(shim_rejects_lying_header_sizes)
         int n = 0;
         eng_result res = rep_oiio_read_parts(path, REP_MAX_FLOATS, &parts, &n, &err);
         ck_assert_msg(res == ENG_ERR_INVALID, "case %zu: %s: %s", c, eng_result_name(res), err.msg);
+        char oiio_msg[sizeof err.msg];
+        memcpy(oiio_msg, err.msg, sizeof oiio_msg);
+        /* the OpenEXR C reader refuses it the same way, before the library sees it */
+        res = rep_read_parts(path, REP_MAX_FLOATS, &parts, &n, &err);
+        ck_assert_msg(res == ENG_ERR_INVALID, "case %zu: %s: %s", c, eng_result_name(res), err.msg);
+        ck_assert_str_eq(err.msg, oiio_msg);
         ck_assert_ptr_null(parts);
         ck_assert_ptr_nonnull(strstr(err.msg, path));
         ck_assert_msg(strstr(err.msg, cases[c].says) != NULL, "case %zu: %s", c, err.msg);
@@ -879,7 +919,10 @@ START_TEST(shim_rejects_lying_header_sizes)
         ck_assert_int_eq(rep_write_atomic(path, bytes, len, &err), ENG_OK);
         rep_part *parts = NULL;
         int n = 0;
-        eng_result res = rep_oiio_read_parts(path, REP_MAX_FLOATS, &parts, &n, &err);
+        eng_result res = rep_read_parts(path, REP_MAX_FLOATS, &parts, &n, &err);
+        ck_assert_msg(res == ENG_ERR_INVALID, "pixel type %u: %s: %s", type, eng_result_name(res), err.msg);
+        ck_assert_ptr_null(parts);
+        res = rep_oiio_read_parts(path, REP_MAX_FLOATS, &parts, &n, &err);
         ck_assert_msg(res == ENG_ERR_INVALID, "pixel type %u: %s: %s", type, eng_result_name(res), err.msg);
         ck_assert_ptr_null(parts);
         ck_assert_ptr_nonnull(strstr(err.msg, path));
@@ -889,7 +932,211 @@ START_TEST(shim_rejects_lying_header_sizes)
     }
     free(orig);
     free(path);
-    fx_free(&r);
+}
+END_TEST
+
+/* ---------------------------------------------------------------- OpenEXR C reader (exr_read.c) */
+
+typedef eng_result (*parts_reader)(const char *, size_t, rep_part **, int *, eng_error *);
+
+/* read and OpenImageIO's reader give the same parts: count, order, names, sizes, channel names
+ * in the same order and every float's bits. */
+static void assert_reader_agrees(parts_reader read, const char *path)
+{
+    rep_part *a = NULL, *b = NULL;
+    int na = 0, nb = 0;
+    eng_error err;
+    ck_assert_msg(read(path, REP_MAX_FLOATS, &a, &na, &err) == ENG_OK, "%s", err.msg);
+    ck_assert_msg(rep_oiio_read_parts(path, REP_MAX_FLOATS, &b, &nb, &err) == ENG_OK, "%s", err.msg);
+    ck_assert_int_eq(na, nb);
+    for (int i = 0; i < na; i++) {
+        ck_assert_str_eq(a[i].name, b[i].name);
+        ck_assert_int_eq(a[i].width, b[i].width);
+        ck_assert_int_eq(a[i].height, b[i].height);
+        ck_assert_int_eq(a[i].channel_count, b[i].channel_count);
+        for (int c = 0; c < a[i].channel_count; c++)
+            ck_assert_msg(strcmp(a[i].channels[c], b[i].channels[c]) == 0, "%s: part %s: channel %d: %s vs %s",
+                          path, a[i].name, c, a[i].channels[c], b[i].channels[c]);
+        size_t n = (size_t)a[i].width * (size_t)a[i].height * (size_t)a[i].channel_count;
+        ck_assert_msg(memcmp(a[i].data, b[i].data, n * sizeof(float)) == 0, "%s: part %s: floats differ", path,
+                      a[i].name);
+    }
+    rep_parts_free(a, na);
+    rep_parts_free(b, nb);
+}
+
+/* The OpenEXR C reader gives OpenImageIO's parts. */
+static void assert_readers_agree(const char *path)
+{
+    assert_reader_agrees(rep_exr_read_parts, path);
+}
+
+/* On recorded frames (43 parts: colour, G-buffer, photon-map channels such as direction.X) and
+ * on the fixture writer's files (NaN, -Inf, -0), the OpenEXR C reader gives OpenImageIO's parts. */
+START_TEST(exr_reader_matches_oiio)
+{
+    static const char *const goldens[] = {
+        ISPM_SOURCE_DIR "/golden/cornell-box-ci/frames/000000.exr",
+        ISPM_SOURCE_DIR "/golden/stress-random-maps/frames/000005.exr",
+    };
+    for (size_t i = 0; i < sizeof goldens / sizeof goldens[0]; i++)
+        assert_readers_agree(goldens[i]);
+    char *bytes = NULL;
+    size_t blen = 0;
+    char *path = fx_exr_file("both.exr", &bytes, &blen);
+    free(bytes);
+    eng_error err;
+    assert_readers_agree(path);
+    /* Chunks whose byte count is no multiple of 16 (the unpacking's vector loops have tails). */
+    static const char *const rgb3[] = {"R", "G", "B"}, *const y1[] = {"Y"};
+    float odd_a[7 * 5 * 3], odd_b[13 * 3];
+    for (size_t i = 0; i < sizeof odd_a / sizeof odd_a[0]; i++)
+        odd_a[i] = (float)i * 0.37f - 3.0f;
+    for (size_t i = 0; i < sizeof odd_b / sizeof odd_b[0]; i++)
+        odd_b[i] = 1.0f / ((float)i + 0.5f);
+    eng_buffer odd[2] = {{"odd.radiance", 7, 5, 3, rgb3, odd_a}, {"odd.depth", 13, 3, 1, y1, odd_b}};
+    ck_assert_msg(rep_oiio_write_parts(path, odd, 2, &err) == ENG_OK, "%s", err.msg);
+    assert_readers_agree(path);
+    /* OpenEXR 3.1's C++ writer (under OpenImageIO) stores a ZIP chunk that compresses to exactly
+     * its own size as is; both readers must take those bytes alike. */
+    char *raw = NULL;
+    size_t len = 0;
+    ck_assert_int_eq(eng_read_file(ISPM_SOURCE_DIR "/tests/data/exr/zip-same-size-64x16-rgb.f32", 1 << 20, &raw, &len,
+                                   &err), ENG_OK);
+    static const char *const rgb[] = {"R", "G", "B"};
+    eng_buffer zb = {"composite.radiance", 64, 16, 3, rgb, (const float *)raw};
+    ck_assert_uint_eq(len, 64 * 16 * 3 * sizeof(float));
+    ck_assert_msg(rep_oiio_write_parts(path, &zb, 1, &err) == ENG_OK, "%s", err.msg);
+    assert_readers_agree(path);
+    free(raw);
+    free(path);
+}
+END_TEST
+
+/* Files the C reader does not take (half channels, tiles; made with oiiotool) are left to
+ * OpenImageIO: rep_read_parts then gives exactly OpenImageIO's parts. */
+START_TEST(exr_reader_leaves_other_files_to_oiio)
+{
+    static const char *const files[] = {ISPM_SOURCE_DIR "/tests/data/exr/half-5x4-rgb.exr",
+                                        ISPM_SOURCE_DIR "/tests/data/exr/tiled-9x7-rgb.exr"};
+    for (size_t i = 0; i < sizeof files / sizeof files[0]; i++) {
+        rep_part *parts = NULL;
+        int n = 0;
+        eng_error err;
+        ck_assert_int_eq(rep_exr_read_parts(files[i], REP_MAX_FLOATS, &parts, &n, &err), ENG_ERR_UNSUPPORTED);
+        ck_assert_ptr_null(parts);
+        ck_assert_ptr_nonnull(strstr(err.msg, files[i]));
+        assert_reader_agrees(rep_read_parts, files[i]);
+    }
+}
+END_TEST
+
+/* A truncated frame file: one line naming the file, whichever reader says it; the C reader
+ * leaves it to OpenImageIO rather than guessing. A missing file is an I/O error. */
+START_TEST(exr_reader_truncated_file)
+{
+    char *bytes = NULL;
+    size_t len = 0;
+    char *path = fx_exr_file("cut.exr", &bytes, &len);
+    eng_error err;
+    size_t cuts[] = {len - 7, len / 2, 300, 40};
+    for (size_t k = 0; k < sizeof cuts / sizeof cuts[0]; k++) {
+        ck_assert_int_eq(rep_write_atomic(path, bytes, cuts[k], &err), ENG_OK);
+        rep_part *parts = NULL;
+        int n = 0;
+        eng_result res = rep_exr_read_parts(path, REP_MAX_FLOATS, &parts, &n, &err);
+        ck_assert_msg(res != ENG_OK, "cut at %zu: read", cuts[k]);
+        ck_assert_ptr_null(parts);
+        res = rep_read_parts(path, REP_MAX_FLOATS, &parts, &n, &err);
+        ck_assert_msg(res == ENG_ERR_IO || res == ENG_ERR_INVALID, "cut at %zu: %s", cuts[k], eng_result_name(res));
+        ck_assert_ptr_null(parts);
+        ck_assert_int_eq(n, 0);
+        ck_assert_msg(strstr(err.msg, path) != NULL, "%s", err.msg);
+        ck_assert_ptr_null(strchr(err.msg, '\n'));
+    }
+    free(bytes);
+    free(path);
+    path = tpath("absent.exr");
+    rep_part *parts = NULL;
+    int n = 0;
+    ck_assert_int_eq(rep_read_parts(path, REP_MAX_FLOATS, &parts, &n, &err), ENG_ERR_IO);
+    ck_assert_ptr_nonnull(strstr(err.msg, path));
+    free(path);
+}
+END_TEST
+
+/* A PNG's chunks other than IDAT, in order, as one byte string (length, type, data, CRC each);
+ * caller frees. */
+static char *png_meta_chunks(const char *bytes, size_t len, size_t *out_len)
+{
+    char *out = malloc(len + 1);
+    ck_assert_ptr_nonnull(out);
+    size_t o = 0;
+    ck_assert_uint_ge(len, 8);
+    for (size_t i = 8; i + 12 <= len;) {
+        const unsigned char *b = (const unsigned char *)bytes + i;
+        size_t n = (size_t)b[0] << 24 | (size_t)b[1] << 16 | (size_t)b[2] << 8 | (size_t)b[3];
+        ck_assert_uint_le(i + 12 + n, len);
+        if (memcmp(b + 4, "IDAT", 4) != 0) {
+            memcpy(out + o, b, n + 12);
+            o += n + 12;
+        }
+        i += n + 12;
+    }
+    *out_len = o;
+    return out;
+}
+
+/* The report's PNGs (png_write.c, libpng) hold what OpenImageIO wrote before: the same chunks
+ * (sRGB, gAMA, cHRM, oFFs, text) byte for byte and the same pixels; only the zlib level differs. */
+START_TEST(png_writer_matches_oiio)
+{
+    static const int shapes[][3] = {{160, 160, 3}, {37, 5, 1}, {9, 300, 3}, {1, 1, 3}};
+    for (size_t s = 0; s < sizeof shapes / sizeof shapes[0]; s++) {
+        int w = shapes[s][0], h = shapes[s][1], nch = shapes[s][2];
+        size_t n = (size_t)w * (size_t)h * (size_t)nch;
+        unsigned char *px = malloc(n);
+        ck_assert_ptr_nonnull(px);
+        uint32_t x = 12345u + (uint32_t)s;
+        for (size_t i = 0; i < n; i++) { /* smooth ramps with some noise: every filter gets used */
+            x = x * 1664525u + 1013904223u;
+            px[i] = (unsigned char)((i / (size_t)nch) % (size_t)w * 255 / (size_t)w + (x >> 29));
+        }
+        char *p1 = tpath("a.png"), *p2 = tpath("b.png");
+        eng_error err;
+        ck_assert_msg(rep_png_write(p1, w, h, nch, px, &err) == ENG_OK, "%s", err.msg);
+        ck_assert_msg(rep_oiio_write_png(p2, w, h, nch, px, &err) == ENG_OK, "%s", err.msg);
+        char *b1 = NULL, *b2 = NULL;
+        size_t l1 = 0, l2 = 0;
+        ck_assert_int_eq(eng_read_file(p1, 1 << 24, &b1, &l1, &err), ENG_OK);
+        ck_assert_int_eq(eng_read_file(p2, 1 << 24, &b2, &l2, &err), ENG_OK);
+        size_t m1 = 0, m2 = 0;
+        char *c1 = png_meta_chunks(b1, l1, &m1), *c2 = png_meta_chunks(b2, l2, &m2);
+        ck_assert_msg(m1 == m2 && memcmp(c1, c2, m1) == 0, "%dx%dx%d: chunks differ", w, h, nch);
+        int rw = 0, rh = 0, rc = 0;
+        unsigned char *back = NULL;
+        ck_assert_msg(rep_oiio_read_image8(p1, &rw, &rh, &rc, &back, &err) == ENG_OK, "%s", err.msg);
+        ck_assert_int_eq(rw, w);
+        ck_assert_int_eq(rh, h);
+        ck_assert_int_eq(rc, nch);
+        ck_assert_int_eq(memcmp(back, px, n), 0);
+        free(back);
+        free(c1);
+        free(c2);
+        free(b1);
+        free(b2);
+        free(p1);
+        free(p2);
+        free(px);
+    }
+    char *bad = tpath("no/such/dir/x.png");
+    unsigned char one[3] = {0, 0, 0};
+    eng_error err;
+    ck_assert_int_eq(rep_png_write(bad, 1, 1, 3, one, &err), ENG_ERR_IO);
+    ck_assert_ptr_nonnull(strstr(err.msg, bad));
+    ck_assert_int_eq(rep_png_write(bad, 0, 1, 3, one, &err), ENG_ERR_INVALID);
+    ck_assert_int_eq(rep_png_write(bad, 1, 1, 4, one, &err), ENG_ERR_INVALID);
+    free(bad);
 }
 END_TEST
 
@@ -1740,6 +1987,61 @@ static int img_files(const char *run)
     return n;
 }
 
+/* The images report.html makes from what the walk kept (keep.c: parts and ꟻLIP maps) are the
+ * bytes it makes when it decodes the frames and runs ꟻLIP again (no keep), whatever is kept. */
+START_TEST(report_kept_parts_give_the_same_images)
+{
+    char *golden = make_golden();
+    fx_run r;
+    fx_make(&r);
+    *fx_at(&r, 0, 1, 2, 3, 0) += 0.5f; /* frame 0 direct.radiance: a card with a ꟻLIP map */
+    *fx_at(&r, 1, 0, 1, 1, 2) += 0.25f; /* frame 1 gbuffer.position: a card without */
+    char *run = tpath("run");
+    fx_write(&r, run);
+    char *kept_dir = tpath("rep-kept"), *plain_dir = tpath("rep-plain");
+    rep_options o = {0};
+    o.run_dir = run;
+    o.golden_dir = golden;
+    o.quiet = 1;
+    o.report_dir = kept_dir;
+    rep_report rr;
+    eng_error err;
+    ck_assert_int_eq(rep_replay_report(&o, &rr, &err), REP_FAIL);
+    ck_assert_ptr_nonnull(rr.keep);
+    ck_assert_ptr_nonnull(rep_keep_find_part(rr.keep, 0, REP_KEEP_RUN, "direct.radiance"));
+    ck_assert_ptr_nonnull(rep_keep_find_part(rr.keep, 0, REP_KEEP_GOLDEN, "direct.radiance"));
+    ck_assert_ptr_nonnull(rep_keep_find_flip(rr.keep, 0, "direct.radiance"));
+    ck_assert_ptr_nonnull(rep_keep_find_part(rr.keep, 1, REP_KEEP_RUN, "gbuffer.position"));
+    ck_assert_ptr_null(rep_keep_find_part(rr.keep, 1, REP_KEEP_RUN, "shadow.light0")); /* bit-exact */
+    rep_keep_free(rr.keep);
+    rr.keep = NULL;
+    ck_assert_msg(rep_report_write(&rr, plain_dir, &err) == ENG_OK, "%s", err.msg);
+    static const char *const imgs[] = {"0000-f000000-direct.radiance-golden.png", "0001-f000000-direct.radiance-new.png",
+                                       "0002-f000000-direct.radiance-diff.png", "0003-f000000-direct.radiance-flip.png",
+                                       "0006-f000001-gbuffer.position-golden.png"};
+    for (size_t i = 0; i < sizeof imgs / sizeof imgs[0]; i++) {
+        char *rel = rep_xprintf("img/%s", imgs[i]);
+        char *a = rep_path_join(kept_dir, rel), *b = rep_path_join(plain_dir, rel);
+        char *ba = NULL, *bb = NULL;
+        size_t la = 0, lb = 0;
+        ck_assert_msg(eng_read_file(a, 1 << 24, &ba, &la, &err) == ENG_OK, "%s", err.msg);
+        ck_assert_msg(eng_read_file(b, 1 << 24, &bb, &lb, &err) == ENG_OK, "%s", err.msg);
+        ck_assert_msg(la == lb && memcmp(ba, bb, la) == 0, "%s differs", imgs[i]);
+        free(ba);
+        free(bb);
+        free(a);
+        free(b);
+        free(rel);
+    }
+    rep_report_free(&rr);
+    free(kept_dir);
+    free(plain_dir);
+    free(run);
+    free(golden);
+    fx_free(&r);
+}
+END_TEST
+
 START_TEST(report_junit_and_html_name_the_failure)
 {
     char *golden = make_golden();
@@ -1970,6 +2272,7 @@ static Suite *replay_suite(void)
     tcase_add_test(unit, progress_plain_lines_with_time_left);
     tcase_add_test(unit, photon_map_compared_as_paths);
     tcase_add_test(unit, cmp_identical_is_bitexact);
+    tcase_add_test(unit, cmp_negative_thresholds_fail_equal_values);
     tcase_add_test(unit, cmp_tiny_diff_within_or_warn);
     tcase_add_test(unit, cmp_failpercent);
     tcase_add_test(unit, cmp_hardfail);
@@ -1990,6 +2293,10 @@ static Suite *replay_suite(void)
     tcase_add_test(files, shim_round_trip);
     tcase_add_test(files, shim_rejects_garbage);
     tcase_add_test(files, shim_rejects_lying_header_sizes);
+    tcase_add_test(files, exr_reader_matches_oiio);
+    tcase_add_test(files, exr_reader_truncated_file);
+    tcase_add_test(files, exr_reader_leaves_other_files_to_oiio);
+    tcase_add_test(files, png_writer_matches_oiio);
     tcase_add_test(files, e2e_identical_is_bitexact);
     tcase_add_test(files, e2e_one_pixel_changed);
     tcase_add_test(files, e2e_nan_fails);
@@ -2011,6 +2318,7 @@ static Suite *replay_suite(void)
     tcase_add_test(files, e2e_bless_refuses_incomplete);
     tcase_add_test(files, e2e_text_report_lists_worst_first);
     tcase_add_test(files, report_junit_and_html_name_the_failure);
+    tcase_add_test(files, report_kept_parts_give_the_same_images);
     tcase_add_test(files, report_green_run_stays_small);
     tcase_add_test(files, report_unreadable_run_is_a_junit_error);
     suite_add_tcase(s, files);

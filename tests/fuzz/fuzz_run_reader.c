@@ -1,7 +1,8 @@
 /* fuzz_run_reader.c — libFuzzer target for replay's readers of files it did not write: the
  * run manifest (rep_run_open + rep_run_read_frame, replay/run.c), tolerance files
- * (rep_tol_parse, replay/tolerance.c) and frame EXRs (rep_oiio_read_parts, the OpenImageIO
- * shim). A golden is read by the same code as a run, so this covers goldens too.
+ * (rep_tol_parse, replay/tolerance.c) and frame EXRs (rep_read_parts: the OpenEXR C reader,
+ * exr_read.c, then the OpenImageIO shim for what it leaves). A golden is read by the same code
+ * as a run, so this covers goldens too.
  *
  * The first input byte picks the reader (mod 3) and the rest is the file:
  *   0  manifest.json of a run folder made once per process in a temp folder, which also holds
@@ -214,7 +215,7 @@ static void fuzz_exr(const uint8_t *data, size_t size)
     rep_part *parts = NULL;
     int count = 0;
     eng_error err = {{0}};
-    if (rep_oiio_read_parts(exr_path, REP_MAX_FLOATS, &parts, &count, &err) != ENG_OK) {
+    if (rep_read_parts(exr_path, REP_MAX_FLOATS, &parts, &count, &err) != ENG_OK) {
         if (parts || count)
             abort();
         check_message(&err);
