@@ -29,7 +29,7 @@ GOLD_DIFF=golden/cornell-box-quads-ci
 command -v idiff >/dev/null || { echo "perf.sh: idiff (openimageio-tools) is not installed" >&2; exit 2; }
 mkdir -p "$OUT"
 
-now() { date +%s.%N; }
+. "$(dirname "$0")/timing.sh" # now, median, ratio
 
 # seconds COMMAND...: runs it (output to $OUT/log), prints its wall time in seconds. Exit
 # codes are not judged here (replay and idiff exit non-zero on differing files by design).
@@ -40,7 +40,6 @@ seconds() {
     awk -v s="$s" -v e="$e" 'BEGIN { printf "%.3f\n", e - s }'
 }
 
-median() { tr ' ' '\n' | grep . | sort -n | awk '{ v[NR] = $1 } END { print v[int((NR + 1) / 2)] }'; }
 
 # pair NAME_A NAME_B CMD_A CMD_B: alternates A and B RUNS times; sets A_MED, B_MED.
 pair() {
@@ -57,7 +56,6 @@ pair() {
     printf '  %-44s %8.2f s   (runs:%s)\n' "$2" "$B_MED" "$tb"
 }
 
-ratio() { awk -v a="$1" -v b="$2" 'BEGIN { printf "%.2f", a / b }'; }
 
 # verdict RATIO OP GOAL: "goal met" or "SHORT of the goal".
 verdict() { awk -v r="$1" -v g="$3" -v op="$2" 'BEGIN { ok = op == "le" ? r <= g : r >= g; print ok ? "goal met" : "SHORT of the goal" }'; }

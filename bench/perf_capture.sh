@@ -19,7 +19,7 @@ bad() { echo "perf_capture.sh: $*" >&2; exit 2; }
 OLD=$1 NEW=$2 OUT=${3:-$(mktemp -d /tmp/ispm-perf-capture.XXXXXX)} RUNS=${RUNS:-3} CHRT=${CHRT:-}
 mkdir -p "$OUT"
 
-now() { date +%s.%N; }
+. "$(dirname "$0")/timing.sh" # now, median, ratio
 seconds() { # NAME COMMAND...: prints its wall time; appends its CPU seconds (user + sys) to $OUT/cpu.NAME
     name=$1
     shift
@@ -30,8 +30,6 @@ seconds() { # NAME COMMAND...: prints its wall time; appends its CPU seconds (us
     e=$(now)
     awk -v s="$s" -v e="$e" 'BEGIN { printf "%.3f\n", e - s }'
 }
-median() { tr ' ' '\n' | grep . | sort -n | awk '{ v[NR] = $1 } END { print v[int((NR + 1) / 2)] }'; }
-ratio() { awk -v a="$1" -v b="$2" 'BEGIN { printf "%.2f", a / b }'; }
 
 echo "bench/perf_capture.sh: $RUNS runs each, alternating; $(nproc) CPUs, load $(cut -d' ' -f1-3 /proc/loadavg)${CHRT:+, under $CHRT}"
 echo "  old: $OLD"

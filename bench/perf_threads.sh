@@ -24,15 +24,13 @@ TINY=$OUT/tiny.json
 sed -e 's/"frames": *[0-9]*/"frames": 1/' -e 's/"resolution": *\[[0-9, ]*\]/"resolution": [32, 32]/' \
     -e "s|\"scene\": *\"|\"scene\": \"$(pwd)/scenes/cornell-box/|" scenes/cornell-box/cornell-box-ci.json >"$TINY"
 
-now() { date +%s.%N; }
+. "$(dirname "$0")/timing.sh" # now, median, ratio
 seconds() { # COMMAND...: its wall time; a failure stops the benchmark
     s=$(now)
     $CHRT "$@" >>"$OUT/log" 2>&1 || { echo "perf_threads.sh: failed: $* (see $OUT/log)" >&2; exit 1; }
     e=$(now)
     awk -v s="$s" -v e="$e" 'BEGIN { printf "%.3f\n", e - s }'
 }
-median() { tr ' ' '\n' | grep . | sort -n | awk '{ v[NR] = $1 } END { print v[int((NR + 1) / 2)] }'; }
-ratio() { awk -v a="$1" -v b="$2" 'BEGIN { printf "%.2f", a / b }'; }
 
 echo "bench/perf_threads.sh: $RUNS runs each, alternating; $(nproc) CPUs, load $(cut -d' ' -f1-3 /proc/loadavg)${CHRT:+, under $CHRT}"
 echo "  old: $OLD"
