@@ -1,8 +1,8 @@
 /* tool_capture_cost.c — issue 22's capture_compression trade-off: for every frame file of a
  * recorded run, decodes its parts once, then per lossless compression writes the frame as
  * capture does (cap__write_exr: encode, write, fsync, rename) and decodes it back as replay
- * does (rep_oiio_read_parts), REPEATS times, and prints per frame the file size and the
- * median thread CPU and wall milliseconds of each. CPU time is what a loaded machine does
+ * does (rep_read_parts: OpenEXR's C API, OpenImageIO for what it leaves), REPEATS times, and
+ * prints per frame the file size and the median thread CPU and wall milliseconds of each. CPU time is what a loaded machine does
  * not distort much; on 2 shared cores, read the wall times with care. Also checks that every
  * compression decodes to the same bits (exit 1 if not).
  *
@@ -48,7 +48,7 @@ int main(int argc, char **argv)
             rep_part *parts = NULL;
             int n = 0;
             eng_error err = {{0}};
-            if (rep_oiio_read_parts(path, (size_t)1 << 28, &parts, &n, &err) != ENG_OK) {
+            if (rep_read_parts(path, (size_t)1 << 28, &parts, &n, &err) != ENG_OK) {
                 fprintf(stderr, "ispm_test_capture_cost: %s\n", err.msg);
                 return 2;
             }
@@ -72,7 +72,7 @@ int main(int argc, char **argv)
                 int nb = 0;
                 c0 = tool_ms(CLOCK_THREAD_CPUTIME_ID);
                 w0 = tool_ms(CLOCK_MONOTONIC);
-                if (rep_oiio_read_parts(tmp, (size_t)1 << 28, &back, &nb, &err) != ENG_OK) {
+                if (rep_read_parts(tmp, (size_t)1 << 28, &back, &nb, &err) != ENG_OK) {
                     fprintf(stderr, "ispm_test_capture_cost: %s\n", err.msg);
                     return 2;
                 }
