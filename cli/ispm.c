@@ -329,6 +329,7 @@ static int cmd_record(int argc, char **argv, const char *command_line)
         return EXIT_INPUT;
     }
     const char *seq_path = argv[optind];
+    eng_keep_freed_memory(); /* llvmpipe's binned scene, freed and allocated again every frame */
     eng_error err = {{0}};
     seq_sequence *seq = calloc(1, sizeof *seq);
     if (!seq) {

@@ -5,6 +5,9 @@
 #include "eng.h"
 
 #include <errno.h>
+#ifdef __GLIBC__
+#include <malloc.h>
+#endif
 #include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
@@ -287,4 +290,20 @@ const char *eng_random_name(eng_random_mode m)
     case ENG_RANDOM_DEFAULT: return "maps";
     }
     return "unknown";
+}
+
+/* Freed memory kept in the heap instead of returned to the system (glibc: allocations up to
+ * 32 MiB from the heap, no trimming below 512 MiB free). A frame allocates and frees the same
+ * large blocks every frame (replay: a frame's buffers, 6 MB for the CI run per side; record:
+ * llvmpipe's binned scene, which a 1-thread splat bins in one piece), and glibc serves each from
+ * fresh mmap'd or trimmed-and-regrown memory, so every page is faulted in anew. Process-wide,
+ * only how freed memory is kept: no result depends on it. Measured (session 8, idle): replay of
+ * the CI run ~24,000 faults fewer; record of cornell-box-perf, 1 thread, 66,886 -> 39,708 minor
+ * faults, 2.51 -> 2.21 s, the same peak RSS (220 MB); 2 threads unchanged. */
+void eng_keep_freed_memory(void)
+{
+#ifdef __GLIBC__
+    mallopt(M_MMAP_THRESHOLD, 32 << 20); /* glibc's largest */
+    mallopt(M_TRIM_THRESHOLD, 512 << 20);
+#endif
 }

@@ -21,9 +21,6 @@
 #include "stability_internal.h"
 
 #include <fnmatch.h>
-#ifdef __GLIBC__
-#include <malloc.h>
-#endif
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -540,22 +537,9 @@ done:
     return res;
 }
 
-/* A replay allocates and frees a frame's worth of buffers (6 MB for the CI run) per frame and
- * side. glibc serves each from fresh mmap'd or trimmed-and-regrown memory, so every page of every
- * buffer is faulted in anew (24,000 faults, a tenth of the CPU time of a replay of the CI run on
- * the build machine's VM); kept in the heap instead, freed buffers are reused. Process-wide, but
- * only how freed memory is kept: no result depends on it. */
-static void keep_freed_memory(void)
-{
-#ifdef __GLIBC__
-    mallopt(M_MMAP_THRESHOLD, 32 << 20); /* glibc's largest */
-    mallopt(M_TRIM_THRESHOLD, 512 << 20);
-#endif
-}
-
 rep_exit rep_replay_report(const rep_options *o, rep_report *r, eng_error *err)
 {
-    keep_freed_memory();
+    eng_keep_freed_memory(); /* a frame's buffers per frame and side: reused, not faulted anew */
     memset(r, 0, sizeof *r);
     r->digest_frame = -1;
     if (!o || !o->run_dir) {
