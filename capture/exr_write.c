@@ -22,6 +22,7 @@
 #define _POSIX_C_SOURCE 200809L
 
 #include "cap_internal.h"
+#include "exr_planes.h"
 
 #include <openexr.h>
 
@@ -178,25 +179,14 @@ static exr_result_t zip_safe_compress(exr_encode_pipeline_t *enc)
     return rv;
 }
 
-/* Where the encoder takes one channel's pixels from: the sample of row y, column x is at
- * base + (y - y0) * line_stride + x * pixel_stride (x from the data window's left edge), in
- * the channel's own type. */
-typedef struct exr_plane {
-    const char *name;
-    const uint8_t *base;
-    int32_t pixel_stride, line_stride;
-    int16_t bytes; /* 2 (HALF) or 4 */
-    uint16_t type; /* exr_pixel_type_t */
-} exr_plane;
-
 /* Points a coding channel at its plane (found by name among planes[0..n-1]) for the chunk
  * starting at row start_y: sets the user layout and returns where the chunk's first sample is,
  * or NULL if no plane has that name (the library lists exactly the channels defined, so only a
  * file disagreeing with itself). */
-static const uint8_t *bind_plane(exr_coding_channel_info_t *ch, const exr_plane *planes, int n, int y0,
+static const uint8_t *bind_plane(exr_coding_channel_info_t *ch, const cap_exr_plane *planes, int n, int y0,
                                  int start_y)
 {
-    const exr_plane *pl = NULL;
+    const cap_exr_plane *pl = NULL;
     for (int i = 0; i < n && !pl; i++)
         if (strcmp(planes[i].name, ch->channel_name) == 0)
             pl = &planes[i];
@@ -209,9 +199,48 @@ static const uint8_t *bind_plane(exr_coding_channel_info_t *ch, const exr_plane 
     return pl->base + (size_t)(start_y - y0) * (size_t)pl->line_stride;
 }
 
+exr_result_t cap_exr_decode_part(exr_context_t ctxt, int part, int y0, int height, int width,
+                                 const cap_exr_plane *planes, int n)
+{
+    int32_t lines = 0;
+    exr_result_t rv = exr_get_scanlines_per_chunk(ctxt, part, &lines);
+    if (rv == EXR_ERR_SUCCESS && lines < 1)
+        rv = EXR_ERR_INVALID_ARGUMENT;
+    exr_decode_pipeline_t dec = EXR_DECODE_PIPELINE_INITIALIZER;
+    int initialized = 0;
+    for (int64_t y = y0; rv == EXR_ERR_SUCCESS && y < (int64_t)y0 + height; y += lines) {
+        exr_chunk_info_t ci;
+        rv = exr_read_scanline_chunk_info(ctxt, part, (int)y, &ci);
+        if (rv == EXR_ERR_SUCCESS)
+            rv = initialized ? exr_decoding_update(ctxt, part, &ci, &dec) : exr_decoding_initialize(ctxt, part, &ci, &dec);
+        if (rv != EXR_ERR_SUCCESS)
+            break;
+        initialized = 1;
+        if (ci.start_y < y0 || ci.height < 1 || (int64_t)ci.start_y + ci.height > (int64_t)y0 + height)
+            rv = EXR_ERR_INVALID_ARGUMENT;
+        for (int k = 0; k < dec.channel_count && rv == EXR_ERR_SUCCESS; k++) {
+            exr_coding_channel_info_t *ch = &dec.channels[k];
+            /* The planes are the caller's to write. */
+            const uint8_t *to = ch->height == ci.height && ch->width == width
+                                    ? bind_plane(ch, planes, n, y0, ci.start_y)
+                                    : NULL;
+            ch->decode_to_ptr = (uint8_t *)(uintptr_t)to;
+            if (!to)
+                rv = EXR_ERR_INVALID_ARGUMENT;
+        }
+        if (rv == EXR_ERR_SUCCESS)
+            rv = exr_decoding_choose_default_routines(ctxt, part, &dec);
+        if (rv == EXR_ERR_SUCCESS)
+            rv = exr_decoding_run(ctxt, part, &dec);
+    }
+    if (initialized)
+        exr_decoding_destroy(ctxt, &dec);
+    return rv;
+}
+
 /* Encodes every scanline chunk of one part, top (row y0) to bottom, from planes[0..n-1],
  * found by channel name. */
-static exr_result_t write_part_pixels(exr_context_t ctxt, int part, int y0, int height, const exr_plane *planes,
+static exr_result_t write_part_pixels(exr_context_t ctxt, int part, int y0, int height, const cap_exr_plane *planes,
                                       int n)
 {
     int32_t lines = 0;
@@ -259,10 +288,10 @@ static exr_result_t write_part_pixels(exr_context_t ctxt, int part, int y0, int 
 /* An announced buffer's pixels as planes (interleaved float32 channels, top row first). */
 static exr_result_t write_buffer_pixels(exr_context_t ctxt, int part, const eng_buffer *b)
 {
-    exr_plane planes[ENG_MAX_CHANNELS];
+    cap_exr_plane planes[ENG_MAX_CHANNELS];
     size_t nc = (size_t)b->channel_count;
     for (size_t c = 0; c < nc; c++)
-        planes[c] = (exr_plane){b->channels[c], (const uint8_t *)(b->data + c), (int32_t)(nc * sizeof(float)),
+        planes[c] = (cap_exr_plane){b->channels[c], (const uint8_t *)(b->data + c), (int32_t)(nc * sizeof(float)),
                                 (int32_t)((size_t)b->width * nc * sizeof(float)), (int16_t)sizeof(float),
                                 EXR_PIXEL_FLOAT};
     return write_part_pixels(ctxt, part, 0, b->height, planes, (int)nc);
@@ -458,7 +487,7 @@ eng_result cap_write_exr(const char *path, const eng_buffer *const *bufs, int co
 /* One part of the file being recompressed, decoded: its channels as planes in their own type. */
 typedef struct exr_part_pixels {
     int y0, height, count;
-    exr_plane planes[ENG_MAX_CHANNELS];
+    cap_exr_plane planes[ENG_MAX_CHANNELS];
     uint8_t *data; /* every plane, one after the other */
 } exr_part_pixels;
 
@@ -525,39 +554,12 @@ static exr_result_t read_part(exr_recode *r, int p, char *why, size_t why_size)
     for (int c = 0; c < pp->count; c++) {
         const exr_attr_chlist_entry_t *e = &chl->entries[c];
         int16_t bytes = pixel_bytes(e->pixel_type);
-        pp->planes[c] = (exr_plane){e->name.str, pp->data + offset, bytes, (int32_t)(w * bytes), bytes,
+        pp->planes[c] = (cap_exr_plane){e->name.str, pp->data + offset, bytes, (int32_t)(w * bytes), bytes,
                                     (uint16_t)e->pixel_type};
         offset += (size_t)w * (size_t)h * (size_t)bytes;
     }
 
-    exr_decode_pipeline_t dec = EXR_DECODE_PIPELINE_INITIALIZER;
-    int initialized = 0, routines = 0;
-    for (int64_t y = dw.min.y; y <= dw.max.y && rv == EXR_ERR_SUCCESS; y += lines) {
-        exr_chunk_info_t ci;
-        rv = exr_read_scanline_chunk_info(r->in, p, (int)y, &ci);
-        if (rv != EXR_ERR_SUCCESS)
-            break;
-        rv = initialized ? exr_decoding_update(r->in, p, &ci, &dec) : exr_decoding_initialize(r->in, p, &ci, &dec);
-        if (rv != EXR_ERR_SUCCESS)
-            break;
-        initialized = 1;
-        for (int k = 0; k < dec.channel_count && rv == EXR_ERR_SUCCESS; k++) {
-            /* The planes are pp->data, which is ours to write. */
-            const uint8_t *to = bind_plane(&dec.channels[k], pp->planes, pp->count, pp->y0, ci.start_y);
-            dec.channels[k].decode_to_ptr = (uint8_t *)(uintptr_t)to;
-            if (!to)
-                rv = EXR_ERR_INVALID_ARGUMENT;
-        }
-        if (rv == EXR_ERR_SUCCESS && !routines) {
-            rv = exr_decoding_choose_default_routines(r->in, p, &dec);
-            routines = 1;
-        }
-        if (rv == EXR_ERR_SUCCESS)
-            rv = exr_decoding_run(r->in, p, &dec);
-    }
-    if (initialized)
-        exr_decoding_destroy(r->in, &dec);
-    return rv;
+    return cap_exr_decode_part(r->in, p, pp->y0, pp->height, (int)w, pp->planes, pp->count);
 }
 
 /* The parts of r->in again, every attribute copied, compression r->comp, pixels from r->parts. */
@@ -654,7 +656,7 @@ static eng_result check_recode(const char *tmp, void *arg, eng_error *err)
         const exr_part_pixels *a = &r->parts[p], *b = &back.parts[p];
         int ok = a->y0 == b->y0 && a->height == b->height && a->count == b->count;
         for (int c = 0; ok && c < a->count; c++) {
-            const exr_plane *x = &a->planes[c], *y = &b->planes[c];
+            const cap_exr_plane *x = &a->planes[c], *y = &b->planes[c];
             ok = strcmp(x->name, y->name) == 0 && x->type == y->type && x->line_stride == y->line_stride &&
                  memcmp(x->base, y->base, (size_t)x->line_stride * (size_t)a->height) == 0;
         }

@@ -17,6 +17,8 @@
  */
 #include "oiio_shim.h"
 
+#include "exr_planes.h"
+
 #include <openexr.h>
 
 #include <stdint.h>
@@ -194,58 +196,17 @@ static eng_result read_header(exr_context_t ctxt, const char *path, int p, size_
     return ENG_OK;
 }
 
-/* The pixels of part p into out->data (interleaved in out's channel order, top row first). */
+/* The pixels of part p into out->data (interleaved in out's channel order, top row first),
+ * through capture's decoding loop (capture/exr_planes.h): one plane per channel. */
 static eng_result read_pixels(exr_context_t ctxt, const char *path, int p, rep_part *out, eng_error *err)
 {
-    int32_t lines = 0;
-    exr_result_t rv = exr_get_scanlines_per_chunk(ctxt, p, &lines);
-    if (rv != EXR_ERR_SUCCESS)
-        return lib_failed(path, p, rv, err);
-    if (lines < 1)
-        return leave(path, p, "no scanlines per chunk", err);
     const size_t nc = (size_t)out->channel_count, row = (size_t)out->width * nc;
-    exr_decode_pipeline_t dec = EXR_DECODE_PIPELINE_INITIALIZER;
-    int inited = 0;
-    eng_result r = ENG_OK;
-    for (int y = 0; y < out->height && r == ENG_OK; y += lines) {
-        exr_chunk_info_t ci;
-        rv = exr_read_scanline_chunk_info(ctxt, p, y, &ci);
-        if (rv == EXR_ERR_SUCCESS)
-            rv = inited ? exr_decoding_update(ctxt, p, &ci, &dec) : exr_decoding_initialize(ctxt, p, &ci, &dec);
-        if (rv != EXR_ERR_SUCCESS) {
-            r = lib_failed(path, p, rv, err);
-            break;
-        }
-        inited = 1;
-        if (ci.start_y < 0 || ci.height < 1 || ci.start_y + ci.height > out->height) {
-            r = leave(path, p, "a chunk outside the data window", err);
-            break;
-        }
-        for (int k = 0; k < dec.channel_count && r == ENG_OK; k++) {
-            exr_coding_channel_info_t *cc = &dec.channels[k];
-            int idx = -1;
-            for (int c = 0; c < out->channel_count && idx < 0; c++)
-                if (strcmp(out->channels[c], cc->channel_name) == 0)
-                    idx = c;
-            if (idx < 0 || cc->height != ci.height || cc->width != out->width) {
-                r = leave(path, p, "a chunk's channels differ from the header's", err);
-                break;
-            }
-            cc->user_bytes_per_element = 4;
-            cc->user_data_type = EXR_PIXEL_FLOAT;
-            cc->user_pixel_stride = (int32_t)(nc * sizeof(float));
-            cc->user_line_stride = (int32_t)(row * sizeof(float));
-            cc->decode_to_ptr = (uint8_t *)(out->data + (size_t)ci.start_y * row + (size_t)idx);
-        }
-        if (r != ENG_OK)
-            break;
-        if ((rv = exr_decoding_choose_default_routines(ctxt, p, &dec)) != EXR_ERR_SUCCESS ||
-            (rv = exr_decoding_run(ctxt, p, &dec)) != EXR_ERR_SUCCESS)
-            r = lib_failed(path, p, rv, err);
-    }
-    if (inited)
-        exr_decoding_destroy(ctxt, &dec);
-    return r;
+    cap_exr_plane planes[ENG_MAX_CHANNELS];
+    for (size_t c = 0; c < nc; c++)
+        planes[c] = (cap_exr_plane){out->channels[c], (const uint8_t *)(out->data + c), (int32_t)(nc * sizeof(float)),
+                                    (int32_t)(row * sizeof(float)), (int16_t)sizeof(float), EXR_PIXEL_FLOAT};
+    exr_result_t rv = cap_exr_decode_part(ctxt, p, 0, out->height, out->width, planes, (int)nc);
+    return rv == EXR_ERR_SUCCESS ? ENG_OK : lib_failed(path, p, rv, err);
 }
 
 eng_result rep_exr_read_parts(const char *path, size_t max_floats, rep_part **parts, int *count, eng_error *err)
