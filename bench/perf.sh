@@ -81,17 +81,15 @@ idiff_all() { # RUN GOLDEN: idiff -a over every frame pair
     echo "for f in $1/frames/*.exr; do idiff -a \"\$f\" $2/frames/\$(basename \"\$f\"); done"
 }
 echo "2. replay vs idiff -a over the same $frames EXR pairs"
-pair "replay (identical files)" "idiff -a (identical files)" \
-    "$ISPM replay $OUT/all --golden $GOLD --report $OUT/replay-same --quiet" \
-    "$(idiff_all "$OUT/all" "$GOLD")"
-r=$(ratio "$B_MED" "$A_MED")
-echo "  replay is ${r}x faster than idiff (identical)   (goal >= 4x: $(verdict "$r" ge 4))"
-if [ -d "$GOLD_DIFF" ]; then
-    pair "replay (differing files)" "idiff -a (differing files)" \
-        "$ISPM replay $OUT/all --golden $GOLD_DIFF --report $OUT/replay-diff --quiet" \
-        "$(idiff_all "$OUT/all" "$GOLD_DIFF")"
+# replay_vs_idiff WHAT RUN GOLDEN REPORT TAG: one alternating pair, its ratio and verdict
+replay_vs_idiff() {
+    pair "replay ($1)" "idiff -a ($1)" "$ISPM replay $2 --golden $3 --report $4 --quiet" "$(idiff_all "$2" "$3")"
     r=$(ratio "$B_MED" "$A_MED")
-    echo "  replay is ${r}x faster than idiff (differing)   (goal >= 4x: $(verdict "$r" ge 4))"
+    echo "  replay is ${r}x faster than idiff ($5)   (goal >= 4x: $(verdict "$r" ge 4))"
+}
+replay_vs_idiff "identical files" "$OUT/all" "$GOLD" "$OUT/replay-same" identical
+if [ -d "$GOLD_DIFF" ]; then
+    replay_vs_idiff "differing files" "$OUT/all" "$GOLD_DIFF" "$OUT/replay-diff" differing
 else
     echo "  (differing files: $GOLD_DIFF not present)"
 fi
@@ -107,11 +105,7 @@ if [ -x "$MUTATE" ]; then
         "$MUTATE" "$OUT/mut" "$f" final.display 80 80 R add 0.25 >>"$OUT/log" 2>&1
         f=$((f + 1))
     done
-    pair "replay (one pixel differs a frame)" "idiff -a (one pixel differs a frame)" \
-        "$ISPM replay $OUT/mut --golden $GOLD --report $OUT/replay-mut --quiet" \
-        "$(idiff_all "$OUT/mut" "$GOLD")"
-    r=$(ratio "$B_MED" "$A_MED")
-    echo "  replay is ${r}x faster than idiff (same buffers, one pixel differs)   (goal >= 4x: $(verdict "$r" ge 4))"
+    replay_vs_idiff "one pixel differs a frame" "$OUT/mut" "$GOLD" "$OUT/replay-mut" "same buffers, one pixel differs"
 else
     echo "  (same-buffer differing pair: $MUTATE not built)"
 fi
