@@ -51,45 +51,44 @@ static rep_kept *find(const rep_keep *k, int frame, int side, const char *name)
     return NULL;
 }
 
+/* The item of (frame, side, name), made if there is none, with room counted for floats more;
+ * NULL when k is full. */
+static rep_kept *claim(rep_keep *k, int frame, int side, const char *name, size_t floats)
+{
+    rep_kept *it = find(k, frame, side, name);
+    if (it) { /* its other half (part or ꟻLIP map) came first */
+        if (k->floats + floats > REP_KEEP_MAX_FLOATS)
+            return NULL;
+        k->floats += floats;
+        return it;
+    }
+    if (!(it = slot(k, frame, floats)))
+        return NULL;
+    it->frame = frame;
+    it->side = side;
+    it->name = rep_xstrdup(name);
+    return it;
+}
+
 void rep_keep_part(rep_keep *k, int frame, int side, rep_part *p)
 {
     if (!p->data)
         return;
-    size_t floats = (size_t)p->width * (size_t)p->height * (size_t)p->channel_count;
-    rep_kept *it = find(k, frame, side, p->name);
-    if (it && it->part.data)
+    const rep_kept *had = find(k, frame, side, p->name);
+    rep_kept *it;
+    if ((had && had->part.data) ||
+        !(it = claim(k, frame, side, p->name, (size_t)p->width * (size_t)p->height * (size_t)p->channel_count)))
         return;
-    if (it) { /* its ꟻLIP map came first */
-        if (k->floats + floats > REP_KEEP_MAX_FLOATS)
-            return;
-        k->floats += floats;
-    } else if (!(it = slot(k, frame, floats))) {
-        return;
-    } else {
-        it->frame = frame;
-        it->side = side;
-        it->name = rep_xstrdup(p->name);
-    }
     it->part = *p;
     memset(p, 0, sizeof *p); /* moved: the walk's free skips it */
 }
 
 int rep_keep_flip(rep_keep *k, int frame, const char *name, float *map, size_t floats)
 {
-    rep_kept *it = find(k, frame, REP_KEEP_RUN, name);
-    if (it && it->flip)
+    const rep_kept *had = find(k, frame, REP_KEEP_RUN, name);
+    rep_kept *it;
+    if ((had && had->flip) || !(it = claim(k, frame, REP_KEEP_RUN, name, floats)))
         return 0;
-    if (it) {
-        if (k->floats + floats > REP_KEEP_MAX_FLOATS)
-            return 0;
-        k->floats += floats;
-    } else if (!(it = slot(k, frame, floats))) {
-        return 0;
-    } else {
-        it->frame = frame;
-        it->side = REP_KEEP_RUN;
-        it->name = rep_xstrdup(name);
-    }
     it->flip = map;
     return 1;
 }
