@@ -544,7 +544,35 @@ static void metrics_add(rep_metrics_err *acc, const rep_metrics_err *m, double w
 
 typedef struct reference_frames {
     float *indirect, *full; /* frame_count × w × h × 3 */
+    /* How its pixels sample the scene: "centre" (ispm reference --pixel-center: the points the
+     * engine's G-buffers shade), "box" (jittered over the pixel: at silhouettes a mix of the
+     * surfaces a pixel covers), "unknown" (not made by ispm reference). */
+    const char *pixel;
 } reference_frames;
+
+/* ref->pixel from the reference run's manifest (renderer.settings.pixel; runs of ispm reference
+ * from before the key were box-filtered). */
+static void reference_pixel(const char *dir, reference_frames *ref)
+{
+    ref->pixel = "unknown";
+    char *path = rep_path_join(dir, "manifest.json"), *text = NULL;
+    size_t len = 0;
+    eng_error err;
+    cJSON *root = NULL;
+    if (eng_read_file(path, (size_t)64 << 20, &text, &len, &err) == ENG_OK &&
+        (root = cJSON_ParseWithLength(text, len))) {
+        const cJSON *rd = cJSON_GetObjectItemCaseSensitive(root, "renderer");
+        const cJSON *name = cJSON_GetObjectItemCaseSensitive(rd, "name");
+        const cJSON *px = cJSON_GetObjectItemCaseSensitive(cJSON_GetObjectItemCaseSensitive(rd, "settings"), "pixel");
+        if (cJSON_IsString(px) && !strcmp(px->valuestring, "centre"))
+            ref->pixel = "centre";
+        else if (cJSON_IsString(name) && !strcmp(name->valuestring, "reference"))
+            ref->pixel = "box";
+    }
+    cJSON_Delete(root);
+    free(text);
+    free(path);
+}
 
 /* Extracts R, G, B of part `name` of frame f into out (w × h × 3). */
 static eng_result take_rgb(const rep_run *run, int f, const rep_part *parts, const char *name, float *out,
@@ -602,6 +630,8 @@ static eng_result load_reference(const bench_config *c, int w, int h, reference_
         rep_parts_free(parts, run->frames[f].buffer_count);
     }
     rep_run_close(run);
+    if (r == ENG_OK)
+        reference_pixel(c->reference, ref);
     return r;
 }
 
@@ -918,7 +948,7 @@ static int find_speedups(const bench_point *pts, int n, const pass_names *passes
 
 static char *make_json(const bench_config *c, const char *command_line, const bench_point *pts, int n,
                        const columns *cols, const pass_names *passes, const pair_stats *pair, const speedup *ups,
-                       int nups)
+                       int nups, const char *reference_pixel)
 {
     cJSON *root = cJSON_CreateObject();
     cJSON_AddStringToObject(root, "format", "ispm-bench");
@@ -927,6 +957,7 @@ static char *make_json(const bench_config *c, const char *command_line, const be
     cJSON_AddStringToObject(root, "config", c->path);
     cJSON_AddStringToObject(root, "sequence", c->sequence);
     cJSON_AddStringToObject(root, "reference", c->reference);
+    cJSON_AddStringToObject(root, "reference_pixel", reference_pixel);
     cJSON_AddItemToObject(root, "frames", cJSON_CreateIntArray(c->frames, c->frame_count));
     cJSON_AddNumberToObject(root, "repeats", c->repeats);
     cJSON_AddNumberToObject(root, "warmup", c->warmup);
@@ -1288,7 +1319,7 @@ int cmd_bench(int argc, char **argv, const char *command_line)
     char *seq_text = NULL;
     cJSON *seq_root = NULL;
     scn_scene *scene = NULL;
-    reference_frames ref = {NULL, NULL};
+    reference_frames ref = {NULL, NULL, "unknown"};
     pass_names passes = {0};
     char *old_json = NULL, *old_csv = NULL;
     eng_result r = config_load(argv[optind], &c, &err);
@@ -1348,6 +1379,10 @@ int cmd_bench(int argc, char **argv, const char *command_line)
         eng_error inner = err;
         eng_fail(&err, r, "%s: reference: %s", c.path, inner.msg);
     }
+    if (r == ENG_OK && !strcmp(ref.pixel, "box"))
+        fprintf(stderr, "ispm bench: note: %s is box-filtered: at silhouettes its pixels mix surfaces where the "
+                        "engine shades the pixel centre (ispm reference --pixel-center)\n",
+                c.reference);
     if (r == ENG_OK)
         r = seq_load_scene(pts[0].seq, &scene, &err);
     if (r != ENG_OK) { /* the config, sequence, scene or reference */
@@ -1407,7 +1442,7 @@ int cmd_bench(int argc, char **argv, const char *command_line)
             free(csv);
         }
         if (r == ENG_OK) {
-            char *json = make_json(&c, command_line, pts, n, &cols, &passes, &pair, ups, nups);
+            char *json = make_json(&c, command_line, pts, n, &cols, &passes, &pair, ups, nups, ref.pixel);
             r = rep_write_atomic(old_json, json, strlen(json), &err);
             free(json);
         }

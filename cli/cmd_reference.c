@@ -24,7 +24,7 @@ static void reference_usage(FILE *f)
 {
     fprintf(f,
             "usage: ispm reference SEQUENCE -o RUN [--spp N] [--frames A-B] [--threads N] [--seed S]\n"
-            "                      [--max-depth N] [--photons N] [--force] [--quiet]\n"
+            "                      [--max-depth N] [--photons N] [--pixel-center] [--force] [--quiet]\n"
             "\n"
             "Renders ground truth for SEQUENCE's frames on the CPU (Embree): path tracing with\n"
             "next-event estimation to the lights plus progressive photon mapping for caustics,\n"
@@ -40,6 +40,10 @@ static void reference_usage(FILE *f)
             "  -S, --seed S         random seed (0..4294967295); default 0\n"
             "  -d, --max-depth N    surfaces per eye path; default 64\n"
             "  -p, --photons N      caustic photons per pass; default 16384\n"
+            "  -c, --pixel-center   every camera ray through its pixel's centre, where the\n"
+            "                       engine's G-buffers sample the scene (no antialiasing: the\n"
+            "                       truth an image-space method is compared with at edges);\n"
+            "                       default: jittered over the pixel (box-filtered)\n"
             "  -f, --force          replace an existing run in RUN\n"
             "  -q, --quiet          no progress on stderr\n"
             "  -h, --help           this text\n"
@@ -95,19 +99,20 @@ int cmd_reference(int argc, char **argv, const char *command_line)
         {"seed", required_argument, NULL, 'S'},   {"max-depth", required_argument, NULL, 'd'},
         {"photons", required_argument, NULL, 'p'}, {"force", no_argument, NULL, 'f'},
         {"quiet", no_argument, NULL, 'q'},        {"help", no_argument, NULL, 'h'},
-        {NULL, 0, NULL, 0},
+        {"pixel-center", no_argument, NULL, 'c'}, {NULL, 0, NULL, 0},
     };
     const char *out = NULL, *frames_arg = NULL;
     ref_desc rd;
     memset(&rd, 0, sizeof rd);
     int force = 0, c;
     long long v;
-    while ((c = getopt_long(argc, argv, "o:s:F:j:S:d:p:fqh", opts, NULL)) != -1) {
+    while ((c = getopt_long(argc, argv, "o:s:F:j:S:d:p:fqhc", opts, NULL)) != -1) {
         switch (c) {
         case 'o': out = optarg; break;
         case 'F': frames_arg = optarg; break;
         case 'f': force = 1; break;
         case 'q': rd.quiet = 1; break;
+        case 'c': rd.pixel_center = 1; break;
         case 's':
             if ((v = parse_count(optarg, 1, 1 << 20)) < 0) {
                 fprintf(stderr, "ispm reference: --spp: '%s' is not a number in 1..%d\n", optarg, 1 << 20);
@@ -241,8 +246,9 @@ int cmd_reference(int argc, char **argv, const char *command_line)
     ref_add_listener(ref, &l);
     const ref_desc *s = ref_settings(ref);
     if (!rd.quiet)
-        fprintf(stderr, "ispm reference: %s (%s), frames %d-%d, %dx%d, %d spp, max depth %d, %s, %d threads\n",
-                eseq->name, scene->path, first, last, eseq->width, eseq->height, s->spp, s->max_depth,
+        fprintf(stderr, "ispm reference: %s (%s), frames %d-%d, %dx%d, %d spp (%s), max depth %d, %s, %d threads\n",
+                eseq->name, scene->path, first, last, eseq->width, eseq->height, s->spp,
+                s->pixel_center ? "pixel centres" : "box-filtered", s->max_depth,
                 s->no_caustics ? "no caustics" : "caustic photon passes", s->threads);
     rep_progress prog;
     rep_progress_begin(&prog, rd.quiet ? NULL : stderr, "ispm reference", "frame", last - first + 1);

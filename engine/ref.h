@@ -38,6 +38,9 @@ typedef struct ref_desc {
     uint32_t seed;    /* salt of every random number; default 0 (any value is as good) */
     int threads;      /* OpenMP threads; default the engine's settings.threads */
     int no_caustics;  /* 1: no photon passes (tests compare with and without) */
+    int pixel_center; /* 1: every camera ray through its pixel's centre, as the engine's G-buffers
+                       * sample the scene (no antialiasing: what an image-space method computes at
+                       * each pixel); 0: jittered over the pixel's square (a box-filtered image) */
     int quiet;        /* 1: no progress line on stderr */
 } ref_desc;
 

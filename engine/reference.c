@@ -394,7 +394,7 @@ typedef struct frame_ctx {
     double inv_view_proj[16];
     int width, height;
     uint32_t frame, seed;
-    int max_depth;
+    int max_depth, pixel_center;
     float far_dist;           /* longer than any segment inside the scene's bounds */
     const photon_grid *grid;  /* this pass's caustic photons, or NULL */
     const emit_plan *plan;
@@ -954,7 +954,10 @@ static void trace_eye(const frame_ctx *c, int x, int y, uint32_t sample, double 
 {
     uint64_t key = path_key(STREAM_EYE, (uint32_t)y * (uint32_t)c->width + (uint32_t)x, sample, c->frame, c->seed);
     float org[3], dir[3], tnear, tfar;
-    camera_ray(c, x + (double)rnd(key, 0), y + (double)rnd(key, 1), org, dir, &tnear, &tfar);
+    if (c->pixel_center)
+        camera_ray(c, x + 0.5, y + 0.5, org, dir, &tnear, &tfar);
+    else
+        camera_ray(c, x + (double)rnd(key, 0), y + (double)rnd(key, 1), org, dir, &tnear, &tfar);
     const float tnear0 = tnear; /* the near plane: translucent surfaces in front of a culled back face count */
     float thr[3] = {1.0f, 1.0f, 1.0f}, eta = 1.0f;
     const scn_scene *scene = c->fs->scene;
@@ -1151,11 +1154,11 @@ int ref_settings_json(const ref_renderer *r, char *out, size_t size)
     const ref_desc *d = &r->d;
     return snprintf(out, size,
                     "{\"spp\": %d, \"max_depth\": %d, \"photons_per_pass\": %d, \"radius\": %.9g, "
-                    "\"alpha\": %.9g, \"seed\": %u, \"caustics\": %s, \"estimators\": "
+                    "\"alpha\": %.9g, \"seed\": %u, \"caustics\": %s, \"pixel\": \"%s\", \"estimators\": "
                     "\"path tracing with next-event estimation + light vertices, balance heuristic "
                     "(L D (D|S)* E); probabilistic progressive photon mapping of caustics (L S+ D (D|S)* E)\"}",
                     d->spp, d->max_depth, d->photons, (double)d->radius, (double)d->alpha, d->seed,
-                    d->no_caustics ? "false" : "true");
+                    d->no_caustics ? "false" : "true", d->pixel_center ? "centre" : "box");
 }
 
 static const char *const CH_RGB[] = {"R", "G", "B"};
@@ -1188,6 +1191,7 @@ eng_result ref_render_frame(ref_renderer *r, int frame, eng_error *err)
     c.height = r->height;
     c.frame = (uint32_t)frame;
     c.seed = d->seed;
+    c.pixel_center = d->pixel_center;
     c.max_depth = d->max_depth;
     {
         float vp_inv[16];

@@ -141,6 +141,7 @@ python3 - out/bench.json <<'PY' || fail "bench.json content"
 import json, sys
 j = json.load(open(sys.argv[1]))
 assert j["format"] == "ispm-bench" and len(j["points"]) == 4 and j["frames"] == [1]
+assert j["reference_pixel"] == "unknown", j["reference_pixel"]  # a recorded run, not ispm reference
 sg = j["scatter_vs_gather"]
 assert sg["max_rel"] < 1e-4, sg
 PY

@@ -28,6 +28,7 @@ assert r["name"] == "reference", r
 s = r["settings"]
 assert s["spp"] == 2 and s["photons_per_pass"] == 2048 and s["seed"] == 0 and s["caustics"] is True, s
 assert s["max_depth"] == 64 and s["radius"] > 0 and s["first_frame"] == 0, s
+assert s["pixel"] == "box", s
 names = [b["name"] for b in m["frames"][0]["buffers"]]
 assert names == ["reference.direct", "reference.indirect", "reference.full"], names
 PY
@@ -41,6 +42,14 @@ m = json.load(open(sys.argv[1]))
 assert m["frame_count"] == 2 and len(m["frames"]) == 2, m["frame_count"]
 assert [f["time"] for f in m["frames"]] == [0.25, 0.375], [f["time"] for f in m["frames"]]
 assert m["renderer"]["settings"]["first_frame"] == 2 and m["renderer"]["settings"]["last_frame"] == 3
+PY
+
+# --pixel-center: recorded in the manifest; the bench reads it back as the reference's kind.
+"$ISPM" reference "$BOX" -o "$WORK/centre" --spp 1 --frames 0 --pixel-center --quiet > /dev/null || fail "--pixel-center exited $?"
+python3 - "$WORK/centre/manifest.json" <<'PY' || fail "--pixel-center manifest"
+import json, sys
+s = json.load(open(sys.argv[1]))["renderer"]["settings"]
+assert s["pixel"] == "centre", s
 PY
 
 # An existing run is kept without --force, replaced with it.

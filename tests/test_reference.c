@@ -11,6 +11,9 @@
  *     lights the ceiling like the light's mirror image scaled by the Schlick reflectance; on
  *     the glass sphere the caustic estimate at N and 4N samples agrees (the shrinking radius
  *     keeps it consistent);
+ *   - pixel centres (ref_desc.pixel_center): on the floor's front edge, where a box-filtered pixel
+ *     is part background, the reference takes the closed form at the pixel centre's floor point,
+ *     as the engine's G-buffers do;
  *   - determinism: 1 and 2 threads give bit-identical buffers; full = direct + indirect. */
 #include "cap.h"
 #include "eng_internal.h"
@@ -240,6 +243,76 @@ START_TEST(cornell_floor_direct)
     ck_assert_msg(fabs(im.direct[3 * (234 * 256 + 106)] - want) < 0.005 * want, "pixel (106, 234): %g, want %g",
                   (double)im.direct[3 * (234 * 256 + 106)], want);
     images_free(&im);
+    setup_close(&s);
+}
+END_TEST
+
+/* The floor's front edge (z = 1, the box's open side) runs across a row of pixels: there a box-
+ * filtered pixel is part floor, part background, while the engine's G-buffers take the floor at
+ * the pixel's centre. With pixel_center the reference takes the same point: its direct radiance
+ * on those pixels is the closed form at the centre's floor point (and the engine's), and the
+ * box-filtered image is darker there by the part of the pixel that sees the background. */
+START_TEST(pixel_centre_edges)
+{
+    setup s;
+    setup_open(&s, CORNELL_DIR "reference-test.json", CORNELL_SEQ, 0, 2);
+    images im[2];
+    for (int k = 0; k < 2; k++) {
+        memset(&im[k], 0, sizeof im[k]);
+        ref_desc d;
+        memset(&d, 0, sizeof d);
+        d.spp = 16;
+        d.max_depth = 1;
+        d.no_caustics = 1;
+        d.pixel_center = k == 0;
+        render_ref(&s, d, &im[k]);
+    }
+    eng_listener el = {&im[0], NULL, grab, NULL};
+    eng_add_listener(s.engine, &el);
+    eng_error err = {{0}};
+    ck_assert_msg(eng_render_frame(s.engine, 0, &err) == ENG_OK, "%s", err.msg);
+    ck_assert_ptr_nonnull(im[0].engine_direct);
+
+    static const float right[3] = {1, 0, 0}, up[3] = {0, 1, 0}, fwd[3] = {0, 0, -1};
+    static const float light[3] = {0.0f, 1.8f, 0.0f}, eye[3] = {0.0f, 1.0f, 3.9f};
+    static const float kd = 0.725f;
+    double sum_want = 0.0, sum_box = 0.0, worst = 0.0, worst_engine = 0.0;
+    int edge = 0;
+    for (int y = 128; y < 256; y++)
+        for (int x = 8; x < 248; x++) {
+            double d[3], here[3], below[3];
+            pixel_ray(x, y, 256, right, up, fwd, tan(20.0 * ENG_PI / 180.0), d);
+            for (int i = 0; i < 3; i++)
+                here[i] = eye[i] + (-eye[1] / d[1]) * d[i];
+            pixel_ray(x, y + 1, 256, right, up, fwd, tan(20.0 * ENG_PI / 180.0), d);
+            for (int i = 0; i < 3; i++)
+                below[i] = eye[i] + (-eye[1] / d[1]) * d[i];
+            /* A floor pixel whose lower neighbour's centre lies beyond the floor's front edge. */
+            if (!(here[2] < 1.0 && below[2] >= 1.0 && fabs(here[0]) < 0.9))
+                continue;
+            float lifted[3] = {(float)here[0], 1e-3f, (float)here[2]};
+            if (eng_occluded(s.engine, eye, lifted) || eng_occluded(s.engine, lifted, light))
+                continue;
+            double d2 = here[0] * here[0] + 1.8 * 1.8 + here[2] * here[2];
+            double want = kd / ENG_PI * 3.0 * 1.8 / (d2 * sqrt(d2));
+            size_t i = 3 * ((size_t)y * 256 + (size_t)x);
+            double rel = fabs(im[0].direct[i] - want) / want, rel_engine = fabs(im[0].engine_direct[i] - want) / want;
+            worst = rel > worst ? rel : worst;
+            worst_engine = rel_engine > worst_engine ? rel_engine : worst_engine;
+            sum_want += want;
+            sum_box += im[1].direct[i];
+            edge++;
+        }
+    printf("floor front edge: %d pixels; pixel centres: worst %.4f%% (engine %.4f%%); box-filtered: %.3f of the "
+           "centre's light\n",
+           edge, 100 * worst, 100 * worst_engine, sum_box / sum_want);
+    ck_assert_int_gt(edge, 100);
+    ck_assert_msg(worst < 0.005, "pixel-centre reference %.3f%% off the closed form on the edge row", 100 * worst);
+    ck_assert_msg(worst_engine < 0.01, "engine direct.radiance %.3f%% off on the edge row", 100 * worst_engine);
+    ck_assert_msg(sum_box < 0.95 * sum_want, "box-filtered edge row holds %.3f of the centre's light",
+                  sum_box / sum_want);
+    images_free(&im[0]);
+    images_free(&im[1]);
     setup_close(&s);
 }
 END_TEST
@@ -525,6 +598,7 @@ static Suite *reference_suite(void)
     tcase_add_test(tc, capture_renderer_settings);
     tcase_add_test(tc, threads_bit_identical);
     tcase_add_test(tc, cornell_floor_direct);
+    tcase_add_test(tc, pixel_centre_edges);
     tcase_add_test(tc, furnace_sphere);
     tcase_add_test(tc, mirror_caustic);
     tcase_add_test(tc, glass_caustic_converges);
