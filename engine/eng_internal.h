@@ -512,6 +512,12 @@ typedef struct eng_rt eng_rt;
 /* Closest hit of the ray org + t·dir, t in [tnear, tfar], dir unit, against the scene as
  * last posed by rt_update. Returns 1 and fills hit, or 0 (hit untouched). Thread-safe. */
 int rt_intersect(const eng_rt *rt, const float org[3], const float dir[3], float tnear, float tfar, rt_hit *hit);
+/* rt_intersect for the photon trace, which looks up a textured material's textures itself at
+ * the width of its photons' footprint (photon_trace.c): on a draw whose material names a
+ * texture the hit's texture factors are left at 1 (world_area is set), everything else is as
+ * rt_intersect returns it. */
+int rt_intersect_untextured(const eng_rt *rt, const float org[3], const float dir[3], float tnear, float tfar,
+                            rt_hit *hit);
 /* alphaMode BLEND geometry (rt.c, pass_translucent.c) is not seen by rt_intersect and
  * rt_occluded; rt_intersect_blend sees only it (lamps ignored), as rt_intersect does. */
 int rt_intersect_blend(const eng_rt *rt, const float org[3], const float dir[3], float tnear, float tfar, rt_hit *hit);

@@ -140,11 +140,13 @@ static void trace_path(const pt_tracer *tr, const eng_frame_scene *fs, const scn
          * photon's cone has the constant width s->footprint, the diameter of the kernel its
          * photons are gathered with (spread angle 0): texture detail finer than the kernel
          * cannot show in the photon map, so the colour a photon carries on is the texture
-         * averaged over that width, over |cos| of the geometric normal and the ray. */
-        if (s->footprint > 0.0f && h.tri != UINT32_MAX && h.draw < fs->draw_count && textured(scene, h.material)) {
+         * averaged over that width, over |cos| of the geometric normal and the ray. Looked up
+         * here only (the Embree tracer leaves a textured hit's factors to this,
+         * rt_intersect_untextured); without a footprint at level 0, as rt_intersect would. */
+        if (h.tri != UINT32_MAX && h.draw < fs->draw_count && textured(scene, h.material)) {
             float c = fabsf(dot3(h.geom_normal, dir));
             rt_hit_textures(scene, &scene->primitives[fs->draws[h.draw].primitive], &h,
-                            s->footprint / (c > 1e-3f ? c : 1e-3f));
+                            s->footprint > 0.0f ? s->footprint / (c > 1e-3f ? c : 1e-3f) : 0.0f);
         }
         const float wi[3] = {-dir[0], -dir[1], -dir[2]};
         /* Shading normal, unless interpolation put wi on the other side of it than the true
@@ -206,7 +208,7 @@ int pt_embree_intersect(const void *state, const float org[3], const float dir[3
                         eng_trace_counts *counts)
 {
     (void)counts;
-    return rt_intersect(state, org, dir, tnear, INFINITY, hit);
+    return rt_intersect_untextured(state, org, dir, tnear, INFINITY, hit);
 }
 
 eng_result photon_trace(const eng_rt *rt, const eng_frame_scene *fs, const eng_random_maps *rm,

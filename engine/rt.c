@@ -46,6 +46,7 @@ typedef struct rt_geom {
      * primitive's attributes, so a hit skips the texture and COLOR_0 calls it does not need. */
     const scn_material *mat; /* NULL: the glTF default material */
     uint8_t base_lookup, mr_lookup, emissive_lookup;
+    uint8_t textured; /* the material names a texture (photon_trace.c looks those up itself) */
 } rt_geom;
 
 struct eng_rt {
@@ -135,6 +136,8 @@ static void rt_geom_lookups(rt_geom *g, const scn_scene *scene, const scn_primit
     g->base_lookup = p->colors || (g->mat && texref_used(scene, &g->mat->base_color_tex, p));
     g->mr_lookup = g->mat && texref_used(scene, &g->mat->metallic_roughness_tex, p);
     g->emissive_lookup = g->mat && texref_used(scene, &g->mat->emissive_tex, p);
+    g->textured = g->mat && (g->mat->base_color_tex.texture >= 0 || g->mat->metallic_roughness_tex.texture >= 0 ||
+                             g->mat->emissive_tex.texture >= 0);
 }
 
 /* Draw d's vertices (the primitive's, or this frame's deformed ones) at its world matrix. */
@@ -340,8 +343,8 @@ static void ray_init(struct RTCRayHit *rh, const float org[3], const float dir[3
     rh->hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
 }
 
-static int intersect_in(const eng_rt *rt, RTCScene scene, int lamps, const float org[3], const float dir[3],
-                        float tnear, float tfar, rt_hit *hit)
+static int intersect_in(const eng_rt *rt, RTCScene scene, int lamps, int untextured, const float org[3],
+                        const float dir[3], float tnear, float tfar, rt_hit *hit)
 {
     struct RTCIntersectContext ctx;
     rtcInitIntersectContext(&ctx);
@@ -379,10 +382,15 @@ static int intersect_in(const eng_rt *rt, RTCScene scene, int lamps, const float
     hit->tri = rh.hit.primID;
     hit->bary[0] = u;
     hit->bary[1] = v;
-    if (g->base_lookup || g->mr_lookup || g->emissive_lookup) {
+    if ((g->base_lookup || g->mr_lookup || g->emissive_lookup) && !(untextured && g->textured)) {
         /* The triangle's world area: half the length of Embree's unnormalised Ng (e1 × e2). */
         hit->world_area = 0.5f * sqrtf(rh.hit.Ng_x * rh.hit.Ng_x + rh.hit.Ng_y * rh.hit.Ng_y + rh.hit.Ng_z * rh.hit.Ng_z);
         rt_hit_textures(rt->scene, p, hit, 0.0f);
+    } else if (g->base_lookup || g->mr_lookup || g->emissive_lookup) { /* the caller looks them up */
+        hit->world_area = 0.5f * sqrtf(rh.hit.Ng_x * rh.hit.Ng_x + rh.hit.Ng_y * rh.hit.Ng_y + rh.hit.Ng_z * rh.hit.Ng_z);
+        hit->base_tex[0] = hit->base_tex[1] = hit->base_tex[2] = hit->base_tex[3] = 1.0f;
+        hit->roughness_tex = hit->metallic_tex = 1.0f;
+        hit->emissive_tex[0] = hit->emissive_tex[1] = hit->emissive_tex[2] = 1.0f;
     } else { /* no lookup would return anything but 1 (see rt_geom) */
         hit->world_area = 0.0f;
         hit->base_tex[0] = hit->base_tex[1] = hit->base_tex[2] = hit->base_tex[3] = 1.0f;
@@ -394,12 +402,18 @@ static int intersect_in(const eng_rt *rt, RTCScene scene, int lamps, const float
 
 int rt_intersect(const eng_rt *rt, const float org[3], const float dir[3], float tnear, float tfar, rt_hit *hit)
 {
-    return intersect_in(rt, rt->rtscene, 1, org, dir, tnear, tfar, hit);
+    return intersect_in(rt, rt->rtscene, 1, 0, org, dir, tnear, tfar, hit);
+}
+
+int rt_intersect_untextured(const eng_rt *rt, const float org[3], const float dir[3], float tnear, float tfar,
+                            rt_hit *hit)
+{
+    return intersect_in(rt, rt->rtscene, 1, 1, org, dir, tnear, tfar, hit);
 }
 
 int rt_intersect_blend(const eng_rt *rt, const float org[3], const float dir[3], float tnear, float tfar, rt_hit *hit)
 {
-    return rt->blend_scene ? intersect_in(rt, rt->blend_scene, 0, org, dir, tnear, tfar, hit) : 0;
+    return rt->blend_scene ? intersect_in(rt, rt->blend_scene, 0, 0, org, dir, tnear, tfar, hit) : 0;
 }
 
 void rt_destroy(eng_rt *rt)

@@ -18,10 +18,14 @@
 #include <stdlib.h>
 #include <string.h>
 
-/* Texel coordinate i (may be outside 0..n-1) wrapped as glTF §3.8.4 (GL's wrap modes). */
-static uint32_t wrap_index(long long i, uint32_t n, scn_wrap w)
+/* Texel coordinate i (may be outside 0..n-1) wrapped as glTF §3.8.4 (GL's wrap modes). A
+ * coordinate inside the level is itself in every mode (the photon trace's texture lookups are
+ * nearly all inside: no 64-bit division for them). */
+static inline uint32_t wrap_index(long long i, uint32_t n, scn_wrap w)
 {
     long long nn = (long long)n;
+    if (i >= 0 && i < nn)
+        return (uint32_t)i;
     switch (w) {
     case SCN_WRAP_CLAMP: return (uint32_t)(i < 0 ? 0 : i >= nn ? nn - 1 : i);
     case SCN_WRAP_MIRROR: {

@@ -115,6 +115,19 @@ START_TEST(decode_and_sample_cpu)
     lin.wrap_s = SCN_WRAP_MIRROR;
     scn_texture_sample(&lin, 1.25f, 0.25f, out);
     ck_assert_float_eq(out[1], want[1][1]);
+    /* Below 0 (texel −2 of 2): REPEAT texel 0, MIRROR texel 1, CLAMP texel 0; past 1 CLAMP the
+     * last texel. (Inside the level wrap_index takes a shortcut; these take the general path.) */
+    lin.wrap_s = SCN_WRAP_REPEAT;
+    scn_texture_sample(&lin, -0.75f, 0.25f, out);
+    ck_assert_float_eq(out[0], want[0][0]);
+    lin.wrap_s = SCN_WRAP_MIRROR;
+    scn_texture_sample(&lin, -0.75f, 0.25f, out);
+    ck_assert_float_eq(out[1], want[1][1]);
+    lin.wrap_s = SCN_WRAP_CLAMP;
+    scn_texture_sample(&lin, -0.75f, 0.25f, out);
+    ck_assert_float_eq(out[0], want[0][0]);
+    scn_texture_sample(&lin, 1.75f, 0.25f, out);
+    ck_assert_float_eq(out[1], want[1][1]);
     scn_destroy(s);
 }
 END_TEST
@@ -592,6 +605,22 @@ START_TEST(mips_average_checker_to_grey)
         ck_assert_float_eq(h.base_tex[k], 0.5f);
     rt_hit_textures(s, &s->primitives[0], &h, 0.03f);
     ck_assert(h.base_tex[0] > 0.0f && h.base_tex[0] < 1.0f && h.base_tex[0] != 0.5f);
+    /* The photon trace's hits (rt_intersect_untextured) leave a textured material's factors at
+     * 1 for photon_trace.c to look up once: the same hit as rt_intersect's otherwise, and the
+     * same bits after that lookup, with a footprint or without. */
+    for (int k = 0; k < 3; k++) {
+        const float width = k == 0 ? 0.0f : k == 1 ? 0.03f : 0.1f;
+        rt_hit a, b;
+        memset(&a, 0, sizeof a);
+        memset(&b, 0, sizeof b);
+        ck_assert(rt_intersect(rt, org, dir, 0.0f, 2.0f, &a));
+        ck_assert(rt_intersect_untextured(rt, org, dir, 0.0f, 2.0f, &b));
+        ck_assert_float_eq(b.base_tex[0], 1.0f);
+        ck_assert_float_eq(b.world_area, a.world_area);
+        rt_hit_textures(s, &s->primitives[0], &a, width);
+        rt_hit_textures(s, &s->primitives[0], &b, width);
+        ck_assert_msg(memcmp(&a, &b, sizeof a) == 0, "width %g: the hits differ", (double)width);
+    }
     rt_destroy(rt);
     eng_destroy(e);
     scn_destroy(s);
