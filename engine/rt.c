@@ -382,17 +382,13 @@ static int intersect_in(const eng_rt *rt, RTCScene scene, int lamps, int untextu
     hit->tri = rh.hit.primID;
     hit->bary[0] = u;
     hit->bary[1] = v;
-    if ((g->base_lookup || g->mr_lookup || g->emissive_lookup) && !(untextured && g->textured)) {
-        /* The triangle's world area: half the length of Embree's unnormalised Ng (e1 × e2). */
-        hit->world_area = 0.5f * sqrtf(rh.hit.Ng_x * rh.hit.Ng_x + rh.hit.Ng_y * rh.hit.Ng_y + rh.hit.Ng_z * rh.hit.Ng_z);
+    const int lookups = g->base_lookup || g->mr_lookup || g->emissive_lookup;
+    /* The triangle's world area: half the length of Embree's unnormalised Ng (e1 × e2). */
+    hit->world_area =
+        lookups ? 0.5f * sqrtf(rh.hit.Ng_x * rh.hit.Ng_x + rh.hit.Ng_y * rh.hit.Ng_y + rh.hit.Ng_z * rh.hit.Ng_z) : 0.0f;
+    if (lookups && !(untextured && g->textured)) {
         rt_hit_textures(rt->scene, p, hit, 0.0f);
-    } else if (g->base_lookup || g->mr_lookup || g->emissive_lookup) { /* the caller looks them up */
-        hit->world_area = 0.5f * sqrtf(rh.hit.Ng_x * rh.hit.Ng_x + rh.hit.Ng_y * rh.hit.Ng_y + rh.hit.Ng_z * rh.hit.Ng_z);
-        hit->base_tex[0] = hit->base_tex[1] = hit->base_tex[2] = hit->base_tex[3] = 1.0f;
-        hit->roughness_tex = hit->metallic_tex = 1.0f;
-        hit->emissive_tex[0] = hit->emissive_tex[1] = hit->emissive_tex[2] = 1.0f;
-    } else { /* no lookup would return anything but 1 (see rt_geom) */
-        hit->world_area = 0.0f;
+    } else { /* no lookup would return anything but 1 (see rt_geom), or the caller looks them up */
         hit->base_tex[0] = hit->base_tex[1] = hit->base_tex[2] = hit->base_tex[3] = 1.0f;
         hit->roughness_tex = hit->metallic_tex = 1.0f;
         hit->emissive_tex[0] = hit->emissive_tex[1] = hit->emissive_tex[2] = 1.0f;
