@@ -512,6 +512,14 @@ typedef struct eng_rt eng_rt;
 /* Closest hit of the ray org + t·dir, t in [tnear, tfar], dir unit, against the scene as
  * last posed by rt_update. Returns 1 and fills hit, or 0 (hit untouched). Thread-safe. */
 int rt_intersect(const eng_rt *rt, const float org[3], const float dir[3], float tnear, float tfar, rt_hit *hit);
+/* Whether material m names a texture (base colour, metallic-roughness or emissive): the hits on
+ * which the photon trace looks textures up at its footprint (photon_trace.c), and so the hits
+ * rt_intersect_untextured leaves to it. One definition for both, which must agree. */
+static inline int rt_material_textured(const scn_material *m)
+{
+    return m->base_color_tex.texture >= 0 || m->metallic_roughness_tex.texture >= 0 || m->emissive_tex.texture >= 0;
+}
+
 /* rt_intersect for the photon trace, which looks up a textured material's textures itself at
  * the width of its photons' footprint (photon_trace.c): on a draw whose material names a
  * texture the hit's texture factors are left at 1 (world_area is set), everything else is as

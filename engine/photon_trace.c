@@ -92,8 +92,7 @@ static int textured(const scn_scene *scene, int32_t m)
 {
     if (m < 0 || (uint32_t)m >= scene->material_count)
         return 0;
-    const scn_material *x = &scene->materials[m];
-    return x->base_color_tex.texture >= 0 || x->metallic_roughness_tex.texture >= 0 || x->emissive_tex.texture >= 0;
+    return rt_material_textured(&scene->materials[m]);
 }
 
 /* Traces one bounce-map photon, appending its stored photons to buf; fills rec. */

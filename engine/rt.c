@@ -136,8 +136,7 @@ static void rt_geom_lookups(rt_geom *g, const scn_scene *scene, const scn_primit
     g->base_lookup = p->colors || (g->mat && texref_used(scene, &g->mat->base_color_tex, p));
     g->mr_lookup = g->mat && texref_used(scene, &g->mat->metallic_roughness_tex, p);
     g->emissive_lookup = g->mat && texref_used(scene, &g->mat->emissive_tex, p);
-    g->textured = g->mat && (g->mat->base_color_tex.texture >= 0 || g->mat->metallic_roughness_tex.texture >= 0 ||
-                             g->mat->emissive_tex.texture >= 0);
+    g->textured = g->mat && rt_material_textured(g->mat);
 }
 
 /* Draw d's vertices (the primitive's, or this frame's deformed ones) at its world matrix. */

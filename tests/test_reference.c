@@ -173,6 +173,13 @@ static int floor_point(int x, int y, float p[3])
     return p[0] > -0.95f && p[0] < 0.95f && p[2] > -0.98f && p[2] < 0.94f;
 }
 
+/* The spec light's irradiance at floor point p: I cosθ / d², I = 3 W/sr at (0, 1.8, 0). */
+static double floor_irradiance(const float p[3])
+{
+    double d2 = (double)p[0] * p[0] + 1.8 * 1.8 + (double)p[2] * p[2];
+    return 3.0 * 1.8 / (d2 * sqrt(d2)); /* cosθ = 1.8/d */
+}
+
 START_TEST(cornell_floor_direct)
 {
     setup s;
@@ -212,8 +219,7 @@ START_TEST(cornell_floor_direct)
                 }
             if (!ok)
                 continue;
-            double d2 = (double)p[0] * p[0] + 1.8 * 1.8 + (double)p[2] * p[2];
-            double e = 3.0 * 1.8 / (d2 * sqrt(d2)); /* I cosθ / d², cosθ = 1.8/d */
+            double e = floor_irradiance(p);
             for (int c = 0; c < 3; c++) {
                 double want = kd[c] / ENG_PI * e;
                 size_t i = 3 * ((size_t)y * 256 + (size_t)x) + (size_t)c;
@@ -238,8 +244,7 @@ START_TEST(cornell_floor_direct)
     ck_assert(floor_point(106, 234, p));
     ck_assert_msg(fabsf(p[0] + 0.2f) < 0.01f && fabsf(p[2] - 0.6f) < 0.01f, "pixel (106, 234) sees (%g, 0, %g)",
                   (double)p[0], (double)p[2]);
-    double d2 = (double)p[0] * p[0] + 1.8 * 1.8 + (double)p[2] * p[2];
-    double want = 0.725 / ENG_PI * 3.0 * 1.8 / (d2 * sqrt(d2));
+    double want = 0.725 / ENG_PI * floor_irradiance(p);
     ck_assert_msg(fabs(im.direct[3 * (234 * 256 + 106)] - want) < 0.005 * want, "pixel (106, 234): %g, want %g",
                   (double)im.direct[3 * (234 * 256 + 106)], want);
     images_free(&im);
@@ -273,28 +278,22 @@ START_TEST(pixel_centre_edges)
     ck_assert_msg(eng_render_frame(s.engine, 0, &err) == ENG_OK, "%s", err.msg);
     ck_assert_ptr_nonnull(im[0].engine_direct);
 
-    static const float right[3] = {1, 0, 0}, up[3] = {0, 1, 0}, fwd[3] = {0, 0, -1};
     static const float light[3] = {0.0f, 1.8f, 0.0f}, eye[3] = {0.0f, 1.0f, 3.9f};
-    static const float kd = 0.725f;
     double sum_want = 0.0, sum_box = 0.0, worst = 0.0, worst_engine = 0.0;
     int edge = 0;
     for (int y = 128; y < 256; y++)
         for (int x = 8; x < 248; x++) {
-            double d[3], here[3], below[3];
-            pixel_ray(x, y, 256, right, up, fwd, tan(20.0 * ENG_PI / 180.0), d);
-            for (int i = 0; i < 3; i++)
-                here[i] = eye[i] + (-eye[1] / d[1]) * d[i];
-            pixel_ray(x, y + 1, 256, right, up, fwd, tan(20.0 * ENG_PI / 180.0), d);
-            for (int i = 0; i < 3; i++)
-                below[i] = eye[i] + (-eye[1] / d[1]) * d[i];
-            /* A floor pixel whose lower neighbour's centre lies beyond the floor's front edge. */
-            if (!(here[2] < 1.0 && below[2] >= 1.0 && fabs(here[0]) < 0.9))
+            /* A floor pixel whose lower neighbour's centre lies beyond the floor's front edge
+             * (floor_point's own bounds stop short of the edge: its points are used, not them). */
+            float here[3] = {0.0f, 0.0f, 2.0f}, below[3] = {0.0f, 0.0f, 2.0f};
+            floor_point(x, y, here);
+            floor_point(x, y + 1, below);
+            if (!(here[2] < 1.0f && below[2] >= 1.0f && fabsf(here[0]) < 0.9f))
                 continue;
-            float lifted[3] = {(float)here[0], 1e-3f, (float)here[2]};
+            float lifted[3] = {here[0], 1e-3f, here[2]};
             if (eng_occluded(s.engine, eye, lifted) || eng_occluded(s.engine, lifted, light))
                 continue;
-            double d2 = here[0] * here[0] + 1.8 * 1.8 + here[2] * here[2];
-            double want = kd / ENG_PI * 3.0 * 1.8 / (d2 * sqrt(d2));
+            double want = 0.725 / ENG_PI * floor_irradiance(here);
             size_t i = 3 * ((size_t)y * 256 + (size_t)x);
             double rel = fabs(im[0].direct[i] - want) / want, rel_engine = fabs(im[0].engine_direct[i] - want) / want;
             worst = rel > worst ? rel : worst;
