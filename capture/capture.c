@@ -974,6 +974,10 @@ static cJSON *manifest_json(const cap_capture *c)
         jadd(st, "progressive_radius", jstr("pixel"));
     if (s.bounce_strata > 1) /* only when set: runs without keep their manifests */
         jadd(st, "bounce_strata", cJSON_CreateNumber(s.bounce_strata));
+    if (s.indirect == ENG_INDIRECT_FINALGATHER) { /* only for the method that reads them */
+        jadd(st, "final_gather_rays", cJSON_CreateNumber(s.final_gather_rays));
+        jadd(st, "final_gather_radius", cJSON_CreateNumber(s.final_gather_radius));
+    }
     jadd(st, "boundary", jstr(eng_boundary_name(s.boundary)));
     jadd(st, "photon_trace", jstr(eng_trace_name(s.photon_trace)));
     if (s.photon_trace == ENG_TRACE_MULTI_IMAGE) {

@@ -302,7 +302,7 @@ static const char *const SETTING_KEYS[] = {
     "temporal_alpha", "atrous_iterations", "atrous_detail", "atrous_gamma", "random", "random_map_size",
     "random_seed", "stratified_cycle", "shadow_map_size", "pcf_radius", "shadow_bias", "exposure", "threads",
     "kernel_scaling", "progressive", "boundary", "specular", "specular_depth", "photon_trace", "multi_image_maps",
-    "multi_image_size", "multi_image_miss", "multi_image_compare", "progressive_radius", "bounce_strata", NULL};
+    "multi_image_size", "multi_image_miss", "multi_image_compare", "progressive_radius", "bounce_strata", "final_gather_rays", "final_gather_radius", NULL};
 
 /* The value the engine uses for a settings key, as text; 0 for a key it does not know. */
 static int setting_text(const eng_settings *s, const char *key, char *out, size_t size)
@@ -348,10 +348,12 @@ static int setting_text(const eng_settings *s, const char *key, char *out, size_
     INT_KEY(random_seed)
     INT_KEY(stratified_cycle)
     INT_KEY(bounce_strata)
+    INT_KEY(final_gather_rays)
     INT_KEY(shadow_map_size)
     INT_KEY(pcf_radius)
     INT_KEY(threads)
     FLT_KEY(kernel_radius)
+    FLT_KEY(final_gather_radius)
     FLT_KEY(normal_compression)
     FLT_KEY(temporal_alpha)
     FLT_KEY(atrous_gamma)
@@ -892,6 +894,7 @@ static const char *indirect_pass(eng_indirect m)
     case ENG_INDIRECT_TILEGATHER:
     case ENG_INDIRECT_TILEGATHER_GL:
     case ENG_INDIRECT_KDGATHER: return "gather";
+    case ENG_INDIRECT_FINALGATHER: return "final_gather";
     case ENG_INDIRECT_NONE: return NULL;
     case ENG_INDIRECT_ISPM:
     case ENG_INDIRECT_DEFAULT: break;

@@ -187,6 +187,8 @@ void eng_settings_defaults(eng_settings *s)
     if (s->multi_image_miss == ENG_MISS_DEFAULT) s->multi_image_miss = ENG_MISS_EMBREE;
     if (s->specular == ENG_SPECULAR_DEFAULT) s->specular = ENG_SPECULAR_TRACED;
     if (s->specular_depth == 0) s->specular_depth = 4;
+    if (s->final_gather_rays == 0) s->final_gather_rays = 64;
+    if (s->final_gather_radius == 0.0f) s->final_gather_radius = 0.25f;
     if (s->capture_compression == ENG_COMPRESSION_DEFAULT) s->capture_compression = ENG_COMPRESSION_RLE;
 }
 
@@ -275,6 +277,7 @@ const char *eng_indirect_name(eng_indirect m)
     case ENG_INDIRECT_QUADS: return "quads";
     case ENG_INDIRECT_TILEGATHER: return "tile-gather";
     case ENG_INDIRECT_TILEGATHER_GL: return "tile-gather-gl";
+    case ENG_INDIRECT_FINALGATHER: return "final-gather";
     case ENG_INDIRECT_ISPM:
     case ENG_INDIRECT_DEFAULT: return "ispm";
     }

@@ -359,8 +359,10 @@ typedef enum eng_indirect {
     ENG_INDIRECT_QUADS,       /* camera-independent photon quads on the tangent plane (001 §3.3) */
     ENG_INDIRECT_TILEGATHER,  /* photons binned to screen tiles, each tile evaluating its list
                                * (002 §6.3); the same estimate as the k-d gather, bit for bit */
-    ENG_INDIRECT_TILEGATHER_GL /* the same tile lists evaluated in a GL compute shader (002 §6.3
-                                * as the paper runs it); equal up to llvmpipe's rounding */
+    ENG_INDIRECT_TILEGATHER_GL, /* the same tile lists evaluated in a GL compute shader (002 §6.3
+                                 * as the paper runs it); equal up to llvmpipe's rounding */
+    ENG_INDIRECT_FINALGATHER  /* the photon map looked up one bounce away: final gathering
+                               * (003 Appendix A; Jensen 1996), rays traced with Embree */
 } eng_indirect;
 
 /* What the À-Trous filter keeps of its detail coefficients (002_… §7.3.1). */
@@ -496,6 +498,13 @@ typedef struct eng_settings {
     /* Issue 13: `"bounce_strata": N` (2, 4, …, 64): the bounce map's first-bounce numbers
      * stratified within each N×N block of texels (bsdf_strata, bsdf.h); 0 (default) or 1: off. */
     int bounce_strata;
+    /* Issue 13: `"final_gather_rays": N` (4, 16, 64, …, 4096): gather rays per pixel of the
+     * "final-gather" method (ind_finalgather.c), a correlated multi-jittered set; default 64. */
+    int final_gather_rays;
+    /* `"final_gather_radius"`: the factor (0, 1] on every photon's kernel radius r_xy at the
+     * final gather's lookups, which the gather's rays average, so a small kernel's noise matters
+     * less than its edge bias; default 0.25. */
+    float final_gather_radius;
 } eng_settings;
 
 void eng_settings_defaults(eng_settings *s);

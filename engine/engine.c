@@ -340,6 +340,10 @@ eng_result eng_create(const eng_desc *desc, eng_engine **out, eng_error *err)
             r = ind_cpu_target_create(&e->prog_target, w, h, e->filtered, err);
             e->prog_target_ok = r == ENG_OK;
         }
+        if (r == ENG_OK && st->boundary == ENG_BOUNDARY_RENORMALIZE && e->method->traced_gather)
+            r = eng_fail(err, ENG_ERR_INVALID,
+                         "settings.boundary \"renormalize\" corrects a kernel at the pixel; \"%s\" has none",
+                         e->method->name);
         if (r == ENG_OK && st->boundary == ENG_BOUNDARY_RENORMALIZE)
             r = bnd_pass_create(w, h, e->filtered ? 2 : 1, &e->bnd, err);
     }
@@ -1029,7 +1033,10 @@ static eng_result run_method(eng_engine *e, int frame, const glu_target *gb, con
         ind_gbuffer_read(gb, &e->prog_gb);
         e->pixel_scale = prog_pixel_scales(e->prog, &e->prog_gb);
     }
-    ind_input in = {&e->fs, gb, &e->pmap, e->radius, &e->settings, e->aniso_on ? e->aniso : NULL, e->pixel_scale};
+    eng_rmap_frame rf;
+    rmap_frame(&e->settings, frame, &rf);
+    ind_input in = {&e->fs, gb, &e->pmap, e->radius, &e->settings, e->aniso_on ? e->aniso : NULL, e->pixel_scale,
+                    e->rt, &e->rmaps, &rf};
     ind_output o;
     memset(&o, 0, sizeof o);
     double t0 = now_ms();
@@ -1055,7 +1062,7 @@ static eng_result boundary_run(eng_engine *e, int frame, const glu_target *gb, c
     if (!e->bnd)
         return ENG_OK;
     double t0 = now_ms();
-    ind_input in = {&e->fs, gb, &e->pmap, e->radius, &e->settings, NULL, e->pixel_scale};
+    ind_input in = {&e->fs, gb, &e->pmap, e->radius, &e->settings, NULL, e->pixel_scale, NULL, NULL, NULL};
     const float *wt = bnd_pass_run(e->bnd, gb, sp, &in);
     glFinish();
     add_time(e, "boundary", now_ms() - t0);

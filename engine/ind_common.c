@@ -17,6 +17,7 @@ const ind_method *ind_method_of(eng_indirect m)
     case ENG_INDIRECT_TILEGATHER: return &ind_tilegather_method;
     case ENG_INDIRECT_TILEGATHER_GL: return &ind_tilegather_gl_method;
     case ENG_INDIRECT_KDGATHER: return &ind_kdgather_method;
+    case ENG_INDIRECT_FINALGATHER: return &ind_finalgather_method;
     case ENG_INDIRECT_NONE: break;
     }
     return NULL;

@@ -215,4 +215,4 @@ static eng_result quads_run(void *state, const ind_input *in, ind_output *out, e
     return ENG_OK;
 }
 
-const ind_method ind_quads_method = {"quads", "splat", "quads", quads_create, quads_run, quads_destroy, 1, NULL};
+const ind_method ind_quads_method = {"quads", "splat", "quads", quads_create, quads_run, quads_destroy, 1, NULL, 0};

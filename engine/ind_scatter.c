@@ -27,4 +27,4 @@ static void scatter_reserve(void *state, size_t photons, int threads)
 }
 
 const ind_method ind_scatter_method = {"ispm",          "splat",         "splat",         scatter_create,
-                                       scatter_run,     scatter_destroy, 1,               scatter_reserve};
+                                       scatter_run,     scatter_destroy, 1,               scatter_reserve, 0};

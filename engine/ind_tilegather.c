@@ -332,4 +332,4 @@ static eng_result tg_run(void *state, const ind_input *in, ind_output *out, eng_
     return ENG_OK;
 }
 
-const ind_method ind_tilegather_method = {"tile-gather", "gather", "gather", tg_create, tg_run, tg_destroy, 1, NULL};
+const ind_method ind_tilegather_method = {"tile-gather", "gather", "gather", tg_create, tg_run, tg_destroy, 1, NULL, 0};

@@ -171,4 +171,4 @@ static eng_result tgl_run(void *state, const ind_input *in, ind_output *out, eng
 }
 
 const ind_method ind_tilegather_gl_method = {"tile-gather-gl", "gather", "gather", tgl_create, tgl_run,
-                                             tgl_destroy, 0, NULL};
+                                             tgl_destroy, 0, NULL, 0};

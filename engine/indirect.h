@@ -7,6 +7,8 @@
  *   ind_tilegather.c  "tile-gather"  screen tiles, each evaluating its photon list (002 §6.3)
  *   ind_tilegather_gl.c "tile-gather-gl" the same lists evaluated in a GL compute shader (002 §6.3)
  *   kdgather.c        "kd-gather"    per-pixel k-d tree gather, the baseline (003 App. A)
+ *   ind_finalgather.c "final-gather" the k-d gather one bounce away, at the surfaces that rays
+ *                                    from each pixel meet: final gathering (003 App. A)
  *
  * The frame loop (engine.c) only sees this table: it creates the method once, runs it once
  * per frame, announces the returned target's attachments under the method's buffer prefix
@@ -34,6 +36,11 @@ typedef struct ind_input {
                                   * progressive photon mapping's per-pixel radius (progressive.h,
                                   * `"progressive_radius": "pixel"`); only for methods whose
                                   * per_pixel_radius is 1 */
+    /* For methods that trace rays from the eye's surfaces (final-gather): the Embree scene
+     * posed for this frame, the random maps and how this frame reads them (rmap_frame). */
+    const eng_rt *rt;
+    const eng_random_maps *rm;
+    const eng_rmap_frame *rf;
 } ind_input;
 
 /* A CPU-side buffer a method wants announced besides its target (e.g. gather.tile_count). */
@@ -67,6 +74,10 @@ typedef struct ind_method {
     /* Optional, NULL for none: makes room for `photons` map photons, calling no GL; the photon
      * stage calls it on the overlap worker with 2+ threads (issue 22 item 3). */
     void (*reserve)(void *state, size_t photons, int threads);
+    /* 1: the estimate at a pixel comes from rays traced from it (final-gather), not from photon
+     * kernels evaluated there, so the boundary correction (boundary.h) has nothing to correct
+     * and the engine refuses it; 0 for the kernel methods. */
+    int traced_gather;
 } ind_method;
 
 extern const ind_method ind_scatter_method;
@@ -74,6 +85,7 @@ extern const ind_method ind_quads_method;
 extern const ind_method ind_tilegather_method;
 extern const ind_method ind_tilegather_gl_method;
 extern const ind_method ind_kdgather_method;
+extern const ind_method ind_finalgather_method;
 
 /* Fills radius[i] (map->count floats) with photon i's kernel radius r_xy under the
  * `kernel_scaling` setting: path-density (ISPM §4.3, splat_radius), ray-length (002 Eq. 6.1),

@@ -398,4 +398,4 @@ static eng_result kd_run(void *state, const ind_input *in, ind_output *out, eng_
     return ENG_OK;
 }
 
-const ind_method ind_kdgather_method = {"kd-gather", "gather", "gather", kd_create, kd_run, kd_destroy, 1, NULL};
+const ind_method ind_kdgather_method = {"kd-gather", "gather", "gather", kd_create, kd_run, kd_destroy, 1, NULL, 0};

@@ -161,7 +161,8 @@ static eng_result parse_settings(parser *P, const cJSON *obj, eng_settings *s)
                                        "specular", "specular_depth",
                                        "photon_trace", "multi_image_maps", "multi_image_size",
                                        "multi_image_miss", "multi_image_compare", "capture_compression", "temporal_window",
-                                       "progressive_radius", "bounce_strata", NULL};
+                                       "progressive_radius", "bounce_strata", "final_gather_rays",
+                                       "final_gather_radius", NULL};
     char v[80];
     eng_result r;
     if (!cJSON_IsObject(obj))
@@ -207,9 +208,11 @@ static eng_result parse_settings(parser *P, const cJSON *obj, eng_settings *s)
             s->indirect = ENG_INDIRECT_TILEGATHER;
         else if (cJSON_IsString(it) && !strcmp(it->valuestring, "tile-gather-gl"))
             s->indirect = ENG_INDIRECT_TILEGATHER_GL;
+        else if (cJSON_IsString(it) && !strcmp(it->valuestring, "final-gather"))
+            s->indirect = ENG_INDIRECT_FINALGATHER;
         else
             return bad(P, "settings.indirect: %s is not one of \"ispm\", \"quads\", \"tile-gather\", "
-                          "\"tile-gather-gl\", \"kd-gather\", \"none\"",
+                          "\"tile-gather-gl\", \"kd-gather\", \"final-gather\", \"none\"",
                        show(it, v, sizeof v));
     }
     if ((it = cJSON_GetObjectItemCaseSensitive(obj, "random"))) {
@@ -237,6 +240,23 @@ static eng_result parse_settings(parser *P, const cJSON *obj, eng_settings *s)
             return r;
         if (s->bounce_strata & (s->bounce_strata - 1))
             return bad(P, "settings.bounce_strata: %s is not a power of two (1, 2, 4, …, 64)", show(it, v, sizeof v));
+    }
+    if ((it = cJSON_GetObjectItemCaseSensitive(obj, "final_gather_rays"))) {
+        if ((r = get_int(P, it, "settings.final_gather_rays", 4, 4096, &s->final_gather_rays)))
+            return r;
+        int f = s->final_gather_rays;
+        while (f % 4 == 0)
+            f /= 4;
+        if (f != 1)
+            return bad(P, "settings.final_gather_rays: %s is not a power of 4 (4, 16, 64, …, 4096)",
+                       show(it, v, sizeof v));
+    }
+    if ((it = cJSON_GetObjectItemCaseSensitive(obj, "final_gather_radius"))) {
+        if ((r = get_number(P, it, "settings.final_gather_radius", &d)))
+            return r;
+        if (!(d > 0.0 && d <= 1.0))
+            return bad(P, "settings.final_gather_radius: %s is out of range (0, 1]", show(it, v, sizeof v));
+        s->final_gather_radius = (float)d;
     }
     if ((it = cJSON_GetObjectItemCaseSensitive(obj, "random_seed")) &&
         (r = get_int(P, it, "settings.random_seed", 1, 2147483647, &s->random_seed)))
@@ -388,9 +408,14 @@ static eng_result parse_settings(parser *P, const cJSON *obj, eng_settings *s)
                    "(lossless only)", show(it, v, sizeof v));
     /* Per-pixel progressive radii: only where the method evaluates a pixel-dependent kernel
      * (ind_method.per_pixel_radius; the engine checks the same). */
-    if (s->progressive_pixel && (!s->progressive || s->indirect == ENG_INDIRECT_TILEGATHER_GL))
+    if (s->progressive_pixel &&
+        (!s->progressive || s->indirect == ENG_INDIRECT_TILEGATHER_GL || s->indirect == ENG_INDIRECT_FINALGATHER))
         return bad(P, "settings.progressive_radius \"pixel\" needs \"progressive\": true and an indirect method "
-                      "other than \"tile-gather-gl\"");
+                      "other than \"tile-gather-gl\" and \"final-gather\"");
+    /* The final gather has no kernel at the pixel (ind_method.traced_gather; the engine checks
+     * the same). */
+    if (s->boundary == ENG_BOUNDARY_RENORMALIZE && s->indirect == ENG_INDIRECT_FINALGATHER)
+        return bad(P, "settings.boundary \"renormalize\" corrects a kernel at the pixel; \"final-gather\" has none");
     return ENG_OK;
 }
 

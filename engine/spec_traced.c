@@ -229,8 +229,10 @@ static int push_branches(spec_ray *stack, int top, const spec_branch *b, int cou
 
 /* Follows the branch tree on the stack depth first, adding to radiance/throughput/depth as
  * spec_tracer_pixel documents. Hits on draw `skip` (UINT32_MAX: none) are passed through by
- * rays that have not yet met another surface (the envmap's rays leave their own object). */
-static void trace_tree(const spec_tracer *t, spec_ray *stack, int top, uint32_t skip, spec_scratch *sc,
+ * rays that have not yet met another surface (the envmap's rays leave their own object).
+ * emit 0: the emitters met add nothing (the path has scattered diffusely before: emitters are
+ * seen only after delta lobes, as in the reference renderer). */
+static void trace_tree(const spec_tracer *t, spec_ray *stack, int top, uint32_t skip, int emit, spec_scratch *sc,
                        float radiance[3], float *depth, float throughput[3])
 {
     spec_branch b[2];
@@ -253,7 +255,7 @@ static void trace_tree(const spec_tracer *t, spec_ray *stack, int top, uint32_t 
             *depth = (float)r.bounce;
         scn_material hm = eng_material_of(scene, h.material);
         const float hwi[3] = {-r.dir[0], -r.dir[1], -r.dir[2]};
-        for (int c = 0; c < 3; c++) /* an emitter seen in the mirror (not a light source) */
+        for (int c = 0; c < 3 && emit; c++) /* an emitter seen in the mirror (not a light source) */
             radiance[c] += r.thr[c] * (hm.emissive[c] * h.emissive_tex[c]);
         /* The scattering normal: the interpolated one unless it puts wi on the other side
          * than the true surface does (photon_trace.c's and reference.c's rule). */
@@ -293,7 +295,7 @@ void spec_tracer_pixel(const spec_tracer *t, const float p[3], const float n[3],
     spec_branch b[2];
     const float one[3] = {1.0f, 1.0f, 1.0f};
     int top = push_branches(stack, 0, b, spec_split(m, n, wi, 1.0f, b), p, n, one, 1);
-    trace_tree(t, stack, top, UINT32_MAX, sc, radiance, depth, throughput);
+    trace_tree(t, stack, top, UINT32_MAX, 1, sc, radiance, depth, throughput);
 }
 
 void spec_tracer_translucent(const spec_tracer *t, const rt_hit *h, const scn_material *m, const float eye[3],
@@ -319,14 +321,15 @@ void spec_tracer_translucent(const spec_tracer *t, const rt_hit *h, const scn_ma
         const float one[3] = {1.0f, 1.0f, 1.0f};
         float depth = 0.0f, thr[3] = {0.0f, 0.0f, 0.0f}, l[3] = {0.0f, 0.0f, 0.0f};
         int top = push_branches(stack, 0, b, spec_split(m, hn, wi, 1.0f, b), h->position, h->geom_normal, one, 1);
-        trace_tree(t, stack, top, UINT32_MAX, sc, l, &depth, thr);
+        trace_tree(t, stack, top, UINT32_MAX, 1, sc, l, &depth, thr);
         for (int c = 0; c < 3; c++)
             radiance[c] += l[c];
     }
 }
 
-void spec_tracer_ray(const spec_tracer *t, const float org[3], const float dir[3], uint32_t skip_draw,
-                     spec_scratch *sc, float radiance[3])
+/* One ray's branch tree from org along dir (spec_tracer_ray, spec_tracer_gather_ray). */
+static void trace_ray(const spec_tracer *t, const float org[3], const float dir[3], uint32_t skip_draw, int emit,
+                      spec_scratch *sc, float radiance[3])
 {
     spec_ray stack[2 * SPEC_MAX_DEPTH + 2];
     float depth = 0.0f, throughput[3] = {0.0f, 0.0f, 0.0f};
@@ -338,7 +341,19 @@ void spec_tracer_ray(const spec_tracer *t, const float org[3], const float dir[3
     }
     stack[0].eta = 1.0f;
     stack[0].bounce = 1;
-    trace_tree(t, stack, 1, skip_draw, sc, radiance, &depth, throughput);
+    trace_tree(t, stack, 1, skip_draw, emit, sc, radiance, &depth, throughput);
+}
+
+void spec_tracer_ray(const spec_tracer *t, const float org[3], const float dir[3], uint32_t skip_draw,
+                     spec_scratch *sc, float radiance[3])
+{
+    trace_ray(t, org, dir, skip_draw, 1, sc, radiance);
+}
+
+void spec_tracer_gather_ray(const spec_tracer *t, const float org[3], const float dir[3], spec_scratch *sc,
+                            float radiance[3])
+{
+    trace_ray(t, org, dir, UINT32_MAX, 0, sc, radiance);
 }
 
 /* ---------------------------------------------------------------- the methods' buffers */

@@ -108,6 +108,11 @@ void spec_tracer_translucent(const spec_tracer *t, const rt_hit *h, const scn_ma
                              spec_scratch *sc, float radiance[3]);
 void spec_tracer_ray(const spec_tracer *t, const float org[3], const float dir[3], uint32_t skip_draw,
                      spec_scratch *sc, float radiance[3]);
+/* Radiance arriving at org from unit direction −dir along a ray that leaves a diffuse or glossy
+ * lobe at org (the final gather, ind_finalgather.c): found as spec_tracer_ray finds it, but the
+ * emitters met add nothing (an emitter is seen only after delta lobes: reference.c). */
+void spec_tracer_gather_ray(const spec_tracer *t, const float org[3], const float dir[3], spec_scratch *sc,
+                            float radiance[3]);
 
 /* What both methods keep between frames (spec_traced.c): the G-buffer read back, the output
  * images and the texture they are uploaded to. */
