@@ -426,6 +426,7 @@ typedef struct eng_bounce_photon {
     float power[3];     /* W per channel */
     float path_density; /* ρp so far */
     float ior;          /* index of refraction of the medium the photon travels in */
+    int delta;          /* 1: the bounce took a delta lobe (mirror, glass: BSDF_LOBE_MIRROR..REFRACT) */
 } eng_bounce_photon;
 
 /* A photon-map photon (ISPM Table 1): stored where a path hits a surface, before it
@@ -436,7 +437,10 @@ typedef struct eng_photon {
     float power[3];     /* Φ_i, W per channel */
     float normal[3];    /* n_p: shading normal of the surface hit, facing the incoming photon */
     float path_density; /* ρp */
-    uint32_t bounce;    /* 2 = second surface of the path (the first stored), 3, ... */
+    uint16_t bounce;    /* 2 = second surface of the path (the first stored), 3, ... */
+    uint16_t caustic;   /* 1: every scatter before this surface took a delta lobe (a path L S+ D:
+                         * the caustic photons of Jensen 1996, which the final gather adds at its
+                         * pixels, ind_finalgather.c) */
     float ray_length;   /* length of the ray segment that brought it here (m): 002 Eq. 6.1, 004 §6 */
 } eng_photon;
 

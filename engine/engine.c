@@ -11,6 +11,7 @@
 #define _POSIX_C_SOURCE 200809L /* clock_gettime */
 #include "eng_internal.h"
 #include "indirect.h"
+#include "bsdf.h"
 #include "boundary.h"
 #include "shadow.h"
 #include "progressive.h"
@@ -817,6 +818,7 @@ static eng_result light_passes(eng_engine *e, int frame, const eng_rmap_frame *r
         float *pos = eng_xmalloc(npix * 4 * sizeof(float));
         float *pw = eng_xmalloc(npix * 4 * sizeof(float));
         float *dir = eng_xmalloc(npix * 4 * sizeof(float));
+        float *lobe = eng_xmalloc(npix * sizeof(float));
         float *bounce = eng_xmalloc(npix * 8 * sizeof(float));
         static const int p4[] = {0, 1, 2, 3};
         static const int p3[] = {0, 1, 2};
@@ -835,6 +837,7 @@ static eng_result light_passes(eng_engine *e, int frame, const eng_rmap_frame *r
             glu_read(&lm->gbuffer, 0, f, 4, p4, pos);
             glu_read(&lm->bounce, 0, f, 4, p4, pw);
             glu_read(&lm->bounce, 1, f, 4, p4, dir);
+            glu_read(&lm->bounce, 2, f, 1, p4, lobe);
             e->readback_ms += now_ms() - r0;
             for (size_t i = 0; i < npix; i++) {
                 memcpy(bounce + 8 * i, pw + 4 * i, 3 * sizeof(float));
@@ -856,6 +859,7 @@ static eng_result light_passes(eng_engine *e, int frame, const eng_rmap_frame *r
                 memcpy(b->power, pw + 4 * i, 3 * sizeof(float));
                 b->path_density = pw[4 * i + 3];
                 b->ior = dir[4 * i + 3];
+                b->delta = lobe[i] >= (float)BSDF_LOBE_MIRROR;
             }
             light_buffer_name(name, sizeof name, "bounce", l, faces, f, NULL);
             if (seq_wants(e->seq, name))
@@ -864,6 +868,7 @@ static eng_result light_passes(eng_engine *e, int frame, const eng_rmap_frame *r
         free(pos);
         free(pw);
         free(dir);
+        free(lobe);
         free(bounce);
         if (aborted)
             return eng_fail(err, ENG_ERR_ABORTED, "frame %d: capture failed in the light passes", frame);

@@ -34,6 +34,7 @@
 
 #include "bsdf.h"
 #include "gather_kernel.h"
+#include "kdtree.h"
 #include "specular.h"
 
 #include <math.h>
@@ -49,6 +50,9 @@ typedef struct fg_state {
     float *out, *glossy;
     float *radius; /* the lookups' r_xy per photon */
     size_t radius_cap;
+    eng_photon_map caustic; /* the frame's caustic photons (eng_photon.caustic) */
+    float *caustic_radius;  /* their r_xy, as the kernel methods use them */
+    size_t caustic_cap;
 } fg_state;
 
 static void fg_destroy(void *state)
@@ -61,6 +65,8 @@ static void fg_destroy(void *state)
     free(k->out);
     free(k->glossy);
     free(k->radius);
+    free(k->caustic.photons);
+    free(k->caustic_radius);
     free(k);
 }
 
@@ -100,6 +106,10 @@ static uint32_t rays_log4(int rays)
 
 typedef struct fg_ctx {
     const spec_tracer *tracer;
+    const kd_tree *ctree; /* NULL: no caustic photons this frame */
+    const eng_photon_map *cmap;
+    const float *cradius;
+    float creach, compression;
     const eng_random_maps *rm;
     const eng_rmap_frame *rf;
     const ind_gbuffer *gb;
@@ -166,12 +176,45 @@ static void fg_pixel(const fg_ctx *c, int x, int y, spec_scratch *sc)
             }
         }
     }
+    /* The caustic photons (paths L S+ D, which no gather ray can close on a point light) with
+     * the kernel at the pixel itself, as the k-d gather evaluates them (Jensen 1996 §3: the
+     * caustic photon map is used directly). */
+    float cacc[4] = {0.0f, 0.0f, 0.0f, 0.0f}, cgl[4] = {0.0f, 0.0f, 0.0f, 0.0f};
+    if (c->ctree)
+        kd_gather_point(c->ctree, c->cmap, c->cradius, c->creach, c->compression, &px, &sc->list, &sc->cap, cacc,
+                        gl ? cgl : NULL);
     for (int j = 0; j < 3; j++) {
-        acc[j] = sum[j] * inv_n;
+        acc[j] = sum[j] * inv_n + cacc[j];
         if (gl)
-            gl[j] = gsum[j] * inv_n;
+            gl[j] = gsum[j] * inv_n + cgl[j];
     }
     acc[3] = met;
+}
+
+/* Copies the map's caustic photons and their radii into k->caustic; returns their count. */
+static size_t caustic_photons(fg_state *k, const eng_photon_map *map, const float *radius, float *reach)
+{
+    size_t n = 0;
+    *reach = 0.0f;
+    for (size_t i = 0; i < map->count; i++)
+        n += map->photons[i].caustic != 0;
+    if (n > k->caustic_cap) {
+        free(k->caustic.photons);
+        free(k->caustic_radius);
+        k->caustic.photons = eng_xmalloc(n * sizeof *k->caustic.photons);
+        k->caustic_radius = eng_xmalloc(n * sizeof *k->caustic_radius);
+        k->caustic_cap = n;
+    }
+    size_t j = 0;
+    for (size_t i = 0; i < map->count; i++)
+        if (map->photons[i].caustic) {
+            k->caustic.photons[j] = map->photons[i];
+            k->caustic_radius[j] = radius[i];
+            *reach = fmaxf(*reach, radius[i]);
+            j++;
+        }
+    k->caustic.count = n;
+    return n;
 }
 
 /* Read-back, tracing and upload all count as the method's time. */
@@ -199,8 +242,29 @@ static eng_result fg_run(void *state, const ind_input *in, ind_output *out, eng_
     spec_tracer *t = spec_tracer_create(in->fs, in->rt, in->map, k->radius, in->s, err);
     if (!t)
         return ENG_ERR_NOMEM;
+    float creach = 0.0f;
+    kd_tree ctree;
+    int have_caustic = caustic_photons(k, in->map, in->radius, &creach) > 0;
+    if (have_caustic && kd_tree_build(k->caustic.photons[0].position, k->caustic.count,
+                                      sizeof(eng_photon) / sizeof(float), &ctree, err) != ENG_OK) {
+        spec_tracer_destroy(t);
+        return ENG_ERR_NOMEM;
+    }
     const uint32_t log2n = rays_log4(in->s->final_gather_rays);
-    const fg_ctx c = {t, in->rm, in->rf, &k->gb, in->fs->camera.eye, log2n, 1u << (2 * log2n), k->out, k->glossy};
+    const fg_ctx c = {t,
+                      have_caustic ? &ctree : NULL,
+                      &k->caustic,
+                      k->caustic_radius,
+                      creach,
+                      in->s->normal_compression,
+                      in->rm,
+                      in->rf,
+                      &k->gb,
+                      in->fs->camera.eye,
+                      log2n,
+                      1u << (2 * log2n),
+                      k->out,
+                      k->glossy};
     const int w = k->width, h = k->height;
     int threads = in->s->threads > 0 ? in->s->threads : 2;
 #pragma omp parallel num_threads(threads)
@@ -213,6 +277,8 @@ static eng_result fg_run(void *state, const ind_input *in, ind_output *out, eng_
         free(sc.list);
     }
     spec_tracer_destroy(t);
+    if (have_caustic)
+        kd_tree_free(&ctree);
     ind_cpu_target_upload(&k->target, 0, k->out);
     if (k->irradiance)
         ind_cpu_target_upload(&k->target, 1, k->glossy);

@@ -104,7 +104,7 @@ eng_result pass_lightmaps_run(pass_lightmaps *p, const eng_frame_scene *fs, uint
         light_maps_release(lm);
         eng_result r = glu_target_create(&lm->gbuffer, 4, size, size, faces, err);
         if (r == ENG_OK)
-            r = glu_target_create(&lm->bounce, 2, size, size, faces, err);
+            r = glu_target_create(&lm->bounce, 3, size, size, faces, err);
         if (r != ENG_OK) {
             light_maps_release(lm);
             return r;

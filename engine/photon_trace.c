@@ -110,6 +110,7 @@ static void trace_path(const pt_tracer *tr, const eng_frame_scene *fs, const scn
     const uint32_t seed = rmap_hash3(bp->position, s->salt);
     float power[3] = {bp->power[0], bp->power[1], bp->power[2]};
     float rho = bp->path_density;
+    int delta_only = bp->delta; /* every scatter so far a delta lobe (eng_photon.caustic) */
     float eta = bp->ior > 0.0f ? bp->ior : 1.0f;
     float org[3] = {bp->position[0], bp->position[1], bp->position[2]};
     float dir[3] = {bp->direction[0], bp->direction[1], bp->direction[2]};
@@ -173,7 +174,8 @@ static void trace_path(const pt_tracer *tr, const eng_frame_scene *fs, const scn
                 ph->normal[i] = side * n[i];
             }
             ph->path_density = rho;
-            ph->bounce = 2 + k;
+            ph->bounce = (uint16_t)(2 + k);
+            ph->caustic = (uint16_t)delta_only;
             ph->ray_length = h.t;
             if (s->max_bounces > 0 && rec->count == (uint32_t)s->max_bounces)
                 break;
@@ -186,8 +188,10 @@ static void trace_path(const pt_tracer *tr, const eng_frame_scene *fs, const scn
             rnd.cosdir = scd;
         }
         float wo[3], w[3], density;
-        if (bsdf_scatter_params(&m, n, wi, &eta, &rnd, wo, w, &density) == BSDF_ABSORBED)
+        const bsdf_lobe lobe = bsdf_scatter_params(&m, n, wi, &eta, &rnd, wo, w, &density);
+        if (lobe == BSDF_ABSORBED)
             break;
+        delta_only = delta_only && (lobe == BSDF_MIRROR || lobe == BSDF_REFLECT || lobe == BSDF_REFRACT);
         for (int i = 0; i < 3; i++)
             power[i] *= w[i];
         rho *= density;

@@ -48,6 +48,8 @@ uniform uint u_strata_salt;      // eng_rmap_frame's strata_salt
 
 layout(location = 0) out vec4 o_power;     // Φ_o RGB, path density ρp
 layout(location = 1) out vec4 o_direction; // ω_o, index of refraction of the medium after the bounce
+layout(location = 2) out vec4 o_lobe;      // x: the lobe the scatter took (BSDF_LOBE_*), for the final
+                                           // gather's caustic photons (ind_finalgather.c); not captured
 
 // XXH32 (Yann Collet) of 6 little-endian 32-bit words: one 16-byte stripe, then 2 words.
 const uint P1 = 2654435761u, P2 = 2246822519u, P3 = 3266489917u, P4 = 668265263u, P5 = 374761393u;
@@ -94,6 +96,7 @@ void main()
     vec4 pos = texelFetch(u_lpos, ivec3(px, u_layer), 0);
     o_power = vec4(0.0);
     o_direction = vec4(0.0, 0.0, 0.0, 1.0);
+    o_lobe = vec4(0.0);
     if (pos.w == 0.0)
         return;
     vec3 x = pos.xyz;
@@ -159,8 +162,10 @@ void main()
     float eta = 1.0;
     vec3 wo, weight;
     float density;
-    if (bsdf_scatter(albedo, mat, n, wi, eta, u, cosdir, wo, weight, density) == BSDF_LOBE_ABSORBED)
+    int lobe = bsdf_scatter(albedo, mat, n, wi, eta, u, cosdir, wo, weight, density);
+    if (lobe == BSDF_LOBE_ABSORBED)
         return;
     o_power = vec4(power * weight, density);
     o_direction = vec4(wo, eta);
+    o_lobe = vec4(float(lobe), 0.0, 0.0, 0.0);
 }
