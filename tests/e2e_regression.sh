@@ -48,12 +48,14 @@ rm "$WORK/nomanifest/manifest.json"
 # rotating), the glass sphere (refractive caustic), the Cornell box with every
 # reconstruction filter on (subsampled splat, upsampling levels, temporal, À-Trous), and the
 # Cornell box with the other indirect methods: photon quads (001 §3.3) and the tile gather
-# (002 §6.3), and the translucent pane (alphaMode BLEND, 003 §3 step 5). The atrium's CI
+# (002 §6.3), the glass sphere with the final gather (003 App. A; its caustic photons at the
+# pixel), and the translucent pane (alphaMode BLEND, 003 §3 step 5). The atrium's CI
 # sequence (scenes/atrium/atrium-ci.json) is recorded and replayed against golden/atrium-ci by
 # tests/e2e_atrium.sh instead (one recording for its checks and its golden; skipped there, with
 # a line saying so, until the golden is blessed).
 for seq in caustic-ring/caustic-ring-ci cornell-box/cornell-glass-ci cornell-box/cornell-box-filtered-ci \
-           cornell-box/cornell-box-quads-ci cornell-box/cornell-box-tilegather-ci cornell-box/cornell-pane-ci; do
+           cornell-box/cornell-box-quads-ci cornell-box/cornell-box-tilegather-ci cornell-box/cornell-glass-finalgather-ci \
+           cornell-box/cornell-pane-ci; do
   name=$(basename "$seq")
   "$ISPM" record "$SRC/scenes/$seq.json" -o "$WORK/$name" --quiet || fail "record $name"
   "$ISPM" replay "$WORK/$name" --golden "$SRC/golden/$name" --quiet > "$WORK/$name.out"; rc=$?
