@@ -188,6 +188,7 @@ expect_bad both.json '{"sequence": "seq.json", "reference": "refrun", "frames": 
 expect_bad frame.json "{\"sequence\": \"seq.json\", \"reference\": \"refrun\", \"frames\": [5], $GOOD_M}"
 expect_bad noref.json "{\"sequence\": \"seq.json\", \"reference\": \"seq.json\", \"frames\": 1, $GOOD_M}" seq.json
 expect_bad dup.json '{"sequence": "seq.json", "reference": "refrun", "frames": 1, "methods": [{"name": "a"}, {"name": "a"}]}'
+expect_bad p90full.json "{\"sequence\": \"seq.json\", \"reference\": \"refrun\", \"frames\": 1, \"chart\": {\"metric\": \"block_p90\", \"buffer\": \"full\"}, $GOOD_M}"
 # A run that is not a reference run (no reference.* buffers).
 "$ISPM" record seq.json -o plainrun --quiet > /dev/null || fail "record plain run"
 expect_bad notref.json "{\"sequence\": \"seq.json\", \"reference\": \"plainrun\", \"frames\": 1, $GOOD_M}" plainrun
