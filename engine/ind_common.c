@@ -201,6 +201,50 @@ void ind_cpu_target_upload(ind_cpu_target *t, int index, const float *rgba)
     glBindTexture(GL_TEXTURE_2D, 0);
 }
 
+eng_result ind_cpu_state_init(ind_cpu_state *c, const char *method, int width, int height, int irradiance,
+                              eng_error *err)
+{
+    memset(c, 0, sizeof *c);
+    c->width = width;
+    c->height = height;
+    c->irradiance = irradiance;
+    size_t n = (size_t)width * (size_t)height * 4;
+    c->out = malloc(n * sizeof(float));
+    c->glossy = irradiance ? malloc(n * sizeof(float)) : NULL;
+    if (!c->out || (irradiance && !c->glossy)) {
+        free(c->out);
+        free(c->glossy);
+        memset(c, 0, sizeof *c);
+        return eng_fail(err, ENG_ERR_NOMEM, "%s: out of memory for a %dx%d image", method, width, height);
+    }
+    eng_result r = ind_cpu_target_create(&c->target, width, height, irradiance, err);
+    if (r != ENG_OK) {
+        free(c->out);
+        free(c->glossy);
+        memset(c, 0, sizeof *c);
+    }
+    return r;
+}
+
+void ind_cpu_state_free(ind_cpu_state *c)
+{
+    if (c->out)
+        ind_cpu_target_destroy(&c->target);
+    ind_gbuffer_free(&c->gb);
+    free(c->out);
+    free(c->glossy);
+    memset(c, 0, sizeof *c);
+}
+
+void ind_cpu_state_output(ind_cpu_state *c, ind_output *o)
+{
+    ind_cpu_target_upload(&c->target, 0, c->out);
+    if (c->irradiance)
+        ind_cpu_target_upload(&c->target, 1, c->glossy);
+    o->target = &c->target.target;
+    o->extra_count = 0;
+}
+
 void ind_gbuffer_read(const glu_target *gb, ind_gbuffer *g)
 {
     const int p4[] = {0, 1, 2, 3}, p3[] = {0, 1, 2};

@@ -44,14 +44,11 @@
 #define FG_SALT 0x6a09e667u /* the final gather's seeds apart from the bounce map's (√2's bits) */
 
 typedef struct fg_state {
-    int width, height, irradiance;
-    ind_cpu_target target;
-    ind_gbuffer gb;
-    float *out, *glossy;
-    float *radius; /* the lookups' r_xy per photon */
+    ind_cpu_state c;         /* target, G-buffer read-back, output images */
+    float *radius;           /* the lookups' r_xy per photon */
     size_t radius_cap;
-    eng_photon_map caustic; /* the frame's caustic photons (eng_photon.caustic) */
-    float *caustic_radius;  /* their r_xy, as the kernel methods use them */
+    eng_photon_map caustic;  /* the frame's caustic photons (eng_photon.caustic) */
+    float *caustic_radius;   /* their r_xy, as the kernel methods use them */
     size_t caustic_cap;
 } fg_state;
 
@@ -60,10 +57,7 @@ static void fg_destroy(void *state)
     fg_state *k = state;
     if (!k)
         return;
-    ind_cpu_target_destroy(&k->target);
-    ind_gbuffer_free(&k->gb);
-    free(k->out);
-    free(k->glossy);
+    ind_cpu_state_free(&k->c);
     free(k->radius);
     free(k->caustic.photons);
     free(k->caustic_radius);
@@ -75,19 +69,9 @@ static eng_result fg_create(int width, int height, int irradiance, void **state,
     fg_state *k = calloc(1, sizeof *k);
     if (!k)
         return eng_fail(err, ENG_ERR_NOMEM, "final-gather: out of memory");
-    k->width = width;
-    k->height = height;
-    k->irradiance = irradiance;
-    size_t n = (size_t)width * (size_t)height * 4;
-    k->out = malloc(n * sizeof(float));
-    k->glossy = irradiance ? malloc(n * sizeof(float)) : NULL;
-    if (!k->out || (irradiance && !k->glossy)) {
-        fg_destroy(k);
-        return eng_fail(err, ENG_ERR_NOMEM, "final-gather: out of memory for a %dx%d image", width, height);
-    }
-    eng_result r = ind_cpu_target_create(&k->target, width, height, irradiance, err);
+    eng_result r = ind_cpu_state_init(&k->c, "final-gather", width, height, irradiance, err);
     if (r != ENG_OK) {
-        fg_destroy(k);
+        free(k);
         return r;
     }
     *state = k;
@@ -223,11 +207,11 @@ static eng_result fg_run(void *state, const ind_input *in, ind_output *out, eng_
     fg_state *k = state;
     if (!in->rt || !in->rm || !in->rf)
         return eng_fail(err, ENG_ERR_INVALID, "final-gather: no ray tracer or random maps given");
-    ind_gbuffer_read(in->gbuf, &k->gb);
-    const size_t n = (size_t)k->width * (size_t)k->height * 4;
-    memset(k->out, 0, n * sizeof(float));
-    if (k->glossy)
-        memset(k->glossy, 0, n * sizeof(float));
+    ind_gbuffer_read(in->gbuf, &k->c.gb);
+    const size_t n = (size_t)k->c.width * (size_t)k->c.height * 4;
+    memset(k->c.out, 0, n * sizeof(float));
+    if (k->c.glossy)
+        memset(k->c.glossy, 0, n * sizeof(float));
     /* The lookups' kernels: every photon's r_xy times final_gather_radius. */
     const float f = in->s->final_gather_radius;
     if (in->map->count > k->radius_cap) {
@@ -259,13 +243,13 @@ static eng_result fg_run(void *state, const ind_input *in, ind_output *out, eng_
                       in->s->normal_compression,
                       in->rm,
                       in->rf,
-                      &k->gb,
+                      &k->c.gb,
                       in->fs->camera.eye,
                       log2n,
                       1u << (2 * log2n),
-                      k->out,
-                      k->glossy};
-    const int w = k->width, h = k->height;
+                      k->c.out,
+                      k->c.glossy};
+    const int w = k->c.width, h = k->c.height;
     int threads = in->s->threads > 0 ? in->s->threads : 2;
 #pragma omp parallel num_threads(threads)
     {
@@ -279,11 +263,7 @@ static eng_result fg_run(void *state, const ind_input *in, ind_output *out, eng_
     spec_tracer_destroy(t);
     if (have_caustic)
         kd_tree_free(&ctree);
-    ind_cpu_target_upload(&k->target, 0, k->out);
-    if (k->irradiance)
-        ind_cpu_target_upload(&k->target, 1, k->glossy);
-    out->target = &k->target.target;
-    out->extra_count = 0;
+    ind_cpu_state_output(&k->c, out);
     return ENG_OK;
 }
 

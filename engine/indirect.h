@@ -132,4 +132,20 @@ typedef struct ind_gbuffer {
 void ind_gbuffer_read(const glu_target *gb, ind_gbuffer *out); /* (re)allocates out's arrays */
 void ind_gbuffer_free(ind_gbuffer *g);
 
+/* What a CPU method that writes per-pixel images keeps between frames (kdgather.c,
+ * ind_finalgather.c): its target, the G-buffer read back and the w×h×4 output images, glossy
+ * in irradiance mode only. */
+typedef struct ind_cpu_state {
+    int width, height, irradiance;
+    ind_cpu_target target;
+    ind_gbuffer gb;
+    float *out, *glossy;
+} ind_cpu_state;
+/* ENG_ERR_NOMEM naming `method` when the images cannot be allocated. */
+eng_result ind_cpu_state_init(ind_cpu_state *c, const char *method, int width, int height, int irradiance,
+                              eng_error *err);
+void ind_cpu_state_free(ind_cpu_state *c);
+/* Uploads out (and glossy) into the target and points o at it, no extra buffers. */
+void ind_cpu_state_output(ind_cpu_state *c, ind_output *o);
+
 #endif

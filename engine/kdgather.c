@@ -337,43 +337,22 @@ eng_result kd_gather(const eng_photon_map *map, int w, int h, const float *posit
 
 /* ---------------------------------------------------------------- the method (indirect.h) */
 
-typedef struct kd_state {
-    int width, height, irradiance;
-    ind_cpu_target target;
-    ind_gbuffer gb;
-    float *out, *glossy;
-} kd_state;
-
 static void kd_destroy(void *state)
 {
-    kd_state *k = state;
-    if (!k)
+    if (!state)
         return;
-    ind_cpu_target_destroy(&k->target);
-    ind_gbuffer_free(&k->gb);
-    free(k->out);
-    free(k->glossy);
-    free(k);
+    ind_cpu_state_free(state);
+    free(state);
 }
 
 static eng_result kd_create(int width, int height, int irradiance, void **state, eng_error *err)
 {
-    kd_state *k = calloc(1, sizeof *k);
+    ind_cpu_state *k = calloc(1, sizeof *k);
     if (!k)
         return eng_fail(err, ENG_ERR_NOMEM, "kd-gather: out of memory");
-    k->width = width;
-    k->height = height;
-    k->irradiance = irradiance;
-    size_t n = (size_t)width * (size_t)height * 4;
-    k->out = malloc(n * sizeof(float));
-    k->glossy = irradiance ? malloc(n * sizeof(float)) : NULL;
-    if (!k->out || (irradiance && !k->glossy)) {
-        kd_destroy(k);
-        return eng_fail(err, ENG_ERR_NOMEM, "kd-gather: out of memory for a %dx%d image", width, height);
-    }
-    eng_result r = ind_cpu_target_create(&k->target, width, height, irradiance, err);
+    eng_result r = ind_cpu_state_init(k, "kd-gather", width, height, irradiance, err);
     if (r != ENG_OK) {
-        kd_destroy(k);
+        free(k);
         return r;
     }
     *state = k;
@@ -383,18 +362,14 @@ static eng_result kd_create(int width, int height, int irradiance, void **state,
 /* Read-back, gather and upload all count as the method's time: it cannot do without them. */
 static eng_result kd_run(void *state, const ind_input *in, ind_output *out, eng_error *err)
 {
-    kd_state *k = state;
+    ind_cpu_state *k = state;
     ind_gbuffer_read(in->gbuf, &k->gb);
     eng_result r = gather(in->map, in->radius, in->aniso, in->pixel_scale, k->width, k->height, k->gb.position,
                           k->gb.normal, k->gb.albedo, k->gb.material,
                           in->fs->camera.eye, in->s, k->out, k->glossy, err);
     if (r != ENG_OK)
         return r;
-    ind_cpu_target_upload(&k->target, 0, k->out);
-    if (k->irradiance)
-        ind_cpu_target_upload(&k->target, 1, k->glossy);
-    out->target = &k->target.target;
-    out->extra_count = 0;
+    ind_cpu_state_output(k, out);
     return ENG_OK;
 }
 

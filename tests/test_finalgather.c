@@ -15,7 +15,9 @@
  *     boundary correction (a kernel at the pixel) is refused, by the parser and the engine. */
 #include "eng.h"
 #include "eng_internal.h"
+#include "furnace_test_util.h"
 #include "specular.h"
+#include "tile_test_util.h"
 
 #include <check.h>
 #include <math.h>
@@ -25,48 +27,6 @@
 
 #define CORNELL_DIR ISPM_SOURCE_DIR "/scenes/cornell-box/"
 #define FURNACE_DIR ISPM_SOURCE_DIR "/scenes/furnace/"
-
-typedef struct kept {
-    char name[64];
-    int w, h, n;
-    float *data;
-} kept;
-
-typedef struct keeper {
-    int count;
-    kept bufs[96];
-} keeper;
-
-static int keep_buffer(void *user, int frame, const eng_buffer *b)
-{
-    (void)frame;
-    keeper *k = user;
-    ck_assert_int_lt(k->count, 96);
-    kept *d = &k->bufs[k->count++];
-    snprintf(d->name, sizeof d->name, "%s", b->name);
-    d->w = b->width;
-    d->h = b->height;
-    d->n = b->channel_count;
-    size_t sz = (size_t)b->width * b->height * b->channel_count * sizeof(float);
-    d->data = malloc(sz);
-    memcpy(d->data, b->data, sz);
-    return 0;
-}
-
-static const kept *find(const keeper *k, const char *name)
-{
-    for (int i = 0; i < k->count; i++)
-        if (!strcmp(k->bufs[i].name, name))
-            return &k->bufs[i];
-    return NULL;
-}
-
-static void keeper_clear(keeper *k)
-{
-    for (int i = 0; i < k->count; i++)
-        free(k->bufs[i].data);
-    memset(k, 0, sizeof *k);
-}
 
 /* Loads the sequence file seq_path with the settings `extra` merged in (JSON members, no
  * braces), size² pixels, and renders frame 0 into k. */
@@ -107,8 +67,9 @@ static void run_close(scene_run *r)
     scn_destroy(r->scene);
 }
 
-static void render(const char *seq_path, int size, const char *extra, keeper *k)
+static void render_sized(const char *seq_path, int size, const char *extra, keeper *k)
 {
+    k->all = 1;
     scene_run r;
     run_open(&r, seq_path, size, extra);
     run_frame(&r, k);
@@ -127,26 +88,13 @@ static double dot3_d(const float a[3], const double b[3])
 static double furnace_ratio(const char *extra, int size)
 {
     static keeper k;
+    k.all = 1;
     scene_run r;
     run_open(&r, FURNACE_DIR "furnace.json", size, extra);
     run_frame(&r, &k);
     const kept *ind = find(&k, "indirect.radiance");
     ck_assert_ptr_nonnull(ind);
-    double area = 0.0;
-    for (uint32_t p = 0; p < r.scene->primitive_count; p++) {
-        const scn_primitive *pr = &r.scene->primitives[p];
-        for (uint32_t t = 0; t < pr->index_count; t += 3) {
-            const float *a = pr->positions + 3 * pr->indices[t], *b = pr->positions + 3 * pr->indices[t + 1],
-                        *c = pr->positions + 3 * pr->indices[t + 2];
-            double u[3], v[3];
-            for (int i = 0; i < 3; i++) {
-                u[i] = (double)b[i] - a[i];
-                v[i] = (double)c[i] - a[i];
-            }
-            double n[3] = {u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]};
-            area += 0.5 * sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
-        }
-    }
+    const double area = furnace_area(r.scene);
     const eng_frame_scene *fs;
     const eng_rt *rt;
     eng_pose(r.engine, 0, &fs, &rt);
@@ -167,8 +115,7 @@ static double furnace_ratio(const char *extra, int size)
             sum_w += w;
             sum_wl += w * (ind->data[i] + ind->data[i + 1] + ind->data[i + 2]) / 3.0;
         }
-    const double rho = 0.8, phi = 4.0 * ENG_PI * 1.0;
-    const double want = rho * rho * phi / ((1.0 - rho) * ENG_PI * area);
+    const double want = furnace_indirect_mean(area);
     keeper_clear(&k);
     run_close(&r);
     return sum_wl / sum_w / want;
@@ -201,8 +148,8 @@ START_TEST(glass_caustic_from_caustic_photons)
 {
     static keeper kd, fg;
     const int size = 96;
-    render(CORNELL_DIR "cornell-glass-ci.json", size, "\"indirect\":\"kd-gather\",\"photon_count\":16384", &kd);
-    render(CORNELL_DIR "cornell-glass-ci.json", size,
+    render_sized(CORNELL_DIR "cornell-glass-ci.json", size, "\"indirect\":\"kd-gather\",\"photon_count\":16384", &kd);
+    render_sized(CORNELL_DIR "cornell-glass-ci.json", size,
            "\"indirect\":\"final-gather\",\"final_gather_rays\":16,\"photon_count\":16384", &fg);
     const kept *n = find(&kd, "gbuffer.normal"), *a = find(&kd, "indirect.radiance"), *b = find(&fg, "indirect.radiance");
     ck_assert(n && a && b);
@@ -283,9 +230,9 @@ END_TEST
 START_TEST(bit_identical_for_any_thread_count)
 {
     static keeper k1, k3;
-    render(CORNELL_DIR "cornell-glass-ci.json", 40,
+    render_sized(CORNELL_DIR "cornell-glass-ci.json", 40,
            "\"indirect\":\"final-gather\",\"final_gather_rays\":16,\"photon_count\":4096,\"threads\":1", &k1);
-    render(CORNELL_DIR "cornell-glass-ci.json", 40,
+    render_sized(CORNELL_DIR "cornell-glass-ci.json", 40,
            "\"indirect\":\"final-gather\",\"final_gather_rays\":16,\"photon_count\":4096,\"threads\":3", &k3);
     int compared = 0;
     for (int i = 0; i < k1.count; i++) {

@@ -18,6 +18,7 @@
 #include "cap.h"
 #include "eng_internal.h"
 #include "ref.h"
+#include "furnace_test_util.h"
 
 #include <check.h>
 #include <math.h>
@@ -331,23 +332,8 @@ START_TEST(furnace_sphere)
     render_ref(&s, d, &im);
     full_is_sum(&im);
 
-    const double rho = 0.8, intensity = 1.0;
-    /* A: area of the tessellated sphere (every draw at identity). */
-    double area = 0.0;
-    for (uint32_t k = 0; k < s.scene->primitive_count; k++) {
-        const scn_primitive *p = &s.scene->primitives[k];
-        for (uint32_t t = 0; t < p->index_count; t += 3) {
-            const float *a = p->positions + 3 * p->indices[t], *b = p->positions + 3 * p->indices[t + 1],
-                        *c = p->positions + 3 * p->indices[t + 2];
-            double u[3], v[3];
-            for (int i = 0; i < 3; i++) {
-                u[i] = (double)b[i] - a[i];
-                v[i] = (double)c[i] - a[i];
-            }
-            double n[3] = {u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]};
-            area += 0.5 * sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
-        }
-    }
+    const double rho = FURNACE_RHO, intensity = FURNACE_INTENSITY;
+    const double area = furnace_area(s.scene);
     ck_assert(area > 12.0 && area < 4.0 * ENG_PI);
     const eng_frame_scene *fs;
     const eng_rt *rt;
@@ -376,8 +362,7 @@ START_TEST(furnace_sphere)
             sum_wl += w * im.indirect[i];
         }
     double mean = sum_wl / sum_w;
-    double phi = 4.0 * ENG_PI * intensity;
-    double want = rho * rho * phi / ((1.0 - rho) * ENG_PI * area);
+    double want = furnace_indirect_mean(area);
     printf("furnace: A = %.6f m², direct worst %.4f%%, indirect area mean %.6f, energy balance %.6f (%+.3f%%)\n",
            area, 100 * worst, mean, want, 100 * (mean - want) / want);
     ck_assert_msg(fabs(mean - want) < 0.005 * want, "indirect area mean %.6g, energy balance %.6g", mean, want);
