@@ -4,7 +4,8 @@
 # box at 160x160 and at 640x480, each size in one `ispm bench` run, so the "speedup vs
 # kd-gather" lines it prints are ratios measured side by side. The GL compute tile gather
 # (tile-gather-gl) is in the 160x160 run only: at 640x480, 524288 photons, r 0.2 one frame took
-# 334 s on llvmpipe (docs/indirect.md), and its 160x160 series alone takes several minutes. Makes the 256-spp references
+# 334 s on llvmpipe (docs/indirect.md), and its 160x160 series alone takes several minutes; so is
+# the final gather (another estimator: 64 rays a pixel, README "Final gathering"). Makes the 256-spp references
 # (frame 0) when they are missing. Usage: bench/indirect-methods.sh [OUTDIR] (default
 # out/indirect-methods); ISPM=path/to/ispm to use another binary.
 set -euo pipefail
