@@ -313,6 +313,11 @@ static void photons(const lin_frame *fr, lin_result *r)
         r->why = "the quads' kernel (001 §3.3) is not the photon-volume kernel lineage evaluates";
         return;
     }
+    if (strcmp(fr->m->indirect, "final-gather") == 0) {
+        r->why = "the final gather's pixels come from rays traced from them (photons looked up one bounce away), "
+                 "not from kernels at the pixel";
+        return;
+    }
     if (!map || !org) {
         r->why = map ? "no photons.origin in the run (record it with ispm record --lineage)"
                      : "no photons.map in the run";

@@ -140,6 +140,13 @@ START_TEST(two_photons_of_known_power)
     ck_assert(!r.has_photons);
     ck_assert_ptr_nonnull(r.why);
     lin_result_free(&r);
+    /* Nor do the final gather's pixels come from kernels at the pixel. */
+    strcpy(f->m.indirect, "final-gather");
+    ck_assert_int_eq(lin_pixel(&f->fr, 1, 0, &r, &err), ENG_OK);
+    ck_assert(!r.has_photons);
+    ck_assert_ptr_nonnull(r.why);
+    ck_assert_ptr_nonnull(strstr(r.why, "final gather"));
+    lin_result_free(&r);
     /* Without photons.origin the photons cannot be evaluated. */
     strcpy(f->m.indirect, "kd-gather");
     f->fr.count = 7;
