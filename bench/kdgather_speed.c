@@ -42,6 +42,15 @@ void ind_cpu_target_destroy(ind_cpu_target *t) { (void)t; }
 void ind_cpu_target_upload(ind_cpu_target *t, int index, const float *rgba) { (void)t, (void)index, (void)rgba; }
 void ind_gbuffer_read(const glu_target *gb, ind_gbuffer *out) { (void)gb, (void)out; }
 void ind_gbuffer_free(ind_gbuffer *g) { (void)g; }
+/* The method wrapper's state (indirect.h, since the final gather shares it): never called here. */
+eng_result ind_cpu_state_init(ind_cpu_state *c, const char *method, int width, int height, int irradiance,
+                              eng_error *err)
+{
+    (void)c, (void)method, (void)width, (void)height, (void)irradiance, (void)err;
+    abort();
+}
+void ind_cpu_state_free(ind_cpu_state *c) { (void)c; }
+void ind_cpu_state_output(ind_cpu_state *c, ind_output *o) { (void)c, (void)o; }
 
 static double now(void)
 {

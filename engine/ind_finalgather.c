@@ -214,12 +214,10 @@ static eng_result fg_run(void *state, const ind_input *in, ind_output *out, eng_
         memset(k->c.glossy, 0, n * sizeof(float));
     /* The lookups' kernels: every photon's r_xy times final_gather_radius. */
     const float f = in->s->final_gather_radius;
-    if (in->map->count > k->radius_cap) {
+    if (in->map->count > k->radius_cap) { /* as caustic_photons grows its arrays */
         free(k->radius);
-        k->radius = malloc(in->map->count * sizeof *k->radius);
-        k->radius_cap = k->radius ? in->map->count : 0;
-        if (!k->radius)
-            return eng_fail(err, ENG_ERR_NOMEM, "final-gather: out of memory for %zu photons", in->map->count);
+        k->radius = eng_xmalloc(in->map->count * sizeof *k->radius);
+        k->radius_cap = in->map->count;
     }
     for (size_t i = 0; i < in->map->count; i++)
         k->radius[i] = in->radius[i] * f;
