@@ -2,11 +2,15 @@
  * formatting, content digests (XXH3-128 from libxxhash), non-finite counting, whole-file
  * reads with a size cap, and the default settings. Replay and the viewer link this (through
  * the ispm_core target) without pulling in OSMesa or Embree. */
+#define _DEFAULT_SOURCE /* sbrk, madvise */
 #include "eng.h"
 
 #include <errno.h>
 #ifdef __GLIBC__
 #include <malloc.h>
+#include <pthread.h>
+#include <sys/mman.h>
+#include <unistd.h>
 #endif
 #include <math.h>
 #include <stdarg.h>
@@ -295,18 +299,71 @@ const char *eng_random_name(eng_random_mode m)
     return "unknown";
 }
 
-/* Freed memory kept in the heap instead of returned to the system (glibc: allocations up to
- * 32 MiB from the heap, no trimming below 512 MiB free). A frame allocates and frees the same
- * large blocks every frame (replay: a frame's buffers, 6 MB for the CI run per side; record:
+/* The heap, tuned for frames (record, replay). glibc only; a no-op elsewhere and where the
+ * allocator is replaced (the sanitizers'), and idempotent.
+ *
+ * Freed memory kept in the heap instead of returned to the system (allocations up to 32 MiB
+ * from the heap, no trimming below 512 MiB free). A frame allocates and frees the same large
+ * blocks every frame (replay: a frame's buffers, 6 MB for the CI run per side; record:
  * llvmpipe's binned scene, which a 1-thread splat bins in one piece), and glibc serves each from
- * fresh mmap'd or trimmed-and-regrown memory, so every page is faulted in anew. Process-wide,
- * only how freed memory is kept: no result depends on it. Measured (session 8, idle): replay of
- * the CI run ~24,000 faults fewer; record of cornell-box-perf, 1 thread, 66,886 -> 39,708 minor
- * faults, 2.51 -> 2.21 s, the same peak RSS (220 MB); 2 threads unchanged. */
-void eng_keep_freed_memory(void)
+ * fresh mmap'd or trimmed-and-regrown memory, so every page is faulted in anew. Measured
+ * (session 8, idle): replay of the CI run ~24,000 faults fewer; record of cornell-box-perf,
+ * 1 thread, 66,886 -> 39,708 minor faults, 2.51 -> 2.21 s, the same peak RSS (220 MB).
+ *
+ * Transparent huge pages (issue 22 rows 1-3): the heap is grown once by HEAP_THP_BYTES of
+ * address space (glibc's M_TOP_PAD for one growth: no page is touched; less than the trim
+ * threshold, so that it stays) and that range is
+ * madvise(MADV_HUGEPAGE)d, so first touches fault 2 MiB at a time instead of 4 KiB (what glibc's
+ * own glibc.malloc.hugetlb=1 tunable does, which must be set before the process starts), and
+ * every thread allocates from it (one arena: M_ARENA_MAX 1; the other arenas would be fresh
+ * mmap'd heaps outside the range). The pages llvmpipe's textures, the photon buffers and the
+ * capture's copies first touch were most of record's 37,000 minor faults, each costly on a
+ * virtual machine. Measured (2-core VM, idle; record of cornell-box-perf 3 frames, 65,536
+ * photons): 36,700 -> 5,000 minor faults, 1 thread 1.95 -> 1.65-1.79 s, 2 threads 1.30 ->
+ * 1.08-1.13 s; replay of the CI run 0.60 -> 0.49-0.53 s; peak RSS +8-10 MB (pages are 2 MiB).
+ * With THP "never" the advice is kept and nothing changes; with "always" it changes nothing
+ * either. Only where memory comes from: no result depends on it.
+ * Returns the bytes advised (0 when none: not glibc, allocator replaced, heap not contiguous,
+ * or madvise refused). */
+#define HEAP_TRIM_BYTES (512 << 20)
+#define HEAP_THP_BYTES ((size_t)384 << 20)
+/* Below the trim threshold with the probe block: freeing the probe must not give it back. */
+_Static_assert(HEAP_THP_BYTES + ((size_t)8 << 20) < (size_t)HEAP_TRIM_BYTES, "advised range would be trimmed");
+#define HEAP_THP_ALIGN ((uintptr_t)2 << 20)
+
+#ifdef __GLIBC__
+static size_t heap_advised;
+
+static void heap_tune_once(void)
+{
+    mallopt(M_MMAP_THRESHOLD, 32 << 20); /* glibc's largest */
+    mallopt(M_TRIM_THRESHOLD, HEAP_TRIM_BYTES);
+    mallopt(M_ARENA_MAX, 1);
+    /* One growth of the main heap padded to HEAP_THP_BYTES, then the pad back to glibc's
+     * default (128 KiB): [b0, b1) is the new, untouched range. */
+    uintptr_t b0 = (uintptr_t)sbrk(0);
+    mallopt(M_TOP_PAD, (int)HEAP_THP_BYTES);
+    /* More than the top chunk can hold: the heap grows. Through a volatile, or the compiler
+     * may drop a malloc whose block is never used, and its free with it. */
+    void *volatile probe = malloc((size_t)4 << 20);
+    uintptr_t b1 = (uintptr_t)sbrk(0);
+    mallopt(M_TOP_PAD, 128 << 10);
+    free(probe);
+    if (b0 == (uintptr_t)-1 || b1 == (uintptr_t)-1 || b1 <= b0 || b1 - b0 < HEAP_THP_BYTES / 2)
+        return; /* the allocator is not glibc's brk heap (sanitizers), or the heap could not grow */
+    uintptr_t lo = (b0 + HEAP_THP_ALIGN - 1) & ~(HEAP_THP_ALIGN - 1);
+    if (lo < b1 && madvise((void *)lo, b1 - lo, MADV_HUGEPAGE) == 0)
+        heap_advised = b1 - lo;
+}
+#endif
+
+size_t eng_keep_freed_memory(void)
 {
 #ifdef __GLIBC__
-    mallopt(M_MMAP_THRESHOLD, 32 << 20); /* glibc's largest */
-    mallopt(M_TRIM_THRESHOLD, 512 << 20);
+    static pthread_once_t once = PTHREAD_ONCE_INIT;
+    pthread_once(&once, heap_tune_once);
+    return heap_advised;
+#else
+    return 0;
 #endif
 }

@@ -780,8 +780,10 @@ void eng_buffer_nonfinite(const eng_buffer *b, uint64_t *nan_count, uint64_t *in
  * over max_bytes with ENG_ERR_INVALID. */
 eng_result eng_read_file(const char *path, size_t max_bytes, char **data, size_t *len, eng_error *err);
 
-/* Process-wide: freed memory stays in the heap for reuse (fewer page faults); see core.c. */
-void eng_keep_freed_memory(void);
+/* Process-wide, once: freed memory stays in the heap for reuse, every thread allocates from
+ * one heap, and a range of it is advised for transparent huge pages (fewer page faults; see
+ * core.c). Returns the bytes advised, 0 where nothing was (not glibc, a replaced allocator). */
+size_t eng_keep_freed_memory(void);
 
 #ifdef __cplusplus
 }
