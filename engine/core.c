@@ -312,17 +312,18 @@ const char *eng_random_name(eng_random_mode m)
  *
  * Transparent huge pages (issue 22 rows 1-3): the heap is grown once by HEAP_THP_BYTES of
  * address space (glibc's M_TOP_PAD for one growth: no page is touched; less than the trim
- * threshold, so that it stays) and that range is
- * madvise(MADV_HUGEPAGE)d, so first touches fault 2 MiB at a time instead of 4 KiB (what glibc's
- * own glibc.malloc.hugetlb=1 tunable does, which must be set before the process starts), and
- * every thread allocates from it (one arena: M_ARENA_MAX 1; the other arenas would be fresh
- * mmap'd heaps outside the range). The pages llvmpipe's textures, the photon buffers and the
- * capture's copies first touch were most of record's 37,000 minor faults, each costly on a
- * virtual machine. Measured (2-core VM, idle; record of cornell-box-perf 3 frames, 65,536
- * photons): 36,700 -> 5,000 minor faults, 1 thread 1.95 -> 1.65-1.79 s, 2 threads 1.30 ->
- * 1.08-1.13 s; replay of the CI run 0.60 -> 0.49-0.53 s; peak RSS +8-10 MB (pages are 2 MiB).
- * With THP "never" the advice is kept and nothing changes; with "always" it changes nothing
- * either. Only where memory comes from: no result depends on it.
+ * threshold, so that it stays) and that range is madvise(MADV_HUGEPAGE)d, so first touches
+ * fault 2 MiB at a time instead of 4 KiB (what glibc's own glibc.malloc.hugetlb=1 tunable
+ * does, which must be set before the process starts), and every thread allocates from it
+ * (one arena: M_ARENA_MAX 1; the other arenas would be fresh mmap'd heaps outside the range).
+ * The pages llvmpipe's textures, the photon buffers and the capture's copies first touch were
+ * most of record's 37,000 minor faults, each costly on a virtual machine. Measured (2-core VM;
+ * record of cornell-box-perf, 3 frames, 65,536 photons; bench/perf_threads.sh against the
+ * build before, 5 alternated runs): 36,700 -> 5,000 minor faults; start-up (one 32x32 frame)
+ * 0.65x the time, 1 thread 0.89x, 2 threads 0.84x; replay of the CI run 0.60 -> 0.49-0.53 s;
+ * peak RSS +12-15 MB (pages are 2 MiB). With THP "never" the advice is kept and nothing
+ * changes; with "always" it changes nothing either. Only where memory comes from: no result
+ * depends on it.
  * Returns the bytes advised (0 when none: not glibc, allocator replaced, heap not contiguous,
  * or madvise refused). */
 #define HEAP_TRIM_BYTES (512 << 20)
