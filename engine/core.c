@@ -320,10 +320,10 @@ const char *eng_random_name(eng_random_mode m)
  * most of record's 37,000 minor faults, each costly on a virtual machine. Measured (2-core VM;
  * record of cornell-box-perf, 3 frames, 65,536 photons; bench/perf_threads.sh against the
  * build before, 5 alternated runs): 36,700 -> 5,000 minor faults; start-up (one 32x32 frame)
- * 0.65x the time, 1 thread 0.89x, 2 threads 0.84x; replay of the CI run 0.60 -> 0.49-0.53 s;
- * peak RSS +12-15 MB (pages are 2 MiB). With THP "never" the advice is kept and nothing
- * changes; with "always" it changes nothing either. Only where memory comes from: no result
- * depends on it.
+ * 0.65x the time, 1 thread 0.89x, 2 threads 0.84x; replay of the CI run against its golden
+ * unchanged (0.58 vs 0.57 s), against cornell-box-quads-ci 1.10 -> 0.98 s; peak RSS +12-15 MB
+ * (pages are 2 MiB). With THP "never" the advice is kept and nothing changes; with "always"
+ * it changes nothing either. Only where memory comes from: no result depends on it.
  * Returns the bytes advised (0 when none: not glibc, allocator replaced, heap not contiguous,
  * or madvise refused). */
 #define HEAP_TRIM_BYTES (512 << 20)
