@@ -109,12 +109,14 @@ START_TEST(freed_memory_stays)
     eng_keep_freed_memory();
     if (REPLACED_ALLOCATOR)
         return;
-    /* 24 MiB, under the 32 MiB mmap threshold: from the heap, and back to the heap when freed
-     * (no trim below 512 MiB free), so the break does not move. */
+    /* 24 MiB, under the 32 MiB mmap threshold: from the heap (below the break, not a mapping of
+     * its own, which glibc's default threshold would give), and back to the heap when freed (no
+     * trim below 512 MiB free), so the break does not move. */
     void *brk0 = sbrk(0);
     for (int i = 0; i < 8; i++) {
         char *p = malloc((size_t)24 << 20);
         ck_assert_ptr_nonnull(p);
+        ck_assert_msg((uintptr_t)p + ((size_t)24 << 20) <= (uintptr_t)brk0, "a 24 MiB block is not from the heap");
         memset(p, i, 4096);
         free(p);
         ck_assert_ptr_eq(sbrk(0), brk0);
