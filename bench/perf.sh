@@ -31,29 +31,32 @@ mkdir -p "$OUT"
 
 . "$(dirname "$0")/timing.sh" # now, median, ratio
 
-# seconds COMMAND...: runs it (output to $OUT/log), prints its wall time in seconds. Exit
+# wall_cpu COMMAND: runs the shell command (output to $OUT/log), prints its wall time and the
+# CPU time (user + system) of the processes it ran, from the shell's `times`, in seconds. Exit
 # codes are not judged here (replay and idiff exit non-zero on differing files by design).
-seconds() {
+wall_cpu() {
     s=$(now)
-    "$@" >>"$OUT/log" 2>&1 || true
+    c=$(sh -c "{ $1
+} >>\"$OUT/log\" 2>&1; times" | tail -1 |
+        awk '{ for (i = 1; i <= 2; i++) { split($i, p, "m"); t += p[1] * 60 + p[2] } } END { printf "%.3f", t }')
     e=$(now)
-    awk -v s="$s" -v e="$e" 'BEGIN { printf "%.3f\n", e - s }'
+    awk -v s="$s" -v e="$e" -v c="$c" 'BEGIN { printf "%.3f %s\n", e - s, c }'
 }
 
-
-# pair NAME_A NAME_B CMD_A CMD_B: alternates A and B RUNS times; sets A_MED, B_MED.
+# pair NAME_A NAME_B CMD_A CMD_B: alternates A and B RUNS times; sets the median wall times
+# A_MED, B_MED and CPU times CA_MED, CB_MED.
 pair() {
-    ta="" tb=""
+    ta="" tb="" ca="" cb=""
     i=0
     while [ "$i" -lt "$RUNS" ]; do
-        ta="$ta $(seconds sh -c "$3")"
-        tb="$tb $(seconds sh -c "$4")"
+        ra=$(wall_cpu "$3") rb=$(wall_cpu "$4") # "wall cpu"
+        ta="$ta ${ra% *}" ca="$ca ${ra#* }" tb="$tb ${rb% *}" cb="$cb ${rb#* }"
         i=$((i + 1))
     done
-    A_MED=$(echo "$ta" | median)
-    B_MED=$(echo "$tb" | median)
-    printf '  %-44s %8.2f s   (runs:%s)\n' "$1" "$A_MED" "$ta"
-    printf '  %-44s %8.2f s   (runs:%s)\n' "$2" "$B_MED" "$tb"
+    A_MED=$(echo "$ta" | median) B_MED=$(echo "$tb" | median)
+    CA_MED=$(echo "$ca" | median) CB_MED=$(echo "$cb" | median)
+    printf '  %-44s %8.2f s   (runs:%s; CPU %.2f s)\n' "$1" "$A_MED" "$ta" "$CA_MED"
+    printf '  %-44s %8.2f s   (runs:%s; CPU %.2f s)\n' "$2" "$B_MED" "$tb" "$CB_MED"
 }
 
 
@@ -113,33 +116,13 @@ fi
 
 if row 3; then
 echo "3. record $PERF (3 frames, 65,536 photons, final.display): 1 thread vs 2 threads"
-# Wall and CPU time (user + system of the record process, from the shell's `times`) of each run:
-# the CPU the 2-thread run spends, spread perfectly over two cores, bounds its wall time from
-# below, so 1-thread wall / (2-thread CPU / 2) is the most any scheduling of that work could give.
-wall_cpu() {
-    s=$(now)
-    c=$(sh -c "$1 >>\"$OUT/log\" 2>&1; times" | tail -1 |
-        awk '{ for (i = 1; i <= 2; i++) { split($i, p, "m"); t += p[1] * 60 + p[2] } } END { printf "%.3f", t }')
-    e=$(now)
-    awk -v s="$s" -v e="$e" -v c="$c" 'BEGIN { printf "%.3f %s\n", e - s, c }'
-}
-ta="" tb="" ca="" cb=""
-i=0
-while [ "$i" -lt "$RUNS" ]; do
-    # shellcheck disable=SC2046
-    set -- $(wall_cpu "$ISPM record $PERF -o $OUT/t1 --force --quiet --threads 1 --capture final.display")
-    ta="$ta $1" ca="$ca $2"
-    # shellcheck disable=SC2046
-    set -- $(wall_cpu "$ISPM record $PERF -o $OUT/t2 --force --quiet --threads 2 --capture final.display")
-    tb="$tb $1" cb="$cb $2"
-    i=$((i + 1))
-done
-A_MED=$(echo "$ta" | median) B_MED=$(echo "$tb" | median)
-CA_MED=$(echo "$ca" | median) CB_MED=$(echo "$cb" | median)
-printf '  %-44s %8.2f s   (runs:%s; CPU %.2f s:%s)\n' "--threads 1" "$A_MED" "$ta" "$CA_MED" "$ca"
-printf '  %-44s %8.2f s   (runs:%s; CPU %.2f s:%s)\n' "--threads 2" "$B_MED" "$tb" "$CB_MED" "$cb"
+pair "--threads 1" "--threads 2" \
+    "$ISPM record $PERF -o $OUT/t1 --force --quiet --threads 1 --capture final.display" \
+    "$ISPM record $PERF -o $OUT/t2 --force --quiet --threads 2 --capture final.display"
 r=$(ratio "$A_MED" "$B_MED")
 echo "  2 threads are ${r}x faster   (goal >= 1.8x: $(verdict "$r" ge 1.8))"
+# The 2-thread run's CPU spread perfectly over two cores bounds its wall time from below, so
+# 1-thread wall / (2-thread CPU / 2) is the most any scheduling of that work could give.
 echo "  bound: 1-thread wall / (2-thread CPU / 2) = $(awk -v a="$A_MED" -v c="$CB_MED" 'BEGIN { printf "%.2f", a / (c / 2) }')x" \
      "(2-thread CPU / 1-thread CPU $(ratio "$CB_MED" "$CA_MED"); 2-thread cores busy $(ratio "$CB_MED" "$B_MED") of 2)"
 fi
