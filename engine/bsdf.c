@@ -153,21 +153,40 @@ bsdf_lobe bsdf_scatter(const scn_material *m, const float n[3], const float wi[3
     return bsdf_scatter_params(&p, n, wi, eta, rnd, wo, weight, density_factor);
 }
 
+/* The lobe bsdf_scatter_params samples: BSDF_ABSORBED when wi lies in the surface, else
+ * BSDF_GLOSSY for the metal lobe (mirror or GGX), BSDF_REFRACT for the glass lobe (reflection
+ * or refraction) or BSDF_DIFFUSE. */
+static inline bsdf_lobe lobe_of(const bsdf_params *m, float cos_n, const float u[4])
+{
+    float metallic = clamp01(m->metallic), transmission = clamp01(m->transmission);
+    if (!(fabsf(cos_n) > 0.0f))
+        return BSDF_ABSORBED;
+    float pick = u[BSDF_U_LOBE];
+    if (pick < metallic)
+        return BSDF_GLOSSY;
+    float rest = metallic < 1.0f ? (pick - metallic) / (1.0f - metallic) : 1.0f;
+    return rest < transmission ? BSDF_REFRACT : BSDF_DIFFUSE;
+}
+
+int bsdf_takes_diffuse(const bsdf_params *m, const float n[3], const float wi[3], const float u[4])
+{
+    return lobe_of(m, dot3(wi, n), u) == BSDF_DIFFUSE;
+}
+
 bsdf_lobe bsdf_scatter_params(const bsdf_params *m, const float n[3], const float wi[3], float *eta,
                               const bsdf_sample *rnd, float wo[3], float weight[3], float *density_factor)
 {
     const float *u = rnd->u;
-    float metallic = clamp01(m->metallic), transmission = clamp01(m->transmission);
     float cos_n = dot3(wi, n);
     /* ns: n turned to the side wi lies on. */
     float s = cos_n >= 0.0f ? 1.0f : -1.0f;
     float ns[3] = {s * n[0], s * n[1], s * n[2]};
     float cos_i = fabsf(cos_n);
-    if (!(cos_i > 0.0f))
+    const bsdf_lobe lobe = lobe_of(m, cos_n, u);
+    if (lobe == BSDF_ABSORBED)
         return absorbed(wo, weight, density_factor);
 
-    float pick = u[BSDF_U_LOBE];
-    if (pick < metallic) {
+    if (lobe == BSDF_GLOSSY) {
         const float *f0 = m->base_color;
         if (m->roughness < BSDF_MIRROR_ROUGHNESS) {
             reflect(wi, ns, wo);
@@ -199,8 +218,7 @@ bsdf_lobe bsdf_scatter_params(const bsdf_params *m, const float n[3], const floa
         *density_factor = max3(f0) / BSDF_DENSITY_GLOSSY;
         return roulette(BSDF_GLOSSY, u[BSDF_U_ROULETTE], weight, wo, density_factor);
     }
-    float rest = metallic < 1.0f ? (pick - metallic) / (1.0f - metallic) : 1.0f;
-    if (rest < transmission) {
+    if (lobe == BSDF_REFRACT) {
         int entering = cos_n > 0.0f;
         float n1 = entering ? *eta : m->ior;
         float n2 = entering ? m->ior : 1.0f;
@@ -230,6 +248,93 @@ bsdf_lobe bsdf_scatter_params(const bsdf_params *m, const float n[3], const floa
     *density_factor = max3(weight) / BSDF_DENSITY_DIFFUSE;
     return roulette(BSDF_DIFFUSE, u[BSDF_U_ROULETTE], weight, wo, density_factor);
 }
+
+#if defined(__SSE2__)
+#include <emmintrin.h>
+
+/* SSE2 twins of the scalar helpers above, one ray a lane: the same operations in the same
+ * order (IEEE single precision per lane, no fused multiply-add), so each lane's result is the
+ * scalar code's bit for bit. */
+static inline __m128 sel4(__m128 mask, __m128 a, __m128 b)
+{
+    return _mm_or_ps(_mm_and_ps(mask, a), _mm_andnot_ps(mask, b));
+}
+
+static inline __m128 dot4(const __m128 a[3], const __m128 b[3])
+{
+    return _mm_add_ps(_mm_add_ps(_mm_mul_ps(a[0], b[0]), _mm_mul_ps(a[1], b[1])), _mm_mul_ps(a[2], b[2]));
+}
+
+/* max3: (a > b ? a : b), then (m > c ? m : c), as maxps orders its operands. */
+static inline __m128 max4(const __m128 v[3])
+{
+    return _mm_max_ps(_mm_max_ps(v[0], v[1]), v[2]);
+}
+
+static inline __m128 load_lanes(const float *const p[4], int i)
+{
+    return _mm_setr_ps(p[0][i], p[1][i], p[2][i], p[3][i]);
+}
+
+void bsdf_diffuse4(const float *const n[4], const float *const wi[4], const float *const cosdir[4],
+                   const float *const albedo[4], const float u_roulette[4], float wo[4][3], float weight[4][3],
+                   float density_factor[4], int alive[4])
+{
+    const __m128 one = _mm_set1_ps(1.0f), zero = _mm_setzero_ps(), minus = _mm_set1_ps(-0.0f);
+    __m128 vn[3], vwi[3], ns[3], t[3], b[3], o[3], w[3];
+    for (int i = 0; i < 3; i++) {
+        vn[i] = load_lanes(n, i);
+        vwi[i] = load_lanes(wi, i);
+    }
+    const __m128 cos_n = dot4(vwi, vn);
+    const __m128 s = sel4(_mm_cmpge_ps(cos_n, zero), one, _mm_xor_ps(one, minus));
+    for (int i = 0; i < 3; i++)
+        ns[i] = _mm_mul_ps(s, vn[i]);
+    /* bsdf_basis(ns, t, b) */
+    const __m128 sign = sel4(_mm_cmpge_ps(ns[2], zero), one, _mm_xor_ps(one, minus));
+    const __m128 a = _mm_div_ps(_mm_xor_ps(one, minus), _mm_add_ps(sign, ns[2]));
+    const __m128 c = _mm_mul_ps(_mm_mul_ps(ns[0], ns[1]), a);
+    t[0] = _mm_add_ps(one, _mm_mul_ps(_mm_mul_ps(_mm_mul_ps(sign, ns[0]), ns[0]), a));
+    t[1] = _mm_mul_ps(sign, c);
+    t[2] = _mm_mul_ps(_mm_xor_ps(sign, minus), ns[0]);
+    b[0] = c;
+    b[1] = _mm_add_ps(sign, _mm_mul_ps(_mm_mul_ps(ns[1], ns[1]), a));
+    b[2] = _mm_xor_ps(ns[1], minus);
+    /* to_world(cosdir, ns, wo), then normalize3(wo) */
+    const __m128 l0 = load_lanes(cosdir, 0), l1 = load_lanes(cosdir, 1), l2 = load_lanes(cosdir, 2);
+    for (int i = 0; i < 3; i++)
+        o[i] = _mm_add_ps(_mm_add_ps(_mm_mul_ps(l0, t[i]), _mm_mul_ps(l1, b[i])), _mm_mul_ps(l2, ns[i]));
+    const __m128 len = _mm_sqrt_ps(dot4(o, o)), pos = _mm_cmpgt_ps(len, zero);
+    for (int i = 0; i < 3; i++)
+        o[i] = sel4(pos, _mm_div_ps(o[i], len), o[i]);
+    /* weight = albedo, density = max3(weight) / BSDF_DENSITY_DIFFUSE, then roulette() */
+    for (int i = 0; i < 3; i++)
+        w[i] = load_lanes(albedo, i);
+    const __m128 density = _mm_div_ps(max4(w), _mm_set1_ps(BSDF_DENSITY_DIFFUSE));
+    for (int i = 0; i < 3; i++)
+        w[i] = _mm_and_ps(_mm_cmpgt_ps(w[i], zero), w[i]); /* !(w > 0): 0, also NaN */
+    const __m128 m = max4(w);
+    const __m128 p = sel4(_mm_cmplt_ps(m, zero), zero, _mm_min_ps(one, m)); /* clamp01 */
+    const __m128 live = _mm_cmplt_ps(_mm_loadu_ps(u_roulette), p);
+    for (int i = 0; i < 3; i++)
+        w[i] = _mm_and_ps(live, _mm_div_ps(w[i], p));
+    float ow[3][4], ww[3][4], d[4];
+    for (int i = 0; i < 3; i++) {
+        _mm_storeu_ps(ow[i], _mm_and_ps(live, o[i]));
+        _mm_storeu_ps(ww[i], w[i]);
+    }
+    _mm_storeu_ps(d, _mm_and_ps(live, density));
+    const int lm = _mm_movemask_ps(live);
+    for (int k = 0; k < 4; k++) {
+        for (int i = 0; i < 3; i++) {
+            wo[k][i] = ow[i][k];
+            weight[k][i] = ww[i][k];
+        }
+        density_factor[k] = d[k];
+        alive[k] = (lm >> k) & 1;
+    }
+}
+#endif
 
 void bsdf_stratify(const float u[4], const float offset[4], float out_u[4], float out_cosdir[4])
 {

@@ -76,6 +76,20 @@ bsdf_lobe bsdf_scatter(const scn_material *m, const float n[3], const float wi[3
 bsdf_lobe bsdf_scatter_params(const bsdf_params *m, const float n[3], const float wi[3], float *eta,
                               const bsdf_sample *rnd, float wo[3], float weight[3], float *density_factor);
 
+/* Whether bsdf_scatter_params would take the diffuse lobe for (m, n, wi) with the random
+ * numbers u (not absorbed for wi in the surface, neither metal nor glass picked). */
+int bsdf_takes_diffuse(const bsdf_params *m, const float n[3], const float wi[3], const float u[4]);
+#if defined(__SSE2__)
+/* bsdf_scatter_params on four rays at once, each known to take the diffuse lobe
+ * (bsdf_takes_diffuse) with albedo k = the base colour and cosine direction cosdir[k]: wo,
+ * weight and density factor of lane k are the scalar function's bit for bit, alive[k] = 0 where
+ * it returns BSDF_ABSORBED (Russian roulette; wo, weight and density then 0), else 1 for
+ * BSDF_DIFFUSE. A lane may repeat another's pointers when fewer than four rays are at hand. */
+void bsdf_diffuse4(const float *const n[4], const float *const wi[4], const float *const cosdir[4],
+                   const float *const albedo[4], const float u_roulette[4], float wo[4][3], float weight[4][3],
+                   float density_factor[4], int alive[4]);
+#endif
+
 /* Stratified sampling across frames (002_558366c451cd32fd.txt §4.2): a Cranley–Patterson
  * rotation of one event's random numbers, out_u[d] = frac(u[d] + offset[d]), and the
  * cosine-weighted direction made from the rotated out_u[BSDF_U_DIR0..1] by the concentric

@@ -530,6 +530,13 @@ static inline int rt_material_textured(const scn_material *m)
  * rt_intersect returns it. */
 int rt_intersect_untextured(const eng_rt *rt, const float org[3], const float dir[3], float tnear, float tfar,
                             rt_hit *hit);
+/* rt_intersect_untextured (tfar = ∞) on n ≤ 4 rays at once, one rtcIntersect4 packet:
+ * found[i] and hits[i] are what rt_intersect_untextured returns for rays[i], given that Embree
+ * answers a packet's rays as it answers them one by one (tracebench checks it on every run). */
+typedef struct rt_ray {
+    float org[3], dir[3], tnear;
+} rt_ray;
+void rt_intersect4_untextured(const eng_rt *rt, int n, const rt_ray *rays, rt_hit *hits, int *found);
 /* alphaMode BLEND geometry (rt.c, pass_translucent.c) is not seen by rt_intersect and
  * rt_occluded; rt_intersect_blend sees only it (lamps ignored), as rt_intersect does. */
 int rt_intersect_blend(const eng_rt *rt, const float org[3], const float dir[3], float tnear, float tfar, rt_hit *hit);
@@ -560,13 +567,23 @@ eng_result photon_trace(const eng_rt *rt, const eng_frame_scene *fs, const eng_r
  * pure function of its arguments and the method's per-frame state. */
 typedef int (*pt_intersect_fn)(const void *state, const float org[3], const float dir[3], float tnear, rt_hit *hit,
                                eng_trace_counts *counts);
+/* Optional, the same on n ≤ PT_LANES rays at once (a method that casts packets): found[i] and
+ * hits[i] are what intersect returns for rays[i] alone. With it, photon_trace_with keeps
+ * PT_LANES paths in flight per thread and asks for their next surfaces together. */
+#define PT_LANES 8
+typedef void (*pt_intersect_n_fn)(const void *state, int n, const rt_ray *rays, rt_hit *hits, int *found,
+                                  eng_trace_counts *counts);
 typedef struct pt_tracer {
     pt_intersect_fn intersect;
     const void *state;
+    pt_intersect_n_fn intersect_n; /* NULL: ray by ray, one path after the other */
 } pt_tracer;
 /* The Embree tracer's intersect: state is the eng_rt; rt_intersect with tfar = ∞. */
 int pt_embree_intersect(const void *state, const float org[3], const float dir[3], float tnear, rt_hit *hit,
                         eng_trace_counts *counts);
+/* ... and its intersect_n: rt_intersect4_untextured packets of 4. */
+void pt_embree_intersect_n(const void *state, int n, const rt_ray *rays, rt_hit *hits, int *found,
+                           eng_trace_counts *counts);
 
 /* photon_trace with the bounce rays traced by tr instead of Embree; stats->counts gets the
  * sum of what tr counted. photon_trace(rt, ...) is this with the Embree tracer. */

@@ -50,19 +50,6 @@ typedef struct pt_buf {
     eng_trace_counts counts; /* the tracer's counts on this thread (integer sums: order-free) */
 } pt_buf;
 
-static eng_photon *pt_push(pt_buf *b)
-{
-    if (b->n == b->cap) {
-        size_t cap = b->cap ? 2 * b->cap : 1024;
-        eng_photon *p = realloc(b->p, cap * sizeof *p);
-        if (!p)
-            return NULL;
-        b->p = p;
-        b->cap = cap;
-    }
-    return &b->p[b->n++];
-}
-
 /* Where a path's photons are: buffer `thread`, [at, at + count). */
 typedef struct pt_path {
     size_t at;
@@ -95,115 +82,291 @@ static int textured(const scn_scene *scene, int32_t m)
     return rt_material_textured(&scene->materials[m]);
 }
 
-/* Traces one bounce-map photon, appending its stored photons to buf; fills rec. */
-static void trace_path(const pt_tracer *tr, const eng_frame_scene *fs, const scn_material *default_material,
-                       const eng_random_maps *rm, const eng_bounce_photon *bp, const eng_trace_settings *s, pt_buf *buf,
-                       pt_path *rec)
+/* A path in flight: what the loop over its surfaces carries from one hit to the next. */
+typedef struct pt_lane {
+    size_t path; /* index of its bounce-map photon */
+    uint32_t seed, k; /* k: surface hits so far */
+    int delta_only; /* every scatter so far a delta lobe (eng_photon.caustic) */
+    float power[3], rho, eta;
+    rt_ray ray; /* the next ray */
+    uint32_t n; /* photons stored so far, in ph */
+    eng_photon ph[ENG_PHOTON_MAX_HITS];
+} pt_lane;
+
+/* Event k's random numbers sit at a scattered place in maps of a few MB: ask for them as the
+ * ray is set up, so that the memory fetch overlaps the ray instead of following it. */
+static void lane_prefetch(const pt_lane *l, const eng_random_maps *rm)
 {
-    const scn_scene *scene = fs->scene;
-    rec->at = buf->n;
+    const uint32_t e = (l->seed + l->k) & (rm->size - 1);
+    __builtin_prefetch(rm->uniform + 4 * (size_t)e);
+    __builtin_prefetch(rm->cosine + 4 * (size_t)e);
+}
+
+/* Starts bounce-map photon bp's path in l (rec gets its flags); 0 when it has nothing to trace. */
+static int lane_start(pt_lane *l, size_t path, const eng_bounce_photon *bp, const eng_random_maps *rm,
+                      const eng_trace_settings *s, pt_path *rec)
+{
     rec->count = 0;
     rec->truncated = rec->oom = 0;
     if (!has_power(bp->power))
-        return;
-    const uint32_t mask = rm->size - 1;
-    const uint32_t seed = rmap_hash3(bp->position, s->salt);
-    float power[3] = {bp->power[0], bp->power[1], bp->power[2]};
-    float rho = bp->path_density;
-    int delta_only = bp->delta; /* every scatter so far a delta lobe (eng_photon.caustic) */
-    float eta = bp->ior > 0.0f ? bp->ior : 1.0f;
-    float org[3] = {bp->position[0], bp->position[1], bp->position[2]};
+        return 0;
+    l->path = path;
+    l->seed = rmap_hash3(bp->position, s->salt);
+    l->k = 0;
+    l->n = 0;
+    memcpy(l->power, bp->power, sizeof l->power);
+    l->rho = bp->path_density;
+    l->delta_only = bp->delta;
+    l->eta = bp->ior > 0.0f ? bp->ior : 1.0f;
     float dir[3] = {bp->direction[0], bp->direction[1], bp->direction[2]};
     float len = sqrtf(dot3(dir, dir));
     if (!(len > 0.0f) || !isfinite(len))
-        return;
-    for (int i = 0; i < 3; i++)
-        dir[i] /= len;
+        return 0;
+    for (int i = 0; i < 3; i++) {
+        l->ray.org[i] = bp->position[i];
+        l->ray.dir[i] = dir[i] / len;
+    }
     /* The bounce-map photon sits on the surface it left; no normal is known there, so the
      * first ray skips a short distance instead of offsetting its origin. */
-    float tnear = bsdf_offset_eps(org);
-    for (uint32_t k = 0;; k++) {
-        if (k == ENG_PHOTON_MAX_HITS) {
-            rec->truncated = 1;
-            break;
-        }
-        /* Event k's random numbers sit at a scattered place in maps of a few MB: ask for
-         * them now, so that the memory fetch overlaps the ray instead of following it. */
-        const uint32_t e = (seed + k) & mask;
-        __builtin_prefetch(rm->uniform + 4 * (size_t)e);
-        __builtin_prefetch(rm->cosine + 4 * (size_t)e);
-        rt_hit h;
-        h.tri = UINT32_MAX;
-        if (!tr->intersect(tr->state, org, dir, tnear, &h, &buf->counts))
-            break;
-        /* Texture level of detail (texture_mip.c, Akenine-Möller et al. 2019 ray cones): the
-         * photon's cone has the constant width s->footprint, the diameter of the kernel its
-         * photons are gathered with (spread angle 0): texture detail finer than the kernel
-         * cannot show in the photon map, so the colour a photon carries on is the texture
-         * averaged over that width, over |cos| of the geometric normal and the ray. Looked up
-         * here only (the Embree tracer leaves a textured hit's factors to this,
-         * rt_intersect_untextured); without a footprint at level 0, as rt_intersect would. */
-        if (h.tri != UINT32_MAX && h.draw < fs->draw_count && textured(scene, h.material)) {
-            float c = fabsf(dot3(h.geom_normal, dir));
-            rt_hit_textures(scene, &scene->primitives[fs->draws[h.draw].primitive], &h,
-                            s->footprint > 0.0f ? s->footprint / (c > 1e-3f ? c : 1e-3f) : 0.0f);
-        }
-        const float wi[3] = {-dir[0], -dir[1], -dir[2]};
-        /* Shading normal, unless interpolation put wi on the other side of it than the true
-         * surface: then the geometric normal, so scattering stays on the photon's side. */
-        float n[3];
-        float cg = dot3(h.geom_normal, wi), cs = dot3(h.normal, wi);
-        memcpy(n, ((cg >= 0.0f) == (cs >= 0.0f)) ? h.normal : h.geom_normal, sizeof n);
-        /* eng_material_at's material, reduced to what scattering reads (bsdf_params_at). */
-        bsdf_params m;
-        bsdf_params_at(h.material >= 0 && (uint32_t)h.material < scene->material_count ? &scene->materials[h.material]
-                                                                                        : default_material,
-                       &h, &m);
-        if (bsdf_stores_photons_params(&m)) {
-            eng_photon *ph = pt_push(buf);
-            if (!ph) {
-                rec->oom = 1;
-                return;
-            }
-            rec->count++;
-            float side = dot3(n, wi) >= 0.0f ? 1.0f : -1.0f;
-            for (int i = 0; i < 3; i++) {
-                ph->position[i] = h.position[i];
-                ph->direction[i] = wi[i];
-                ph->power[i] = power[i];
-                ph->normal[i] = side * n[i];
-            }
-            ph->path_density = rho;
-            ph->bounce = (uint16_t)(2 + k);
-            ph->caustic = (uint16_t)delta_only;
-            ph->ray_length = h.t;
-            if (s->max_bounces > 0 && rec->count == (uint32_t)s->max_bounces)
-                break;
-        }
-        bsdf_sample rnd = {rm->uniform + 4 * (size_t)e, rm->cosine + 4 * (size_t)e};
-        float su[4], scd[4];
-        if (s->stratified) {
-            bsdf_stratify(rnd.u, s->offset, su, scd);
-            rnd.u = su;
-            rnd.cosdir = scd;
-        }
-        float wo[3], w[3], density;
-        const bsdf_lobe lobe = bsdf_scatter_params(&m, n, wi, &eta, &rnd, wo, w, &density);
-        if (lobe == BSDF_ABSORBED)
-            break;
-        delta_only = delta_only && (lobe == BSDF_MIRROR || lobe == BSDF_REFLECT || lobe == BSDF_REFRACT);
-        for (int i = 0; i < 3; i++)
-            power[i] *= w[i];
-        rho *= density;
-        if (!has_power(power))
-            break;
-        float eps = bsdf_offset_eps(h.position);
-        float side = dot3(h.geom_normal, wo) >= 0.0f ? eps : -eps;
+    l->ray.tnear = bsdf_offset_eps(l->ray.org);
+    lane_prefetch(l, rm);
+    return 1;
+}
+
+/* A hit on its way through the BSDF (lane_surface → scattering → lane_next). */
+typedef struct pt_shade {
+    float n[3], wi[3];
+    bsdf_params m;
+    bsdf_sample rnd;
+    float su[4], scd[4]; /* the stratified numbers rnd points to */
+    int diffuse; /* the BSDF takes its diffuse lobe (bsdf_takes_diffuse) */
+    float wo[3], w[3], density;
+    bsdf_lobe lobe;
+} pt_shade;
+
+/* What l's path does at the surface its ray found (found = 0: none) before it scatters: stores a
+ * photon and sets up sh for the BSDF. 0 when the path ends here. */
+static int lane_surface(pt_lane *l, rt_hit *h, int found, const eng_frame_scene *fs,
+                        const scn_material *default_material, const eng_random_maps *rm, const eng_trace_settings *s,
+                        pt_shade *sh)
+{
+    if (!found)
+        return 0;
+    const scn_scene *scene = fs->scene;
+    const float *dir = l->ray.dir;
+    /* Texture level of detail (texture_mip.c, Akenine-Möller et al. 2019 ray cones): the
+     * photon's cone has the constant width s->footprint, the diameter of the kernel its
+     * photons are gathered with (spread angle 0): texture detail finer than the kernel
+     * cannot show in the photon map, so the colour a photon carries on is the texture
+     * averaged over that width, over |cos| of the geometric normal and the ray. Looked up
+     * here only (the Embree tracer leaves a textured hit's factors to this,
+     * rt_intersect_untextured); without a footprint at level 0, as rt_intersect would. */
+    if (h->tri != UINT32_MAX && h->draw < fs->draw_count && textured(scene, h->material)) {
+        float c = fabsf(dot3(h->geom_normal, dir));
+        rt_hit_textures(scene, &scene->primitives[fs->draws[h->draw].primitive], h,
+                        s->footprint > 0.0f ? s->footprint / (c > 1e-3f ? c : 1e-3f) : 0.0f);
+    }
+    float *wi = sh->wi, *n = sh->n;
+    for (int i = 0; i < 3; i++)
+        wi[i] = -dir[i];
+    /* Shading normal, unless interpolation put wi on the other side of it than the true
+     * surface: then the geometric normal, so scattering stays on the photon's side. */
+    float cg = dot3(h->geom_normal, wi), cs = dot3(h->normal, wi);
+    memcpy(n, ((cg >= 0.0f) == (cs >= 0.0f)) ? h->normal : h->geom_normal, sizeof sh->n);
+    /* eng_material_at's material, reduced to what scattering reads (bsdf_params_at). */
+    bsdf_params_at(h->material >= 0 && (uint32_t)h->material < scene->material_count ? &scene->materials[h->material]
+                                                                                      : default_material,
+                   h, &sh->m);
+    if (bsdf_stores_photons_params(&sh->m)) {
+        eng_photon *ph = &l->ph[l->n++]; /* at most one a hit, ENG_PHOTON_MAX_HITS hits */
+        float side = dot3(n, wi) >= 0.0f ? 1.0f : -1.0f;
         for (int i = 0; i < 3; i++) {
-            org[i] = h.position[i] + side * h.geom_normal[i];
-            dir[i] = wo[i];
+            ph->position[i] = h->position[i];
+            ph->direction[i] = wi[i];
+            ph->power[i] = l->power[i];
+            ph->normal[i] = side * n[i];
         }
-        tnear = 0.0f;
+        ph->path_density = l->rho;
+        ph->bounce = (uint16_t)(2 + l->k);
+        ph->caustic = (uint16_t)l->delta_only;
+        ph->ray_length = h->t;
+        if (s->max_bounces > 0 && l->n == (uint32_t)s->max_bounces)
+            return 0;
+    }
+    const uint32_t e = (l->seed + l->k) & (rm->size - 1);
+    sh->rnd = (bsdf_sample){rm->uniform + 4 * (size_t)e, rm->cosine + 4 * (size_t)e};
+    if (s->stratified) {
+        bsdf_stratify(sh->rnd.u, s->offset, sh->su, sh->scd);
+        sh->rnd.u = sh->su;
+        sh->rnd.cosdir = sh->scd;
+    }
+    sh->diffuse = bsdf_takes_diffuse(&sh->m, n, wi, sh->rnd.u);
+    return 1;
+}
+
+/* The BSDF at one hit, ray by ray. */
+static void scatter_one(pt_lane *l, pt_shade *sh)
+{
+    sh->lobe = bsdf_scatter_params(&sh->m, sh->n, sh->wi, &l->eta, &sh->rnd, sh->wo, sh->w, &sh->density);
+}
+
+/* The diffuse lobe at up to four hits at once (bsdf_diffuse4), which answers each as
+ * scatter_one would; without SSE2, one by one. */
+static void scatter_diffuse(pt_lane *const *lanes, pt_shade *const *sh, int n)
+{
+#if defined(__SSE2__)
+    const float *nn[4], *wi[4], *cd[4], *albedo[4];
+    float ur[4], wo[4][3], w[4][3], density[4];
+    int alive[4];
+    for (int k = 0; k < 4; k++) {
+        const pt_shade *x = sh[k < n ? k : 0];
+        nn[k] = x->n;
+        wi[k] = x->wi;
+        cd[k] = x->rnd.cosdir;
+        albedo[k] = x->m.base_color;
+        ur[k] = x->rnd.u[BSDF_U_ROULETTE];
+    }
+    bsdf_diffuse4(nn, wi, cd, albedo, ur, wo, w, density, alive);
+    for (int k = 0; k < n; k++) {
+        memcpy(sh[k]->wo, wo[k], sizeof wo[k]);
+        memcpy(sh[k]->w, w[k], sizeof w[k]);
+        sh[k]->density = density[k];
+        sh[k]->lobe = alive[k] ? BSDF_DIFFUSE : BSDF_ABSORBED;
+    }
+#else
+    for (int k = 0; k < n; k++)
+        scatter_one(lanes[k], sh[k]);
+#endif
+    (void)lanes;
+}
+
+/* After the BSDF: the path's power and density, and its next ray. 1 when the path goes on; 0
+ * when it ended (rec->truncated set when the hit limit cut it). */
+static int lane_next(pt_lane *l, const rt_hit *h, const pt_shade *sh, const eng_random_maps *rm, pt_path *rec)
+{
+    const bsdf_lobe lobe = sh->lobe;
+    if (lobe == BSDF_ABSORBED)
+        return 0;
+    l->delta_only = l->delta_only && (lobe == BSDF_MIRROR || lobe == BSDF_REFLECT || lobe == BSDF_REFRACT);
+    for (int i = 0; i < 3; i++)
+        l->power[i] *= sh->w[i];
+    l->rho *= sh->density;
+    if (!has_power(l->power))
+        return 0;
+    float eps = bsdf_offset_eps(h->position);
+    float side = dot3(h->geom_normal, sh->wo) >= 0.0f ? eps : -eps;
+    for (int i = 0; i < 3; i++) {
+        l->ray.org[i] = h->position[i] + side * h->geom_normal[i];
+        l->ray.dir[i] = sh->wo[i];
+    }
+    l->ray.tnear = 0.0f;
+    if (++l->k == ENG_PHOTON_MAX_HITS) {
+        rec->truncated = 1;
+        return 0;
+    }
+    lane_prefetch(l, rm);
+    return 1;
+}
+
+/* Appends l's photons to buf as one run; rec says where. */
+static void lane_finish(const pt_lane *l, pt_buf *buf, pt_path *rec)
+{
+    rec->at = buf->n;
+    if (l->n == 0)
+        return;
+    if (buf->n + l->n > buf->cap) {
+        size_t cap = buf->cap ? buf->cap : 1024;
+        while (cap < buf->n + l->n)
+            cap *= 2;
+        eng_photon *p = realloc(buf->p, cap * sizeof *p);
+        if (!p) {
+            rec->oom = 1;
+            return;
+        }
+        buf->p = p;
+        buf->cap = cap;
+    }
+    memcpy(buf->p + buf->n, l->ph, l->n * sizeof *l->ph);
+    buf->n += l->n;
+    rec->count = l->n;
+}
+
+/* Bounce-map photons a batch: a thread traces whole batches, and paths share packets only
+ * within one, so which rays travel together does not depend on the thread count. */
+#define PT_BATCH 256
+
+/* Traces the paths of in[b0, b1) with `width` paths in flight (1: one after the other): every
+ * round asks the tracer for the next surface of each path in flight at once, then moves each
+ * on; a path that ends hands its lane to the next photon of the batch. A path does the same
+ * whatever travels beside it, so the photons are those of tracing the paths one by one. */
+static void trace_batch(const pt_tracer *tr, const eng_frame_scene *fs, const scn_material *default_material,
+                        const eng_random_maps *rm, const eng_bounce_photon *in, size_t b0, size_t b1,
+                        const eng_trace_settings *s, int width, pt_lane *lanes, pt_buf *buf, pt_path *paths)
+{
+    pt_lane *act[PT_LANES], *spare[PT_LANES];
+    rt_ray rays[PT_LANES];
+    rt_hit hits[PT_LANES];
+    int found[PT_LANES];
+    pt_shade shade[PT_LANES];
+    int active = 0, free_count = width;
+    for (int i = 0; i < width; i++)
+        spare[i] = &lanes[width - 1 - i];
+    size_t next = b0;
+    for (;;) {
+        while (active < width && next < b1) {
+            pt_lane *l = spare[free_count - 1];
+            if (lane_start(l, next, &in[next], rm, s, &paths[next])) {
+                act[active++] = l;
+                free_count--;
+            } else {
+                paths[next].at = buf->n;
+            }
+            next++;
+        }
+        if (active == 0)
+            return;
+        for (int i = 0; i < active; i++) {
+            rays[i] = act[i]->ray;
+            hits[i].tri = UINT32_MAX;
+        }
+        if (tr->intersect_n) {
+            tr->intersect_n(tr->state, active, rays, hits, found, &buf->counts);
+        } else {
+            for (int i = 0; i < active; i++)
+                found[i] = tr->intersect(tr->state, rays[i].org, rays[i].dir, rays[i].tnear, &hits[i], &buf->counts);
+        }
+        /* At each hit: the surface (photon store), the BSDF (the diffuse lobe four hits at a
+         * time), the next ray; each step over all paths in flight before the next step. */
+        int on[PT_LANES], diffuse[PT_LANES], nd = 0;
+        for (int i = 0; i < active; i++) {
+            on[i] = lane_surface(act[i], &hits[i], found[i], fs, default_material, rm, s, &shade[i]);
+            if (on[i] && shade[i].diffuse)
+                diffuse[nd++] = i;
+            else if (on[i])
+                scatter_one(act[i], &shade[i]);
+        }
+        for (int j = 0; j < nd; j += 4) {
+            pt_lane *dl[4];
+            pt_shade *ds[4];
+            const int m = nd - j < 4 ? nd - j : 4;
+            for (int k = 0; k < m; k++) {
+                dl[k] = act[diffuse[j + k]];
+                ds[k] = &shade[diffuse[j + k]];
+            }
+            scatter_diffuse(dl, ds, m);
+        }
+        int keep = 0;
+        for (int i = 0; i < active; i++) {
+            pt_lane *l = act[i];
+            pt_path *rec = &paths[l->path];
+            if (on[i] && lane_next(l, &hits[i], &shade[i], rm, rec)) {
+                act[keep++] = l;
+            } else {
+                lane_finish(l, buf, rec);
+                spare[free_count++] = l;
+            }
+        }
+        active = keep;
     }
 }
 
@@ -214,11 +377,19 @@ int pt_embree_intersect(const void *state, const float org[3], const float dir[3
     return rt_intersect_untextured(state, org, dir, tnear, INFINITY, hit);
 }
 
+void pt_embree_intersect_n(const void *state, int n, const rt_ray *rays, rt_hit *hits, int *found,
+                           eng_trace_counts *counts)
+{
+    (void)counts;
+    for (int i = 0; i < n; i += 4)
+        rt_intersect4_untextured(state, n - i < 4 ? n - i : 4, rays + i, hits + i, found + i);
+}
+
 eng_result photon_trace(const eng_rt *rt, const eng_frame_scene *fs, const eng_random_maps *rm,
                         const eng_bounce_photon *in, size_t count, const eng_trace_settings *s,
                         eng_photon_map *out, eng_trace_stats *stats, eng_error *err)
 {
-    const pt_tracer tr = {pt_embree_intersect, rt};
+    const pt_tracer tr = {pt_embree_intersect, rt, pt_embree_intersect_n};
     return photon_trace_with(&tr, fs, rm, in, count, s, out, stats, err);
 }
 
@@ -270,7 +441,7 @@ void photon_map_reserve(eng_photon_map *m, int threads, size_t photons)
     if (!ensure_bufs(m, threads))
         return;
     /* Each thread's buffer grown and touched by that thread (its OpenMP team is then the one
-     * the trace will use); a buffer only grows, by the doubling pt_push would have done. */
+     * the trace will use); a buffer only grows, by the doubling lane_finish would have done. */
     const size_t per = photons / (size_t)threads + 1;
     pt_buf *bufs = m->trace_bufs;
 #pragma omp parallel num_threads(threads)
@@ -305,15 +476,28 @@ eng_result photon_trace_with(const pt_tracer *tr, const eng_frame_scene *fs, con
         memset(&bufs[t].counts, 0, sizeof bufs[t].counts);
     }
     const scn_material default_material = eng_material_of(fs->scene, -1);
-#pragma omp parallel num_threads(threads)
+    const int width = tr->intersect_n ? PT_LANES : 1;
+    const ptrdiff_t batches = (ptrdiff_t)((count + PT_BATCH - 1) / PT_BATCH);
+    int lanes_oom = 0;
+#pragma omp parallel num_threads(threads) reduction(| : lanes_oom)
     {
         int t = omp_get_thread_num();
         pt_buf *mine = &bufs[t];
+        pt_lane *lanes = malloc((size_t)width * sizeof *lanes);
+        lanes_oom = !lanes;
 #pragma omp for schedule(static)
-        for (ptrdiff_t i = 0; i < (ptrdiff_t)count; i++) {
-            trace_path(tr, fs, &default_material, rm, &in[i], s, mine, &paths[i]);
-            paths[i].thread = (uint16_t)t;
+        for (ptrdiff_t b = 0; b < batches; b++) {
+            size_t b0 = (size_t)b * PT_BATCH, b1 = b0 + PT_BATCH < count ? b0 + PT_BATCH : count;
+            if (lanes)
+                trace_batch(tr, fs, &default_material, rm, in, b0, b1, s, width, lanes, mine, paths);
+            for (size_t i = b0; i < b1; i++)
+                paths[i].thread = (uint16_t)t;
         }
+        free(lanes);
+    }
+    if (lanes_oom) {
+        free(paths);
+        return eng_fail(err, ENG_ERR_NOMEM, "photon trace: out of memory for %zu photons", count);
     }
 
     size_t total = 0;

@@ -342,6 +342,69 @@ static void ray_init(struct RTCRayHit *rh, const float org[3], const float dir[3
     rh->hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
 }
 
+/* What a ray's closest hit is in rt_hit terms, from Embree's answer (t = its tfar, u, v, the
+ * unnormalised Ng, geomID, primID): the lamps, the shading normal and the texture factors.
+ * Two steps, so that a packet's rays (rt_intersect4_untextured) go through each step together
+ * (the steps of different rays do not wait on each other); a single ray goes through both at
+ * once. The same code for both, so a hit Embree reports alike gives the same rt_hit. */
+typedef struct rt_answer {
+    float t, u, v, ng[3]; /* Embree's tfar and hit: ng unnormalised */
+    unsigned geom_id, prim_id;
+} rt_answer;
+
+/* Step 1: lamps, the hit point and the geometric normal; 0 when there is no hit. */
+static int hit_geometry(const eng_rt *rt, int lamps, const float org[3], const float dir[3], float tnear, float tfar,
+                        const rt_answer *a, rt_hit *hit)
+{
+    int found = a->geom_id != RTC_INVALID_GEOMETRY_ID && a->geom_id < rt->geom_count;
+    float tl;
+    if (lamps && rt->lamp_count && rt_lamp_hit(rt, org, dir, tnear, found ? a->t : tfar, -1, &tl) >= 0)
+        return 0; /* absorbed by a lamp */
+    if (!found)
+        return 0;
+    hit->t = a->t;
+    for (int i = 0; i < 3; i++)
+        hit->position[i] = org[i] + a->t * dir[i];
+    float ng[3] = {a->ng[0], a->ng[1], a->ng[2]};
+    const float up[3] = {0.0f, 1.0f, 0.0f};
+    normalize_or(ng, up);
+    memcpy(hit->geom_normal, ng, sizeof ng);
+    return 1;
+}
+
+/* Step 2 of a hit: the shading normal, the material and the texture factors. */
+static void hit_surface(const eng_rt *rt, int untextured, const rt_answer *a, rt_hit *hit)
+{
+    const rt_geom *g = &rt->geoms[a->geom_id];
+    const scn_primitive *p = &rt->scene->primitives[g->primitive];
+    const uint32_t *tri = p->indices + 3 * (size_t)a->prim_id;
+    const float u = a->u, v = a->v, w = 1.0f - u - v;
+    const float *n0 = g->normals + 3 * tri[0], *n1 = g->normals + 3 * tri[1], *n2 = g->normals + 3 * tri[2];
+    float ns[3];
+    for (int i = 0; i < 3; i++)
+        ns[i] = w * n0[i] + u * n1[i] + v * n2[i];
+    normalize_or(ns, hit->geom_normal);
+    if (g->tangents && g->material >= 0 && (uint32_t)g->material < rt->scene->material_count)
+        scn_normal_at(rt->scene, &rt->scene->materials[g->material], p, a->prim_id, u, v, g->tangents + 4 * tri[0],
+                      g->tangents + 4 * tri[1], g->tangents + 4 * tri[2], ns);
+    memcpy(hit->normal, ns, sizeof ns);
+    hit->material = g->material;
+    hit->draw = a->geom_id;
+    hit->tri = a->prim_id;
+    hit->bary[0] = u;
+    hit->bary[1] = v;
+    const int lookups = g->base_lookup || g->mr_lookup || g->emissive_lookup;
+    /* The triangle's world area: half the length of Embree's unnormalised Ng (e1 × e2). */
+    hit->world_area = lookups ? 0.5f * sqrtf(a->ng[0] * a->ng[0] + a->ng[1] * a->ng[1] + a->ng[2] * a->ng[2]) : 0.0f;
+    if (lookups && !(untextured && g->textured)) {
+        rt_hit_textures(rt->scene, p, hit, 0.0f);
+    } else { /* no lookup would return anything but 1 (see rt_geom), or the caller looks them up */
+        hit->base_tex[0] = hit->base_tex[1] = hit->base_tex[2] = hit->base_tex[3] = 1.0f;
+        hit->roughness_tex = hit->metallic_tex = 1.0f;
+        hit->emissive_tex[0] = hit->emissive_tex[1] = hit->emissive_tex[2] = 1.0f;
+    }
+}
+
 static int intersect_in(const eng_rt *rt, RTCScene scene, int lamps, int untextured, const float org[3],
                         const float dir[3], float tnear, float tfar, rt_hit *hit)
 {
@@ -350,48 +413,11 @@ static int intersect_in(const eng_rt *rt, RTCScene scene, int lamps, int untextu
     struct RTCRayHit rh;
     ray_init(&rh, org, dir, tnear, tfar);
     rtcIntersect1(scene, &ctx, &rh);
-    int found = rh.hit.geomID != RTC_INVALID_GEOMETRY_ID && rh.hit.geomID < rt->geom_count;
-    float tl;
-    if (lamps && rt->lamp_count && rt_lamp_hit(rt, org, dir, tnear, found ? rh.ray.tfar : tfar, -1, &tl) >= 0)
-        return 0; /* absorbed by a lamp */
-    if (!found)
+    const rt_answer a = {rh.ray.tfar, rh.hit.u, rh.hit.v, {rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z}, rh.hit.geomID,
+                         rh.hit.primID};
+    if (!hit_geometry(rt, lamps, org, dir, tnear, tfar, &a, hit))
         return 0;
-    const rt_geom *g = &rt->geoms[rh.hit.geomID];
-    const scn_primitive *p = &rt->scene->primitives[g->primitive];
-    const uint32_t *tri = p->indices + 3 * (size_t)rh.hit.primID;
-    float t = rh.ray.tfar, u = rh.hit.u, v = rh.hit.v, w = 1.0f - u - v;
-    hit->t = t;
-    for (int i = 0; i < 3; i++)
-        hit->position[i] = org[i] + t * dir[i];
-    float ng[3] = {rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z};
-    const float up[3] = {0.0f, 1.0f, 0.0f};
-    normalize_or(ng, up);
-    const float *n0 = g->normals + 3 * tri[0], *n1 = g->normals + 3 * tri[1], *n2 = g->normals + 3 * tri[2];
-    float ns[3];
-    for (int i = 0; i < 3; i++)
-        ns[i] = w * n0[i] + u * n1[i] + v * n2[i];
-    normalize_or(ns, ng);
-    if (g->tangents && g->material >= 0 && (uint32_t)g->material < rt->scene->material_count)
-        scn_normal_at(rt->scene, &rt->scene->materials[g->material], p, rh.hit.primID, u, v, g->tangents + 4 * tri[0],
-                      g->tangents + 4 * tri[1], g->tangents + 4 * tri[2], ns);
-    memcpy(hit->geom_normal, ng, sizeof ng);
-    memcpy(hit->normal, ns, sizeof ns);
-    hit->material = g->material;
-    hit->draw = rh.hit.geomID;
-    hit->tri = rh.hit.primID;
-    hit->bary[0] = u;
-    hit->bary[1] = v;
-    const int lookups = g->base_lookup || g->mr_lookup || g->emissive_lookup;
-    /* The triangle's world area: half the length of Embree's unnormalised Ng (e1 × e2). */
-    hit->world_area =
-        lookups ? 0.5f * sqrtf(rh.hit.Ng_x * rh.hit.Ng_x + rh.hit.Ng_y * rh.hit.Ng_y + rh.hit.Ng_z * rh.hit.Ng_z) : 0.0f;
-    if (lookups && !(untextured && g->textured)) {
-        rt_hit_textures(rt->scene, p, hit, 0.0f);
-    } else { /* no lookup would return anything but 1 (see rt_geom), or the caller looks them up */
-        hit->base_tex[0] = hit->base_tex[1] = hit->base_tex[2] = hit->base_tex[3] = 1.0f;
-        hit->roughness_tex = hit->metallic_tex = 1.0f;
-        hit->emissive_tex[0] = hit->emissive_tex[1] = hit->emissive_tex[2] = 1.0f;
-    }
+    hit_surface(rt, untextured, &a, hit);
     return 1;
 }
 
@@ -404,6 +430,40 @@ int rt_intersect_untextured(const eng_rt *rt, const float org[3], const float di
                             rt_hit *hit)
 {
     return intersect_in(rt, rt->rtscene, 1, 1, org, dir, tnear, tfar, hit);
+}
+
+void rt_intersect4_untextured(const eng_rt *rt, int n, const rt_ray *rays, rt_hit *hits, int *found)
+{
+    struct RTCIntersectContext ctx;
+    rtcInitIntersectContext(&ctx);
+    RTC_ALIGN(16) struct RTCRayHit4 rh;
+    RTC_ALIGN(16) int valid[4];
+    memset(&rh, 0, sizeof rh);
+    for (int j = 0; j < 4; j++) {
+        const rt_ray *r = &rays[j < n ? j : 0];
+        valid[j] = j < n ? -1 : 0;
+        rh.ray.org_x[j] = r->org[0];
+        rh.ray.org_y[j] = r->org[1];
+        rh.ray.org_z[j] = r->org[2];
+        rh.ray.dir_x[j] = r->dir[0];
+        rh.ray.dir_y[j] = r->dir[1];
+        rh.ray.dir_z[j] = r->dir[2];
+        rh.ray.tnear[j] = r->tnear;
+        rh.ray.tfar[j] = INFINITY;
+        rh.ray.mask[j] = 0xFFFFFFFFu;
+        rh.hit.geomID[j] = RTC_INVALID_GEOMETRY_ID;
+        rh.hit.instID[0][j] = RTC_INVALID_GEOMETRY_ID;
+    }
+    rtcIntersect4(valid, rt->rtscene, &ctx, &rh);
+    rt_answer a[4];
+    for (int j = 0; j < n; j++) {
+        a[j] = (rt_answer){rh.ray.tfar[j], rh.hit.u[j], rh.hit.v[j], {rh.hit.Ng_x[j], rh.hit.Ng_y[j], rh.hit.Ng_z[j]},
+                           rh.hit.geomID[j], rh.hit.primID[j]};
+        found[j] = hit_geometry(rt, 1, rays[j].org, rays[j].dir, rays[j].tnear, INFINITY, &a[j], &hits[j]);
+    }
+    for (int j = 0; j < n; j++)
+        if (found[j])
+            hit_surface(rt, 1, &a[j], &hits[j]);
 }
 
 int rt_intersect_blend(const eng_rt *rt, const float org[3], const float dir[3], float tnear, float tfar, rt_hit *hit)

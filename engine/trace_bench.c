@@ -69,7 +69,7 @@ eng_result tb_run(eng_engine *e, int frame, int repeats, tb_result *out, eng_err
     if (r != ENG_OK)
         return r;
     recorder rec = {ti.rt, NULL, 0, 0, 0};
-    const pt_tracer tr = {record_intersect, &rec};
+    const pt_tracer tr = {record_intersect, &rec, NULL}; /* ray by ray, path by path */
     eng_trace_settings one = ti.settings;
     one.threads = 1;
     eng_photon_map ref = {0}, map = {0};

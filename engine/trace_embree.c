@@ -21,6 +21,7 @@ static eng_result embree_prepare(void *state, const eng_rt *rt, const eng_frame_
     (void)fs;
     (void)err;
     tracer->intersect = pt_embree_intersect;
+    tracer->intersect_n = pt_embree_intersect_n;
     tracer->state = rt;
     return ENG_OK;
 }

@@ -683,6 +683,7 @@ static eng_result mi_prepare(void *state, const eng_rt *rt, const eng_frame_scen
         st->valid = 1;
     }
     tracer->intersect = mi_intersect;
+    tracer->intersect_n = NULL; /* ray by ray */
     tracer->state = st;
     return ENG_OK;
 }
