@@ -456,6 +456,8 @@ typedef struct eng_photon_map {
      * next so that a frame reuses the last frame's memory; freed by photon_map_free. */
     struct pt_buf *trace_bufs;
     int trace_buf_count;
+    struct pt_path *trace_paths; /* ... and where each path's photons are: trace_path_capacity */
+    size_t trace_path_capacity;
 } eng_photon_map;
 
 typedef struct eng_trace_settings {

@@ -47,22 +47,20 @@
 typedef struct pt_buf {
     eng_photon *p;
     size_t n, cap;
+    eng_photon *stage; /* the batch in hand: its paths' photons in the order the paths ended */
+    size_t stage_n, stage_cap;
+    int oom; /* a photon did not fit */
     eng_trace_counts counts; /* the tracer's counts on this thread (integer sums: order-free) */
 } pt_buf;
 
 /* Where a path's photons are: buffer `thread`, [at, at + count). */
 typedef struct pt_path {
-    size_t at;
+    size_t at; /* in the stage, then in the buffer (batch_done) */
     uint32_t count;
-    uint16_t thread;
-    uint8_t truncated, oom;
+    uint8_t truncated;
 } pt_path;
 
-/* n photons of buffer `thread` from index `from`, going to index `to` of the map. */
-typedef struct pt_run {
-    uint16_t thread;
-    size_t from, to, n;
-} pt_run;
+
 
 static float dot3(const float a[3], const float b[3])
 {
@@ -107,7 +105,7 @@ static int lane_start(pt_lane *l, size_t path, const eng_bounce_photon *bp, cons
                       const eng_trace_settings *s, pt_path *rec)
 {
     rec->count = 0;
-    rec->truncated = rec->oom = 0;
+    rec->truncated = 0;
     if (!has_power(bp->power))
         return 0;
     l->path = path;
@@ -268,27 +266,56 @@ static int lane_next(pt_lane *l, const rt_hit *h, const pt_shade *sh, const eng_
     return 1;
 }
 
-/* Appends l's photons to buf as one run; rec says where. */
+/* Appends l's photons to the batch's stage as one run; rec->at says where (in the stage, until
+ * batch_done). */
 static void lane_finish(const pt_lane *l, pt_buf *buf, pt_path *rec)
 {
-    rec->at = buf->n;
+    rec->at = buf->stage_n;
     if (l->n == 0)
         return;
-    if (buf->n + l->n > buf->cap) {
+    if (buf->stage_n + l->n > buf->stage_cap) {
+        size_t cap = buf->stage_cap ? buf->stage_cap : 1024;
+        while (cap < buf->stage_n + l->n)
+            cap *= 2;
+        eng_photon *p = realloc(buf->stage, cap * sizeof *p);
+        if (!p) {
+            buf->oom = 1;
+            return;
+        }
+        buf->stage = p;
+        buf->stage_cap = cap;
+    }
+    for (uint32_t k = 0; k < l->n; k++) /* a few photons: no call to memcpy */
+        buf->stage[buf->stage_n + k] = l->ph[k];
+    buf->stage_n += l->n;
+    rec->count = l->n;
+}
+
+/* Moves the batch's photons from the stage to buf in input order (paths end in any order), so
+ * that a thread's paths are consecutive in its buffer; paths[i].at then points there. */
+static void batch_done(pt_buf *buf, pt_path *paths, size_t b0, size_t b1)
+{
+    if (buf->n + buf->stage_n > buf->cap) {
         size_t cap = buf->cap ? buf->cap : 1024;
-        while (cap < buf->n + l->n)
+        while (cap < buf->n + buf->stage_n)
             cap *= 2;
         eng_photon *p = realloc(buf->p, cap * sizeof *p);
         if (!p) {
-            rec->oom = 1;
+            buf->oom = 1;
+            buf->stage_n = 0;
             return;
         }
         buf->p = p;
         buf->cap = cap;
     }
-    memcpy(buf->p + buf->n, l->ph, l->n * sizeof *l->ph);
-    buf->n += l->n;
-    rec->count = l->n;
+    for (size_t i = b0; i < b1; i++) {
+        const eng_photon *from = buf->stage + paths[i].at;
+        paths[i].at = buf->n;
+        for (uint32_t k = 0; k < paths[i].count; k++)
+            buf->p[buf->n + k] = from[k];
+        buf->n += paths[i].count;
+    }
+    buf->stage_n = 0;
 }
 
 /* Bounce-map photons a batch: a thread traces whole batches, and paths share packets only
@@ -319,12 +346,14 @@ static void trace_batch(const pt_tracer *tr, const eng_frame_scene *fs, const sc
                 act[active++] = l;
                 free_count--;
             } else {
-                paths[next].at = buf->n;
+                paths[next].at = buf->stage_n;
             }
             next++;
         }
-        if (active == 0)
+        if (active == 0) {
+            batch_done(buf, paths, b0, b1);
             return;
+        }
         for (int i = 0; i < active; i++) {
             rays[i] = act[i]->ray;
             hits[i].tri = UINT32_MAX;
@@ -441,7 +470,7 @@ void photon_map_reserve(eng_photon_map *m, int threads, size_t photons)
     if (!ensure_bufs(m, threads))
         return;
     /* Each thread's buffer grown and touched by that thread (its OpenMP team is then the one
-     * the trace will use); a buffer only grows, by the doubling lane_finish would have done. */
+     * the trace will use); a buffer only grows, by the doubling batch_done would have done. */
     const size_t per = photons / (size_t)threads + 1;
     pt_buf *bufs = m->trace_bufs;
 #pragma omp parallel num_threads(threads)
@@ -465,49 +494,64 @@ eng_result photon_trace_with(const pt_tracer *tr, const eng_frame_scene *fs, con
     if (rm->size == 0 || (rm->size & (rm->size - 1)) != 0 || !rm->uniform || !rm->cosine)
         return eng_fail(err, ENG_ERR_INVALID, "photon trace: random maps not created");
     const int threads = trace_threads(s->threads);
-    pt_path *paths = malloc((count ? count : 1) * sizeof *paths);
-    if (!paths || !ensure_bufs(out, threads)) {
-        free(paths);
-        return eng_fail(err, ENG_ERR_NOMEM, "photon trace: out of memory for %zu photons", count);
+    if (count > out->trace_path_capacity) {
+        pt_path *more = realloc(out->trace_paths, count * sizeof *more);
+        if (!more)
+            return eng_fail(err, ENG_ERR_NOMEM, "photon trace: out of memory for %zu photons", count);
+        out->trace_paths = more;
+        out->trace_path_capacity = count;
     }
+    pt_path *paths = out->trace_paths;
+    if (!ensure_bufs(out, threads))
+        return eng_fail(err, ENG_ERR_NOMEM, "photon trace: out of memory for %zu photons", count);
     pt_buf *bufs = out->trace_bufs;
     for (int t = 0; t < threads; t++) {
-        bufs[t].n = 0;
+        bufs[t].n = bufs[t].stage_n = 0;
+        bufs[t].oom = 0;
         memset(&bufs[t].counts, 0, sizeof bufs[t].counts);
     }
+    /* Thread 0 traces the first inputs, so its photons open the map: it writes them there
+     * directly, and only the other threads' are copied after the trace. */
+    eng_photon *const own0 = bufs[0].p;
+    const size_t own0_cap = bufs[0].cap;
+    bufs[0].p = out->photons;
+    bufs[0].cap = out->capacity;
     const scn_material default_material = eng_material_of(fs->scene, -1);
     const int width = tr->intersect_n ? PT_LANES : 1;
-    const ptrdiff_t batches = (ptrdiff_t)((count + PT_BATCH - 1) / PT_BATCH);
-    int lanes_oom = 0;
+    const size_t batches = (count + PT_BATCH - 1) / PT_BATCH;
+    int lanes_oom = 0, team = 1;
 #pragma omp parallel num_threads(threads) reduction(| : lanes_oom)
     {
-        int t = omp_get_thread_num();
+        /* Thread t traces batches [batches·t/n, batches·(t + 1)/n): the threads' ranges follow
+         * one another in input order, and so do their photons in the map. */
+        const int t = omp_get_thread_num(), nt = omp_get_num_threads();
+        if (t == 0)
+            team = nt;
         pt_buf *mine = &bufs[t];
         pt_lane *lanes = malloc((size_t)width * sizeof *lanes);
         lanes_oom = !lanes;
-#pragma omp for schedule(static)
-        for (ptrdiff_t b = 0; b < batches; b++) {
-            size_t b0 = (size_t)b * PT_BATCH, b1 = b0 + PT_BATCH < count ? b0 + PT_BATCH : count;
-            if (lanes)
-                trace_batch(tr, fs, &default_material, rm, in, b0, b1, s, width, lanes, mine, paths);
-            for (size_t i = b0; i < b1; i++)
-                paths[i].thread = (uint16_t)t;
+        const size_t end = batches * (size_t)(t + 1) / (size_t)nt;
+        for (size_t b = batches * (size_t)t / (size_t)nt; lanes && b < end; b++) {
+            const size_t b0 = b * PT_BATCH, b1 = b0 + PT_BATCH < count ? b0 + PT_BATCH : count;
+            trace_batch(tr, fs, &default_material, rm, in, b0, b1, s, width, lanes, mine, paths);
         }
         free(lanes);
     }
-    if (lanes_oom) {
-        free(paths);
+    out->photons = bufs[0].p; /* thread 0's photons in place, perhaps moved by a realloc */
+    out->capacity = bufs[0].cap;
+    bufs[0].p = own0;
+    bufs[0].cap = own0_cap;
+    if (lanes_oom)
         return eng_fail(err, ENG_ERR_NOMEM, "photon trace: out of memory for %zu photons", count);
-    }
 
     size_t total = 0;
     int oom = 0;
-    for (size_t i = 0; i < count; i++) {
-        total += paths[i].count;
-        oom |= paths[i].oom;
+    for (int t = 0; t < team; t++) {
+        total += bufs[t].n;
+        oom |= bufs[t].oom;
     }
     if (!oom && total > out->capacity) {
-        eng_photon *p = realloc(out->photons, total * sizeof *p);
+        eng_photon *p = realloc(out->photons, total * sizeof *p); /* keeps thread 0's */
         if (p) {
             out->photons = p;
             out->capacity = total;
@@ -524,43 +568,27 @@ eng_result photon_trace_with(const pt_tracer *tr, const eng_frame_scene *fs, con
             oom = 1;
         }
     }
-    if (oom) {
-        free(paths);
+    if (oom)
         return eng_fail(err, ENG_ERR_NOMEM, "photon trace: out of memory for %zu stored photons", total);
+    if (out->want_source) {
+        size_t at = 0;
+        for (size_t i = 0; i < count; i++)
+            for (uint32_t k = 0; k < paths[i].count; k++)
+                out->source[at++] = (uint32_t)i;
     }
-    /* Compaction in input order. A thread's paths are consecutive in its buffer, and with
-     * schedule(static) a thread traces one consecutive range of inputs, so the map is a few
-     * runs (about one per thread): copied as such, on the threads. */
-    pt_run *runs = NULL;
-    size_t run_count = 0, run_cap = 0, at = 0;
-    for (size_t i = 0; i < count; i++) {
-        if (paths[i].count == 0)
-            continue; /* out->photons may still be NULL when nothing was stored */
-        pt_run *last = run_count ? &runs[run_count - 1] : NULL;
-        if (last && last->thread == paths[i].thread && last->from + last->n == paths[i].at) {
-            last->n += paths[i].count;
-        } else {
-            if (run_count == run_cap) {
-                size_t cap = run_cap ? 2 * run_cap : (size_t)threads + 1;
-                pt_run *r = realloc(runs, cap * sizeof *r);
-                if (!r) {
-                    free(runs);
-                    free(paths);
-                    return eng_fail(err, ENG_ERR_NOMEM, "photon trace: out of memory for %zu stored photons", total);
-                }
-                runs = r;
-                run_cap = cap;
-            }
-            runs[run_count++] = (pt_run){paths[i].thread, paths[i].at, at, paths[i].count};
+    /* The map: thread 0's photons are in place; every other thread's buffer follows, copied in
+     * as many pieces as there are threads. */
+#pragma omp parallel num_threads(threads)
+    {
+        const size_t k = (size_t)omp_get_thread_num(), nk = (size_t)omp_get_num_threads();
+        size_t at = bufs[0].n;
+        for (int t = 1; t < team; t++) {
+            const size_t n = bufs[t].n, lo = n * k / nk, hi = n * (k + 1) / nk;
+            if (hi > lo)
+                memcpy(out->photons + at + lo, bufs[t].p + lo, (hi - lo) * sizeof(eng_photon));
+            at += n;
         }
-        for (size_t k = 0; out->want_source && k < paths[i].count; k++)
-            out->source[at + k] = (uint32_t)i;
-        at += paths[i].count;
     }
-#pragma omp parallel for schedule(static) num_threads(threads)
-    for (ptrdiff_t r = 0; r < (ptrdiff_t)run_count; r++)
-        memcpy(out->photons + runs[r].to, bufs[runs[r].thread].p + runs[r].from, runs[r].n * sizeof(eng_photon));
-    free(runs);
     out->count = total;
     eng_trace_counts counts;
     memset(&counts, 0, sizeof counts);
@@ -582,7 +610,6 @@ eng_result photon_trace_with(const pt_tracer *tr, const eng_frame_scene *fs, con
                 stats->stored_power[ph->bounce][c] += ph->power[c];
         }
     }
-    free(paths);
     return ENG_OK;
 }
 
@@ -592,8 +619,11 @@ void photon_map_free(eng_photon_map *m)
         return;
     free(m->photons);
     free(m->source);
-    for (int t = 0; t < m->trace_buf_count; t++)
+    for (int t = 0; t < m->trace_buf_count; t++) {
         free(m->trace_bufs[t].p);
+        free(m->trace_bufs[t].stage);
+    }
     free(m->trace_bufs);
+    free(m->trace_paths);
     memset(m, 0, sizeof *m);
 }
