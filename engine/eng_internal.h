@@ -458,7 +458,15 @@ typedef struct eng_photon_map {
     int trace_buf_count;
     struct pt_path *trace_paths; /* ... and where each path's photons are: trace_path_capacity */
     size_t trace_path_capacity;
+    /* The last trace's rays and photons per batch of inputs (trace_batch_count of them; 0
+     * before the first trace): where the next trace splits its inputs over the threads, and
+     * where in the map each thread starts writing. */
+    struct eng_trace_batch *trace_batches;
+    size_t trace_batch_count, trace_batch_capacity;
 } eng_photon_map;
+typedef struct eng_trace_batch {
+    uint32_t rays, photons;
+} eng_trace_batch;
 
 typedef struct eng_trace_settings {
     int max_bounces;     /* optional cap on photons stored per path after the bounce map; 0 = none

@@ -45,7 +45,9 @@
 
 /* A growable list of photons, one per thread. */
 typedef struct pt_buf {
-    eng_photon *p;
+    eng_photon *win; /* the thread's window in the map (win_n of win_cap used), filled first */
+    size_t win_n, win_cap;
+    eng_photon *p; /* then its own buffer, once the window is full */
     size_t n, cap;
     eng_photon *stage; /* the batch in hand: its paths' photons in the order the paths ended */
     size_t stage_n, stage_cap;
@@ -291,31 +293,40 @@ static void lane_finish(const pt_lane *l, pt_buf *buf, pt_path *rec)
     rec->count = l->n;
 }
 
-/* Moves the batch's photons from the stage to buf in input order (paths end in any order), so
- * that a thread's paths are consecutive in its buffer; paths[i].at then points there. */
-static void batch_done(pt_buf *buf, pt_path *paths, size_t b0, size_t b1)
+/* Moves the batch's photons from the stage to the thread's window in the map, or when that is
+ * full to its buffer, in input order (paths end in any order): a thread's photons are its paths'
+ * in order, the window's then the buffer's. Returns the batch's photon count. */
+static size_t batch_done(pt_buf *buf, pt_path *paths, size_t b0, size_t b1)
 {
-    if (buf->n + buf->stage_n > buf->cap) {
-        size_t cap = buf->cap ? buf->cap : 1024;
-        while (cap < buf->n + buf->stage_n)
-            cap *= 2;
-        eng_photon *p = realloc(buf->p, cap * sizeof *p);
-        if (!p) {
-            buf->oom = 1;
-            buf->stage_n = 0;
-            return;
-        }
-        buf->p = p;
-        buf->cap = cap;
-    }
+    const size_t stored = buf->stage_n;
     for (size_t i = b0; i < b1; i++) {
         const eng_photon *from = buf->stage + paths[i].at;
-        paths[i].at = buf->n;
-        for (uint32_t k = 0; k < paths[i].count; k++)
-            buf->p[buf->n + k] = from[k];
-        buf->n += paths[i].count;
+        const uint32_t c = paths[i].count;
+        eng_photon *to;
+        if (buf->n == 0 && buf->win_n + c <= buf->win_cap) {
+            to = buf->win + buf->win_n;
+            buf->win_n += c;
+        } else {
+            if (buf->n + c > buf->cap) {
+                size_t cap = buf->cap ? buf->cap : 1024;
+                while (cap < buf->n + c)
+                    cap *= 2;
+                eng_photon *p = realloc(buf->p, cap * sizeof *p);
+                if (!p) {
+                    buf->oom = 1;
+                    break;
+                }
+                buf->p = p;
+                buf->cap = cap;
+            }
+            to = buf->p + buf->n;
+            buf->n += c;
+        }
+        for (uint32_t k = 0; k < c; k++)
+            to[k] = from[k];
     }
     buf->stage_n = 0;
+    return stored;
 }
 
 /* Bounce-map photons a batch: a thread traces whole batches, and paths share packets only
@@ -328,8 +339,10 @@ static void batch_done(pt_buf *buf, pt_path *paths, size_t b0, size_t b1)
  * whatever travels beside it, so the photons are those of tracing the paths one by one. */
 static void trace_batch(const pt_tracer *tr, const eng_frame_scene *fs, const scn_material *default_material,
                         const eng_random_maps *rm, const eng_bounce_photon *in, size_t b0, size_t b1,
-                        const eng_trace_settings *s, int width, pt_lane *lanes, pt_buf *buf, pt_path *paths)
+                        const eng_trace_settings *s, int width, pt_lane *lanes, pt_buf *buf, pt_path *paths,
+                        eng_trace_batch *stat)
 {
+    uint32_t rays_cast = 0;
     pt_lane *act[PT_LANES], *spare[PT_LANES];
     rt_ray rays[PT_LANES];
     rt_hit hits[PT_LANES];
@@ -351,9 +364,11 @@ static void trace_batch(const pt_tracer *tr, const eng_frame_scene *fs, const sc
             next++;
         }
         if (active == 0) {
-            batch_done(buf, paths, b0, b1);
+            stat->photons = (uint32_t)batch_done(buf, paths, b0, b1);
+            stat->rays = rays_cast;
             return;
         }
+        rays_cast += (uint32_t)active;
         for (int i = 0; i < active; i++) {
             rays[i] = act[i]->ray;
             hits[i].tri = UINT32_MAX;
@@ -504,54 +519,105 @@ eng_result photon_trace_with(const pt_tracer *tr, const eng_frame_scene *fs, con
     pt_path *paths = out->trace_paths;
     if (!ensure_bufs(out, threads))
         return eng_fail(err, ENG_ERR_NOMEM, "photon trace: out of memory for %zu photons", count);
+    const size_t batches = (count + PT_BATCH - 1) / PT_BATCH;
+    const int coherent = out->trace_batch_count == batches; /* the last trace had as many batches */
+    if (batches > out->trace_batch_capacity) {
+        eng_trace_batch *more = realloc(out->trace_batches, batches * sizeof *more);
+        if (!more)
+            return eng_fail(err, ENG_ERR_NOMEM, "photon trace: out of memory for %zu photons", count);
+        out->trace_batches = more;
+        out->trace_batch_capacity = batches;
+    }
+    eng_trace_batch *stat = out->trace_batches;
+    /* Where each thread's batches start (from[t], from[threads] = batches) and where in the map
+     * its photons go (at[t]): with the last trace's figures (frame coherence: what did not move
+     * traces the same paths again), equal shares of its rays and the map offsets of its
+     * photons, so that a static scene's threads finish together and write the map in place;
+     * before that, equal shares of the inputs and of the map's room. The photons do not depend
+     * on either (a path is the same whoever traces it). */
+    size_t *from = malloc(2 * ((size_t)threads + 1) * sizeof *from), *at = from + threads + 1;
+    if (!from)
+        return eng_fail(err, ENG_ERR_NOMEM, "photon trace: out of memory for %zu photons", count);
+    uint64_t rays = 0, stored = 0;
+    for (size_t b = 0; coherent && b < batches; b++) {
+        rays += stat[b].rays;
+        stored += stat[b].photons;
+    }
+    if (coherent && stored > out->capacity) {
+        eng_photon *p = realloc(out->photons, (size_t)stored * sizeof *p);
+        if (p) {
+            out->photons = p;
+            out->capacity = (size_t)stored;
+        }
+    }
+    from[0] = at[0] = 0;
+    {
+        uint64_t r = 0, ph = 0;
+        size_t b = 0;
+        for (int t = 1; t <= threads; t++) {
+            if (t == threads) {
+                b = batches;
+            } else if (coherent && rays > 0) {
+                while (b < batches && (r + stat[b].rays) * (uint64_t)threads <= rays * (uint64_t)t) {
+                    r += stat[b].rays;
+                    ph += stat[b++].photons;
+                }
+            } else {
+                b = batches * (size_t)t / (size_t)threads;
+            }
+            from[t] = b;
+            at[t] = coherent ? (size_t)ph : out->capacity * b / (batches ? batches : 1);
+            if (at[t] > out->capacity)
+                at[t] = out->capacity;
+        }
+        at[threads] = out->capacity;
+    }
     pt_buf *bufs = out->trace_bufs;
     for (int t = 0; t < threads; t++) {
-        bufs[t].n = bufs[t].stage_n = 0;
+        bufs[t].n = bufs[t].stage_n = bufs[t].win_n = 0;
         bufs[t].oom = 0;
+        bufs[t].win = out->photons ? out->photons + at[t] : NULL;
+        bufs[t].win_cap = at[t + 1] - at[t];
         memset(&bufs[t].counts, 0, sizeof bufs[t].counts);
     }
-    /* Thread 0 traces the first inputs, so its photons open the map: it writes them there
-     * directly, and only the other threads' are copied after the trace. */
-    eng_photon *const own0 = bufs[0].p;
-    const size_t own0_cap = bufs[0].cap;
-    bufs[0].p = out->photons;
-    bufs[0].cap = out->capacity;
     const scn_material default_material = eng_material_of(fs->scene, -1);
     const int width = tr->intersect_n ? PT_LANES : 1;
-    const size_t batches = (count + PT_BATCH - 1) / PT_BATCH;
     int lanes_oom = 0, team = 1;
 #pragma omp parallel num_threads(threads) reduction(| : lanes_oom)
     {
-        /* Thread t traces batches [batches·t/n, batches·(t + 1)/n): the threads' ranges follow
-         * one another in input order, and so do their photons in the map. */
+        /* Thread t traces batches [from[t], from[t + 1]) (all of them when the team is smaller
+         * than asked for: then thread 0 takes them in order). */
         const int t = omp_get_thread_num(), nt = omp_get_num_threads();
         if (t == 0)
             team = nt;
         pt_buf *mine = &bufs[t];
         pt_lane *lanes = malloc((size_t)width * sizeof *lanes);
         lanes_oom = !lanes;
-        const size_t end = batches * (size_t)(t + 1) / (size_t)nt;
-        for (size_t b = batches * (size_t)t / (size_t)nt; lanes && b < end; b++) {
+        const size_t b_end = nt == threads ? from[t + 1] : (t == 0 ? batches : 0);
+        for (size_t b = nt == threads ? from[t] : 0; lanes && b < b_end; b++) {
             const size_t b0 = b * PT_BATCH, b1 = b0 + PT_BATCH < count ? b0 + PT_BATCH : count;
-            trace_batch(tr, fs, &default_material, rm, in, b0, b1, s, width, lanes, mine, paths);
+            trace_batch(tr, fs, &default_material, rm, in, b0, b1, s, width, lanes, mine, paths, &stat[b]);
         }
         free(lanes);
     }
-    out->photons = bufs[0].p; /* thread 0's photons in place, perhaps moved by a realloc */
-    out->capacity = bufs[0].cap;
-    bufs[0].p = own0;
-    bufs[0].cap = own0_cap;
-    if (lanes_oom)
+    out->trace_batch_count = lanes_oom ? 0 : batches;
+    if (team != threads) { /* thread 0 traced everything into its window and buffer */
+        for (int t = 1; t < threads; t++)
+            bufs[t].win_n = bufs[t].n = 0;
+    }
+    if (lanes_oom) {
+        free(from);
         return eng_fail(err, ENG_ERR_NOMEM, "photon trace: out of memory for %zu photons", count);
+    }
 
     size_t total = 0;
     int oom = 0;
-    for (int t = 0; t < team; t++) {
-        total += bufs[t].n;
+    for (int t = 0; t < threads; t++) {
+        total += bufs[t].win_n + bufs[t].n;
         oom |= bufs[t].oom;
     }
     if (!oom && total > out->capacity) {
-        eng_photon *p = realloc(out->photons, total * sizeof *p); /* keeps thread 0's */
+        eng_photon *p = realloc(out->photons, total * sizeof *p); /* keeps the windows' photons */
         if (p) {
             out->photons = p;
             out->capacity = total;
@@ -568,27 +634,43 @@ eng_result photon_trace_with(const pt_tracer *tr, const eng_frame_scene *fs, con
             oom = 1;
         }
     }
-    if (oom)
+    if (oom) {
+        free(from);
+        out->trace_batch_count = 0;
         return eng_fail(err, ENG_ERR_NOMEM, "photon trace: out of memory for %zu stored photons", total);
-    if (out->want_source) {
-        size_t at = 0;
-        for (size_t i = 0; i < count; i++)
-            for (uint32_t k = 0; k < paths[i].count; k++)
-                out->source[at++] = (uint32_t)i;
     }
-    /* The map: thread 0's photons are in place; every other thread's buffer follows, copied in
-     * as many pieces as there are threads. */
+    if (out->want_source) {
+        size_t k = 0;
+        for (size_t i = 0; i < count; i++)
+            for (uint32_t c = 0; c < paths[i].count; c++)
+                out->source[k++] = (uint32_t)i;
+    }
+    /* The map: thread t's photons belong at fin[t] (the photons of the threads before it); its
+     * window's lie at at[t]. Those that must move up move first, from the last thread down, then
+     * those that must move down, from the first up (no move overwrites photons still to move);
+     * then the threads' buffers are copied after their windows', in pieces on all threads. A
+     * static scene's windows are in place: nothing moves. */
+    size_t *fin = from; /* from[] is not needed any more */
+    for (size_t t = 0, f = 0; t < (size_t)threads; t++) {
+        fin[t] = f;
+        f += bufs[t].win_n + bufs[t].n;
+    }
+    for (int t = threads - 1; t >= 0; t--)
+        if (bufs[t].win_n && fin[t] > at[t])
+            memmove(out->photons + fin[t], out->photons + at[t], bufs[t].win_n * sizeof(eng_photon));
+    for (int t = 0; t < threads; t++)
+        if (bufs[t].win_n && fin[t] < at[t])
+            memmove(out->photons + fin[t], out->photons + at[t], bufs[t].win_n * sizeof(eng_photon));
 #pragma omp parallel num_threads(threads)
     {
         const size_t k = (size_t)omp_get_thread_num(), nk = (size_t)omp_get_num_threads();
-        size_t at = bufs[0].n;
-        for (int t = 1; t < team; t++) {
+        for (int t = 0; t < threads; t++) {
             const size_t n = bufs[t].n, lo = n * k / nk, hi = n * (k + 1) / nk;
             if (hi > lo)
-                memcpy(out->photons + at + lo, bufs[t].p + lo, (hi - lo) * sizeof(eng_photon));
-            at += n;
+                memcpy(out->photons + fin[t] + bufs[t].win_n + lo, bufs[t].p + lo, (hi - lo) * sizeof(eng_photon));
         }
     }
+    free(from);
     out->count = total;
     eng_trace_counts counts;
     memset(&counts, 0, sizeof counts);
@@ -625,5 +707,6 @@ void photon_map_free(eng_photon_map *m)
     }
     free(m->trace_bufs);
     free(m->trace_paths);
+    free(m->trace_batches);
     memset(m, 0, sizeof *m);
 }

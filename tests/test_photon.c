@@ -731,6 +731,65 @@ START_TEST(determinism_threads)
 }
 END_TEST
 
+/* The map a trace writes in place (photon_trace_with: each thread into the window the last
+ * trace's figures give it, the rest moved or copied after): whatever the last trace left, the
+ * map is the ray-by-ray trace's (one path after the other, single rays, one thread). Fewer
+ * photons in the first thread's range than last time moves the second thread's down, more moves
+ * it up and overflows the first window; a thread count other than last time's splits elsewhere. */
+static void same_as_ray_by_ray(cornell *c, const eng_random_maps *rm, const eng_bounce_photon *in, size_t n,
+                               const eng_photon_map *m)
+{
+    eng_error err;
+    const pt_tracer one_by_one = {pt_embree_intersect, c->rt, NULL};
+    eng_trace_settings s1 = {.max_bounces = 0, .threads = 1};
+    eng_photon_map ref = {0};
+    ck_assert_int_eq(photon_trace_with(&one_by_one, &c->fs, rm, in, n, &s1, &ref, NULL, &err), ENG_OK);
+    ck_assert_uint_gt(ref.count, n / 2);
+    ck_assert_uint_eq(m->count, ref.count);
+    ck_assert_int_eq(memcmp(m->photons, ref.photons, ref.count * sizeof(eng_photon)), 0);
+    photon_map_free(&ref);
+}
+
+START_TEST(map_in_place)
+{
+    cornell c;
+    eng_random_maps rm;
+    eng_error err;
+    eng_bounce_photon *in;
+    const size_t n = cornell_with_photons(&c, &rm, 6000, &in);
+    eng_bounce_photon *orig = malloc(n * sizeof *orig);
+    memcpy(orig, in, n * sizeof *orig);
+    eng_photon_map m = {0};
+    const int order[] = {2, 2, 3, 2, 1, 2};
+    for (size_t k = 0; k < sizeof order / sizeof order[0]; k++) {
+        eng_trace_settings s = {.max_bounces = 0, .threads = order[k]};
+        ck_assert_int_eq(photon_trace(c.rt, &c.fs, &rm, in, n, &s, &m, NULL, &err), ENG_OK);
+        same_as_ray_by_ray(&c, &rm, in, n, &m);
+    }
+    eng_trace_settings s2 = {.max_bounces = 0, .threads = 2};
+    for (size_t i = 0; i < n / 4; i++) /* the first thread's range stores fewer photons */
+        in[i].power[0] = in[i].power[1] = in[i].power[2] = 0.0f;
+    ck_assert_int_eq(photon_trace(c.rt, &c.fs, &rm, in, n, &s2, &m, NULL, &err), ENG_OK);
+    same_as_ray_by_ray(&c, &rm, in, n, &m);
+    memcpy(in, orig, n * sizeof *orig); /* ... and more again */
+    ck_assert_int_eq(photon_trace(c.rt, &c.fs, &rm, in, n, &s2, &m, NULL, &err), ENG_OK);
+    same_as_ray_by_ray(&c, &rm, in, n, &m);
+    for (size_t i = n / 2; i < n; i++) /* the second thread's range stores fewer */
+        in[i].power[0] = in[i].power[1] = in[i].power[2] = 0.0f;
+    ck_assert_int_eq(photon_trace(c.rt, &c.fs, &rm, in, n, &s2, &m, NULL, &err), ENG_OK);
+    same_as_ray_by_ray(&c, &rm, in, n, &m);
+    memcpy(in, orig, n * sizeof *orig);
+    ck_assert_int_eq(photon_trace(c.rt, &c.fs, &rm, in, n - 300, &s2, &m, NULL, &err), ENG_OK); /* fewer batches */
+    same_as_ray_by_ray(&c, &rm, in, n - 300, &m);
+    photon_map_free(&m);
+    free(orig);
+    free(in);
+    rmap_destroy(&rm);
+    cornell_close(&c);
+}
+END_TEST
+
+
 /* photon_map_reserve (issue 22 item 3: the first frame's buffers grown on the overlap worker)
  * changes no map: traces into maps reserved for fewer photons than stored, for many more, for
  * another thread count, and into an unreserved map are bit-identical, and the reserved room is
@@ -1190,6 +1249,7 @@ static Suite *photon_suite(void)
     tcase_add_test(tc, bsdf_params_match_material);
     tcase_add_test(tc, determinism_threads);
     tcase_add_test(tc, reserve_changes_no_map);
+    tcase_add_test(tc, map_in_place);
     tcase_add_test(tc, packets_match_single_rays);
     tcase_add_test(tc, frame_coherence);
     tcase_add_test(tc, glass_caustics);
