@@ -115,14 +115,6 @@ int bsdf_stores_photons(const scn_material *m)
     return bsdf_stores_photons_params(&p);
 }
 
-int bsdf_stores_photons_params(const bsdf_params *m)
-{
-    float metallic = clamp01(m->metallic), transmission = clamp01(m->transmission);
-    float diffuse = (1.0f - metallic) * (1.0f - transmission);
-    float glossy = m->roughness >= BSDF_MIRROR_ROUGHNESS ? metallic : 0.0f;
-    return diffuse > 0.0f || glossy > 0.0f;
-}
-
 static bsdf_lobe absorbed(float wo[3], float weight[3], float *density_factor)
 {
     for (int i = 0; i < 3; i++)
@@ -153,26 +145,6 @@ bsdf_lobe bsdf_scatter(const scn_material *m, const float n[3], const float wi[3
     return bsdf_scatter_params(&p, n, wi, eta, rnd, wo, weight, density_factor);
 }
 
-/* The lobe bsdf_scatter_params samples: BSDF_ABSORBED when wi lies in the surface, else
- * BSDF_GLOSSY for the metal lobe (mirror or GGX), BSDF_REFRACT for the glass lobe (reflection
- * or refraction) or BSDF_DIFFUSE. */
-static inline bsdf_lobe lobe_of(const bsdf_params *m, float cos_n, const float u[4])
-{
-    float metallic = clamp01(m->metallic), transmission = clamp01(m->transmission);
-    if (!(fabsf(cos_n) > 0.0f))
-        return BSDF_ABSORBED;
-    float pick = u[BSDF_U_LOBE];
-    if (pick < metallic)
-        return BSDF_GLOSSY;
-    float rest = metallic < 1.0f ? (pick - metallic) / (1.0f - metallic) : 1.0f;
-    return rest < transmission ? BSDF_REFRACT : BSDF_DIFFUSE;
-}
-
-int bsdf_takes_diffuse(const bsdf_params *m, const float n[3], const float wi[3], const float u[4])
-{
-    return lobe_of(m, dot3(wi, n), u) == BSDF_DIFFUSE;
-}
-
 bsdf_lobe bsdf_scatter_params(const bsdf_params *m, const float n[3], const float wi[3], float *eta,
                               const bsdf_sample *rnd, float wo[3], float weight[3], float *density_factor)
 {
@@ -182,7 +154,7 @@ bsdf_lobe bsdf_scatter_params(const bsdf_params *m, const float n[3], const floa
     float s = cos_n >= 0.0f ? 1.0f : -1.0f;
     float ns[3] = {s * n[0], s * n[1], s * n[2]};
     float cos_i = fabsf(cos_n);
-    const bsdf_lobe lobe = lobe_of(m, cos_n, u);
+    const bsdf_lobe lobe = bsdf_lobe_of(m, cos_n, u);
     if (lobe == BSDF_ABSORBED)
         return absorbed(wo, weight, density_factor);
 

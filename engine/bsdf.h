@@ -76,9 +76,32 @@ bsdf_lobe bsdf_scatter(const scn_material *m, const float n[3], const float wi[3
 bsdf_lobe bsdf_scatter_params(const bsdf_params *m, const float n[3], const float wi[3], float *eta,
                               const bsdf_sample *rnd, float wo[3], float weight[3], float *density_factor);
 
+static inline float bsdf_clamp01(float x)
+{
+    return x < 0.0f ? 0.0f : (x > 1.0f ? 1.0f : x);
+}
+
+/* The lobe bsdf_scatter_params samples for cos_n = wi·n and the random numbers u:
+ * BSDF_ABSORBED when wi lies in the surface, else BSDF_GLOSSY for the metal lobe (mirror or
+ * GGX), BSDF_REFRACT for the glass lobe (reflection or refraction) or BSDF_DIFFUSE. */
+static inline bsdf_lobe bsdf_lobe_of(const bsdf_params *m, float cos_n, const float u[4])
+{
+    float metallic = bsdf_clamp01(m->metallic), transmission = bsdf_clamp01(m->transmission);
+    if (!(fabsf(cos_n) > 0.0f))
+        return BSDF_ABSORBED;
+    float pick = u[BSDF_U_LOBE];
+    if (pick < metallic)
+        return BSDF_GLOSSY;
+    float rest = metallic < 1.0f ? (pick - metallic) / (1.0f - metallic) : 1.0f;
+    return rest < transmission ? BSDF_REFRACT : BSDF_DIFFUSE;
+}
+
 /* Whether bsdf_scatter_params would take the diffuse lobe for (m, n, wi) with the random
  * numbers u (not absorbed for wi in the surface, neither metal nor glass picked). */
-int bsdf_takes_diffuse(const bsdf_params *m, const float n[3], const float wi[3], const float u[4]);
+static inline int bsdf_takes_diffuse(const bsdf_params *m, const float n[3], const float wi[3], const float u[4])
+{
+    return bsdf_lobe_of(m, wi[0] * n[0] + wi[1] * n[1] + wi[2] * n[2], u) == BSDF_DIFFUSE;
+}
 #if defined(__SSE2__)
 /* bsdf_scatter_params on four rays at once, each known to take the diffuse lobe
  * (bsdf_takes_diffuse) with albedo k = the base colour and cosine direction cosdir[k]: wo,
@@ -122,7 +145,13 @@ uint32_t bsdf_permute(uint32_t i, uint32_t l, uint32_t p);
  * splatted onto that surface's own pixels, where the delta BSDF cannot reflect it toward the
  * eye from any other direction. */
 int bsdf_stores_photons(const scn_material *m);
-int bsdf_stores_photons_params(const bsdf_params *m);
+static inline int bsdf_stores_photons_params(const bsdf_params *m)
+{
+    float metallic = bsdf_clamp01(m->metallic), transmission = bsdf_clamp01(m->transmission);
+    float diffuse = (1.0f - metallic) * (1.0f - transmission);
+    float glossy = m->roughness >= BSDF_MIRROR_ROUGHNESS ? metallic : 0.0f;
+    return diffuse > 0.0f || glossy > 0.0f;
+}
 
 /* Exact unpolarised Fresnel reflectance of a smooth dielectric interface, light arriving in
  * the medium of index n1 at cosine cos_i (>= 0) onto a medium n2; 1 under total internal

@@ -438,9 +438,10 @@ void rt_intersect4_untextured(const eng_rt *rt, int n, const rt_ray *rays, rt_hi
     rtcInitIntersectContext(&ctx);
     RTC_ALIGN(16) struct RTCRayHit4 rh;
     RTC_ALIGN(16) int valid[4];
-    memset(&rh, 0, sizeof rh);
     for (int j = 0; j < 4; j++) {
         const rt_ray *r = &rays[j < n ? j : 0];
+        rh.ray.time[j] = 0.0f; /* ray_init's fields, without a memset of the whole packet */
+        rh.ray.id[j] = rh.ray.flags[j] = 0;
         valid[j] = j < n ? -1 : 0;
         rh.ray.org_x[j] = r->org[0];
         rh.ray.org_y[j] = r->org[1];
@@ -451,6 +452,8 @@ void rt_intersect4_untextured(const eng_rt *rt, int n, const rt_ray *rays, rt_hi
         rh.ray.tnear[j] = r->tnear;
         rh.ray.tfar[j] = INFINITY;
         rh.ray.mask[j] = 0xFFFFFFFFu;
+        rh.hit.Ng_x[j] = rh.hit.Ng_y[j] = rh.hit.Ng_z[j] = rh.hit.u[j] = rh.hit.v[j] = 0.0f;
+        rh.hit.primID[j] = 0;
         rh.hit.geomID[j] = RTC_INVALID_GEOMETRY_ID;
         rh.hit.instID[0][j] = RTC_INVALID_GEOMETRY_ID;
     }
