@@ -49,7 +49,8 @@ typedef struct pt_buf {
     size_t win_n, win_cap;
     eng_photon *p; /* then its own buffer, once the window is full */
     size_t n, cap;
-    eng_photon *stage; /* the batch in hand: its paths' photons in the order the paths ended */
+    eng_photon *stage; /* the batch in hand: its paths' photons as they are stored, */
+    uint32_t *link;    /* each linked to the next of its path (UINT32_MAX: the last) */
     size_t stage_n, stage_cap;
     int oom; /* a photon did not fit */
     eng_trace_counts counts; /* the tracer's counts on this thread (integer sums: order-free) */
@@ -89,8 +90,8 @@ typedef struct pt_lane {
     int delta_only; /* every scatter so far a delta lobe (eng_photon.caustic) */
     float power[3], rho, eta;
     rt_ray ray; /* the next ray */
-    uint32_t n; /* photons stored so far, in ph */
-    eng_photon ph[ENG_PHOTON_MAX_HITS];
+    uint32_t n; /* photons stored so far: in the stage from index first on, linked (pt_buf.link) */
+    uint32_t first, last;
 } pt_lane;
 
 /* Event k's random numbers sit at a scattered place in maps of a few MB: ask for them as the
@@ -133,6 +134,33 @@ static int lane_start(pt_lane *l, size_t path, const eng_bounce_photon *bp, cons
     return 1;
 }
 
+/* A photon of l's path appended to the stage and linked after the path's last; NULL when out
+ * of memory (buf->oom set). */
+static eng_photon *stage_push(pt_buf *buf, pt_lane *l)
+{
+    if (buf->stage_n == buf->stage_cap) {
+        size_t cap = buf->stage_cap ? 2 * buf->stage_cap : 1024;
+        eng_photon *p = realloc(buf->stage, cap * sizeof *p);
+        if (p)
+            buf->stage = p;
+        uint32_t *k = p ? realloc(buf->link, cap * sizeof *k) : NULL;
+        if (!k) {
+            buf->oom = 1;
+            return NULL;
+        }
+        buf->link = k;
+        buf->stage_cap = cap;
+    }
+    const uint32_t j = (uint32_t)buf->stage_n++;
+    buf->link[j] = UINT32_MAX;
+    if (l->n++ == 0)
+        l->first = j;
+    else
+        buf->link[l->last] = j;
+    l->last = j;
+    return &buf->stage[j];
+}
+
 /* A hit on its way through the BSDF (lane_surface → scattering → lane_next). */
 typedef struct pt_shade {
     float n[3], wi[3];
@@ -148,7 +176,7 @@ typedef struct pt_shade {
  * photon and sets up sh for the BSDF. 0 when the path ends here. */
 static int lane_surface(pt_lane *l, rt_hit *h, int found, const eng_frame_scene *fs,
                         const scn_material *default_material, const eng_random_maps *rm, const eng_trace_settings *s,
-                        pt_shade *sh)
+                        pt_buf *buf, pt_shade *sh)
 {
     if (!found)
         return 0;
@@ -178,7 +206,9 @@ static int lane_surface(pt_lane *l, rt_hit *h, int found, const eng_frame_scene 
                                                                                       : default_material,
                    h, &sh->m);
     if (bsdf_stores_photons_params(&sh->m)) {
-        eng_photon *ph = &l->ph[l->n++]; /* at most one a hit, ENG_PHOTON_MAX_HITS hits */
+        eng_photon *ph = stage_push(buf, l);
+        if (!ph)
+            return 0;
         float side = dot3(n, wi) >= 0.0f ? 1.0f : -1.0f;
         for (int i = 0; i < 3; i++) {
             ph->position[i] = h->position[i];
@@ -268,28 +298,10 @@ static int lane_next(pt_lane *l, const rt_hit *h, const pt_shade *sh, const eng_
     return 1;
 }
 
-/* Appends l's photons to the batch's stage as one run; rec->at says where (in the stage, until
- * batch_done). */
-static void lane_finish(const pt_lane *l, pt_buf *buf, pt_path *rec)
+/* Where l's path's photons are: rec->at the first in the stage (until batch_done). */
+static void lane_finish(const pt_lane *l, pt_path *rec)
 {
-    rec->at = buf->stage_n;
-    if (l->n == 0)
-        return;
-    if (buf->stage_n + l->n > buf->stage_cap) {
-        size_t cap = buf->stage_cap ? buf->stage_cap : 1024;
-        while (cap < buf->stage_n + l->n)
-            cap *= 2;
-        eng_photon *p = realloc(buf->stage, cap * sizeof *p);
-        if (!p) {
-            buf->oom = 1;
-            return;
-        }
-        buf->stage = p;
-        buf->stage_cap = cap;
-    }
-    for (uint32_t k = 0; k < l->n; k++) /* a few photons: no call to memcpy */
-        buf->stage[buf->stage_n + k] = l->ph[k];
-    buf->stage_n += l->n;
+    rec->at = l->first;
     rec->count = l->n;
 }
 
@@ -300,7 +312,7 @@ static size_t batch_done(pt_buf *buf, pt_path *paths, size_t b0, size_t b1)
 {
     const size_t stored = buf->stage_n;
     for (size_t i = b0; i < b1; i++) {
-        const eng_photon *from = buf->stage + paths[i].at;
+        uint32_t from = (uint32_t)paths[i].at;
         const uint32_t c = paths[i].count;
         eng_photon *to;
         if (buf->n == 0 && buf->win_n + c <= buf->win_cap) {
@@ -322,8 +334,8 @@ static size_t batch_done(pt_buf *buf, pt_path *paths, size_t b0, size_t b1)
             to = buf->p + buf->n;
             buf->n += c;
         }
-        for (uint32_t k = 0; k < c; k++)
-            to[k] = from[k];
+        for (uint32_t k = 0; k < c; k++, from = buf->link[from])
+            to[k] = buf->stage[from];
     }
     buf->stage_n = 0;
     return stored;
@@ -383,7 +395,7 @@ static void trace_batch(const pt_tracer *tr, const eng_frame_scene *fs, const sc
          * time), the next ray; each step over all paths in flight before the next step. */
         int on[PT_LANES], diffuse[PT_LANES], nd = 0;
         for (int i = 0; i < active; i++) {
-            on[i] = lane_surface(act[i], &hits[i], found[i], fs, default_material, rm, s, &shade[i]);
+            on[i] = lane_surface(act[i], &hits[i], found[i], fs, default_material, rm, s, buf, &shade[i]);
             if (on[i] && shade[i].diffuse)
                 diffuse[nd++] = i;
             else if (on[i])
@@ -406,7 +418,7 @@ static void trace_batch(const pt_tracer *tr, const eng_frame_scene *fs, const sc
             if (on[i] && lane_next(l, &hits[i], &shade[i], rm, rec)) {
                 act[keep++] = l;
             } else {
-                lane_finish(l, buf, rec);
+                lane_finish(l, rec);
                 spare[free_count++] = l;
             }
         }
@@ -704,6 +716,7 @@ void photon_map_free(eng_photon_map *m)
     for (int t = 0; t < m->trace_buf_count; t++) {
         free(m->trace_bufs[t].p);
         free(m->trace_bufs[t].stage);
+        free(m->trace_bufs[t].link);
     }
     free(m->trace_bufs);
     free(m->trace_paths);
