@@ -580,7 +580,7 @@ typedef int (*pt_intersect_fn)(const void *state, const float org[3], const floa
 /* Optional, the same on n ≤ PT_LANES rays at once (a method that casts packets): found[i] and
  * hits[i] are what intersect returns for rays[i] alone. With it, photon_trace_with keeps
  * PT_LANES paths in flight per thread and asks for their next surfaces together. */
-#define PT_LANES 8
+#define PT_LANES 4
 typedef void (*pt_intersect_n_fn)(const void *state, int n, const rt_ray *rays, rt_hit *hits, int *found,
                                   eng_trace_counts *counts);
 typedef struct pt_tracer {
