@@ -92,7 +92,8 @@ static inline bsdf_lobe bsdf_lobe_of(const bsdf_params *m, float cos_n, const fl
     float pick = u[BSDF_U_LOBE];
     if (pick < metallic)
         return BSDF_GLOSSY;
-    float rest = metallic < 1.0f ? (pick - metallic) / (1.0f - metallic) : 1.0f;
+    /* (pick − 0)/(1 − 0) compares as pick does: no division for a non-metal */
+    float rest = metallic == 0.0f ? pick : metallic < 1.0f ? (pick - metallic) / (1.0f - metallic) : 1.0f;
     return rest < transmission ? BSDF_REFRACT : BSDF_DIFFUSE;
 }
 
