@@ -138,7 +138,8 @@ int cmd_tracebench(int argc, char **argv)
     printf("tracebench: %s frame %lld, %zu bounce-map photons, %zu rays (%llu hit), %zu photons stored, %d threads, "
            "%d repeats alternating\n",
            path, frame, res.photons, res.rays, (unsigned long long)res.hits, res.stored, res.threads, res.repeats);
-    printf("  photon trace       %8.3f Mrays/s  (median %.2f ms)\n", trace_rate * 1e-6, tm);
+    printf("  photon trace       %8.3f Mrays/s  (median %.2f ms; %d paths in flight a thread, rtcIntersect4 packets)\n",
+           trace_rate * 1e-6, tm, res.lanes);
     printf("  raw rtcIntersect1  %8.3f Mrays/s  (median %.2f ms)\n", raw_rate * 1e-6, rm);
     printf("  raw rtcIntersect4  %8.3f Mrays/s  (median %.2f ms; packets of 4 consecutive rays, hits %s rtcIntersect1's)\n",
            pm > 0.0 ? (double)res.rays / (pm * 1e-3) * 1e-6 : 0.0, pm, res.packets_identical ? "bit-identical to" : "DIFFERENT from");

@@ -2,7 +2,9 @@
  * same rays in the same process (tracebench.h, issue 22 item 4). The rays are recorded from a
  * one-thread trace through a recording tracer (trace_method.h's interface, ray by ray, the
  * reference the engine's trace must match bit for bit); then, alternating, the engine's photon
- * trace of the frame (photon_trace: what eng_render_frame runs for "photon_trace": "embree")
+ * trace of the frame (photon_trace: what eng_render_frame runs for "photon_trace": "embree"; the
+ * repeats after the first find the last trace's figures in the map, as a static scene's frames
+ * do)
  * and rt_cast_raw over the recorded rays (rtcIntersect1, and rtcIntersect4 packets of
  * consecutive rays for comparison), each on the engine's thread count. A trace ray costs
  * more than a raw one by what the trace does around it: hit attributes (shading normal, base
@@ -80,6 +82,7 @@ eng_result tb_run(eng_engine *e, int frame, int repeats, tb_result *out, eng_err
     out->rays = rec.n;
     out->stored = ref.count;
     out->threads = ti.settings.threads;
+    out->lanes = PT_LANES;
     out->repeats = repeats;
     out->maps_identical = 1;
     for (int k = 0; k < repeats && r == ENG_OK; k++) {

@@ -18,6 +18,7 @@ typedef struct tb_result {
     size_t stored;   /* photon-map photons */
     uint64_t hits;   /* rays of the recording that hit a surface (rtcIntersect1, no lamps) */
     int threads, repeats;
+    int lanes; /* paths the trace keeps in flight per thread (PT_LANES), their rays cast as packets */
     double trace_ms[TB_MAX_REPEATS]; /* the engine's photon trace, repeat by repeat */
     double raw_ms[TB_MAX_REPEATS];   /* rtcIntersect1 over the recorded rays */
     double packet_ms[TB_MAX_REPEATS]; /* rtcIntersect4 over the same rays, 4 consecutive per packet */
