@@ -21,14 +21,26 @@
  * while it still carries power is counted in stats->truncated, so a manifest shows whether
  * the limit ever mattered.
  *
- * Determinism across thread counts: a path's photons go to the buffer of the thread that
- * traced it, and the path records where (thread, offset, count); the map is then compacted
- * in input order (runs of consecutive paths, each copied whole), and the statistics are
- * summed sequentially after that.
+ * Streams (issue 22 item 4): the inputs are cut into batches of PT_BATCH; a thread traces
+ * a consecutive range of batches, keeping PT_LANES paths of its batch in flight (lanes). Each
+ * round casts the next ray of every path in flight at once (the tracer's intersect_n: Embree
+ * rtcIntersect4 packets, rt.c), then moves each path on; the diffuse BSDF is sampled four hits
+ * at a time (bsdf_diffuse4, SSE2, the scalar code's operations in its order). A path that ends
+ * hands its lane to the next input of the batch. Packets form within a batch only, so which rays
+ * share one does not depend on the thread count; a packet's hits are its rays' single-ray hits
+ * (tracebench and test_photon check it), so the map is the one-by-one trace's.
  *
- * Speed (issue 22 item 4): the random-map entries of an event are prefetched before its ray
- * is traced, the BSDF reads a bsdf_params rather than a copy of the material, and the
- * per-thread buffers stay in the map from one trace to the next.
+ * Determinism and the map: a path's photons go to its batch's stage, linked path by path; when
+ * the batch ends they are put in input order into the thread's window of the map (where the
+ * last trace's per-batch counts say its batches' photons begin: in place for a static scene),
+ * or its own buffer once the window is full. After the trace, windows that are not where
+ * their photons belong are moved and buffers copied after them, so the map is in input order
+ * for any thread count and whatever the last trace left; the statistics are summed
+ * sequentially after that. The threads split the batches by the last trace's ray counts.
+ *
+ * Speed (issue 22 item 4) also: the random-map entries of an event are prefetched as its ray
+ * is set up, the BSDF reads a bsdf_params rather than a copy of the material, and the per-thread
+ * buffers, path records and batch figures stay in the map from one trace to the next.
  *
  * Which surface a ray hits next is asked of a tracer (trace_method.h: Embree, rt.c, or the
  * multi-image trace of 004); what happens at the surface is the same for every tracer.

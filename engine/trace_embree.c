@@ -1,7 +1,8 @@
 /* trace_embree.c — the Embree photon trace (trace_method.h, "photon_trace": "embree"; 003 §3
  * step 2: bounces after the first traced on the CPU): every bounce ray is rt_intersect's
- * closest hit in the scene rt.c keeps posed. Nothing to prepare, no buffers, no counts. Also
- * the table of photon-trace methods. */
+ * closest hit in the scene rt.c keeps posed, cast four at a time (rtcIntersect4 packets,
+ * intersect_n). Nothing to prepare, no buffers, no counts. Also the table of photon-trace
+ * methods. */
 #include "trace_method.h"
 
 #include <stddef.h>

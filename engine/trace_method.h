@@ -6,9 +6,9 @@
  *
  * The frame loop (engine.c) only sees this table: it creates the method once, calls prepare
  * once per frame after the scene is posed (a method builds what it traces against there, and
- * returns the pt_tracer photon_trace_with calls per ray), announces the buffers the method
- * lists, copies its frame info into the frame's statistics, and times prepare as the method's
- * pass when it names one. What a path does at a surface (BSDF sampling, random maps, storage)
+ * returns the pt_tracer photon_trace_with calls per ray, or per packet of rays), announces the
+ * buffers the method lists, copies its frame info into the frame's statistics, and times
+ * prepare as the method's pass when it names one. What a path does at a surface (BSDF sampling, random maps, storage)
  * is photon_trace.c's, the same for every method. */
 #ifndef ISPM_TRACE_METHOD_H
 #define ISPM_TRACE_METHOD_H
