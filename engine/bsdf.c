@@ -249,8 +249,8 @@ static inline __m128 load_lanes(const float *const p[4], int i)
 }
 
 void bsdf_diffuse4(const float *const n[4], const float *const wi[4], const float *const cosdir[4],
-                   const float *const albedo[4], const float u_roulette[4], float wo[4][3], float weight[4][3],
-                   float density_factor[4], int alive[4])
+                   const float *const albedo[4], const float u_roulette[4], float *const wo[4],
+                   float *const weight[4], float *const density_factor[4], int alive[4])
 {
     const __m128 one = _mm_set1_ps(1.0f), zero = _mm_setzero_ps(), minus = _mm_set1_ps(-0.0f);
     __m128 vn[3], vwi[3], ns[3], t[3], b[3], o[3], w[3];
@@ -290,19 +290,25 @@ void bsdf_diffuse4(const float *const n[4], const float *const wi[4], const floa
     const __m128 live = _mm_cmplt_ps(_mm_loadu_ps(u_roulette), p);
     for (int i = 0; i < 3; i++)
         w[i] = _mm_and_ps(live, _mm_div_ps(w[i], p));
-    float ow[3][4], ww[3][4], d[4];
-    for (int i = 0; i < 3; i++) {
-        _mm_storeu_ps(ow[i], _mm_and_ps(live, o[i]));
-        _mm_storeu_ps(ww[i], w[i]);
-    }
+    /* Lane k to wo[k], weight[k], density_factor[k]: transpose the 3 × 4 results to 4 × 4
+     * (the fourth row unused) and store each lane's first three. */
+    __m128 ro = _mm_and_ps(live, o[0]), go = _mm_and_ps(live, o[1]), bo = _mm_and_ps(live, o[2]), zo = zero;
+    __m128 rw = w[0], gw = w[1], bw = w[2], zw = zero;
+    _MM_TRANSPOSE4_PS(ro, go, bo, zo);
+    _MM_TRANSPOSE4_PS(rw, gw, bw, zw);
+    const __m128 lo[4] = {ro, go, bo, zo}, lw[4] = {rw, gw, bw, zw};
+    float d[4];
     _mm_storeu_ps(d, _mm_and_ps(live, density));
     const int lm = _mm_movemask_ps(live);
     for (int k = 0; k < 4; k++) {
+        float a[4], b[4];
+        _mm_storeu_ps(a, lo[k]);
+        _mm_storeu_ps(b, lw[k]);
         for (int i = 0; i < 3; i++) {
-            wo[k][i] = ow[i][k];
-            weight[k][i] = ww[i][k];
+            wo[k][i] = a[i];
+            weight[k][i] = b[i];
         }
-        density_factor[k] = d[k];
+        *density_factor[k] = d[k];
         alive[k] = (lm >> k) & 1;
     }
 }

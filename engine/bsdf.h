@@ -108,10 +108,11 @@ static inline int bsdf_takes_diffuse(const bsdf_params *m, const float n[3], con
  * (bsdf_takes_diffuse) with albedo k = the base colour and cosine direction cosdir[k]: wo,
  * weight and density factor of lane k are the scalar function's bit for bit, alive[k] = 0 where
  * it returns BSDF_ABSORBED (Russian roulette; wo, weight and density then 0), else 1 for
- * BSDF_DIFFUSE. A lane may repeat another's pointers when fewer than four rays are at hand. */
+ * BSDF_DIFFUSE; each lane's outputs go where its own pointers say. A lane may repeat another's
+ * pointers when fewer than four rays are at hand (it then writes the same values there). */
 void bsdf_diffuse4(const float *const n[4], const float *const wi[4], const float *const cosdir[4],
-                   const float *const albedo[4], const float u_roulette[4], float wo[4][3], float weight[4][3],
-                   float density_factor[4], int alive[4]);
+                   const float *const albedo[4], const float u_roulette[4], float *const wo[4],
+                   float *const weight[4], float *const density_factor[4], int alive[4]);
 #endif
 
 /* Stratified sampling across frames (002_558366c451cd32fd.txt §4.2): a Cranley–Patterson

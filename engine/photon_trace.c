@@ -258,23 +258,22 @@ static void scatter_diffuse(pt_lane *const *lanes, pt_shade *const *sh, int n)
 {
 #if defined(__SSE2__)
     const float *nn[4], *wi[4], *cd[4], *albedo[4];
-    float ur[4], wo[4][3], w[4][3], density[4];
+    float ur[4], *wo[4], *w[4], *density[4];
     int alive[4];
     for (int k = 0; k < 4; k++) {
-        const pt_shade *x = sh[k < n ? k : 0];
+        pt_shade *x = sh[k < n ? k : 0];
         nn[k] = x->n;
         wi[k] = x->wi;
         cd[k] = x->rnd.cosdir;
         albedo[k] = x->m.base_color;
         ur[k] = x->rnd.u[BSDF_U_ROULETTE];
+        wo[k] = x->wo;
+        w[k] = x->w;
+        density[k] = &x->density;
     }
     bsdf_diffuse4(nn, wi, cd, albedo, ur, wo, w, density, alive);
-    for (int k = 0; k < n; k++) {
-        memcpy(sh[k]->wo, wo[k], sizeof wo[k]);
-        memcpy(sh[k]->w, w[k], sizeof w[k]);
-        sh[k]->density = density[k];
+    for (int k = 0; k < n; k++)
         sh[k]->lobe = alive[k] ? BSDF_DIFFUSE : BSDF_ABSORBED;
-    }
 #else
     for (int k = 0; k < n; k++)
         scatter_one(lanes[k], sh[k]);

@@ -358,6 +358,78 @@ START_TEST(strata_cover_each_stratum_once)
 }
 END_TEST
 
+#if defined(__SSE2__)
+/* bsdf_diffuse4 (the photon trace's diffuse lobe, four hits at once) against
+ * bsdf_scatter_params, lane by lane, bit for bit: random normals (either side of wi),
+ * albedos up to 1 with zero and out-of-range channels, cosine directions from the tables'
+ * range, and roulette numbers that keep and end paths; fewer than four lanes repeat lane 0. */
+START_TEST(diffuse4_matches_scalar)
+{
+    uint32_t state = 0x9E3779B9u;
+#define RND() ((state = state * 1664525u + 1013904223u) >> 8) * (1.0f / 16777216.0f)
+    int kept = 0, ended = 0, checked = 0;
+    for (int round = 0; round < 20000; round++) {
+        const int lanes = 1 + round % 4;
+        float n[4][3], wi[4][3], cd[4][4], u[4][4], out_wo[4][3], out_w[4][3], out_d[4];
+        bsdf_params m[4];
+        const float *pn[4], *pwi[4], *pcd[4], *palb[4];
+        float ur[4], *pwo[4], *pw[4], *pd[4];
+        int alive[4];
+        for (int k = 0; k < 4; k++) {
+            const int src = k < lanes ? k : 0;
+            if (k < lanes) {
+                float len;
+                do {
+                    for (int i = 0; i < 3; i++) {
+                        n[k][i] = 2.0f * RND() - 1.0f;
+                        wi[k][i] = 2.0f * RND() - 1.0f;
+                    }
+                    len = sqrtf(n[k][0] * n[k][0] + n[k][1] * n[k][1] + n[k][2] * n[k][2]);
+                } while (len < 0.1f);
+                for (int i = 0; i < 3; i++)
+                    n[k][i] /= len;
+                float phi = 6.2831853f * RND(), ct = sqrtf(RND()), st = sqrtf(1.0f - ct * ct);
+                cd[k][0] = st * cosf(phi);
+                cd[k][1] = st * sinf(phi);
+                cd[k][2] = ct;
+                cd[k][3] = ct / 3.14159265f;
+                for (int d = 0; d < 4; d++)
+                    u[k][d] = RND();
+                m[k] = (bsdf_params){{RND(), RND() * 1.2f, round % 7 == 0 ? 0.0f : RND()}, 0.0f, 1.0f, 0.0f, 1.5f};
+            }
+            pn[k] = n[src];
+            pwi[k] = wi[src];
+            pcd[k] = cd[src];
+            palb[k] = m[src].base_color;
+            ur[k] = u[src][BSDF_U_ROULETTE];
+            pwo[k] = out_wo[src];
+            pw[k] = out_w[src];
+            pd[k] = &out_d[src];
+        }
+        bsdf_diffuse4(pn, pwi, pcd, palb, ur, pwo, pw, pd, alive);
+        for (int k = 0; k < lanes; k++) {
+            if (!bsdf_takes_diffuse(&m[k], n[k], wi[k], u[k]))
+                continue; /* wi in the surface: not a diffuse hit */
+            float eta = 1.0f, wo[3], w[3], d;
+            const bsdf_sample rnd = {u[k], cd[k]};
+            const bsdf_lobe lobe = bsdf_scatter_params(&m[k], n[k], wi[k], &eta, &rnd, wo, w, &d);
+            ck_assert_int_eq(alive[k], lobe == BSDF_DIFFUSE);
+            ck_assert_int_eq(memcmp(out_wo[k], wo, sizeof wo), 0);
+            ck_assert_int_eq(memcmp(out_w[k], w, sizeof w), 0);
+            ck_assert_int_eq(memcmp(&out_d[k], &d, sizeof d), 0);
+            kept += alive[k];
+            ended += !alive[k];
+            checked++;
+        }
+    }
+#undef RND
+    printf("bsdf: diffuse4 = scalar on %d hits (%d kept, %d ended by roulette)\n", checked, kept, ended);
+    ck_assert_int_gt(kept, 1000);
+    ck_assert_int_gt(ended, 1000);
+}
+END_TEST
+#endif
+
 static Suite *bsdf_suite(void)
 {
     Suite *s = suite_create("bsdf");
@@ -366,6 +438,9 @@ static Suite *bsdf_suite(void)
     tcase_add_test(tc, glsl_matches_c);
     tcase_add_test(tc, stratified_offsets);
     tcase_add_test(tc, strata_cover_each_stratum_once);
+#if defined(__SSE2__)
+    tcase_add_test(tc, diffuse4_matches_scalar);
+#endif
     suite_add_tcase(s, tc);
     return s;
 }
