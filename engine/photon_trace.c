@@ -66,6 +66,7 @@ typedef struct pt_buf {
     size_t stage_n, stage_cap;
     int oom; /* a photon did not fit */
     eng_trace_counts counts; /* the tracer's counts on this thread (integer sums: order-free) */
+    char apart[64]; /* the next thread's buffer starts a cache line later: no line shared */
 } pt_buf;
 
 /* Where a path's photons are: buffer `thread`, [at, at + count). */
@@ -614,7 +615,8 @@ eng_result photon_trace_with(const pt_tracer *tr, const eng_frame_scene *fs, con
         if (t == 0)
             team = nt;
         pt_buf *mine = &bufs[t];
-        pt_lane *lanes = malloc((size_t)width * sizeof *lanes);
+        /* whole cache lines of its own: the threads' lanes never share one */
+        pt_lane *lanes = aligned_alloc(64, ((size_t)width * sizeof *lanes + 63) / 64 * 64);
         lanes_oom = !lanes;
         const size_t b_end = nt == threads ? from[t + 1] : (t == 0 ? batches : 0);
         for (size_t b = nt == threads ? from[t] : 0; lanes && b < b_end; b++) {
