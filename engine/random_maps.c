@@ -23,6 +23,9 @@
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
+/* libxxhash's own XXH32, compiled into this file (its header's inline mode) so that the path
+ * seeds, one a traced path, hash their 12 bytes without a library call; the same function. */
+#define XXH_INLINE_ALL
 #include <xxhash.h>
 
 #define SPLITMIX_GAMMA 0x9E3779B97F4A7C15ull
