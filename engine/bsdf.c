@@ -51,10 +51,6 @@ static float max3(const float v[3])
     return m > v[2] ? m : v[2];
 }
 
-static float clamp01(float x)
-{
-    return x < 0.0f ? 0.0f : (x > 1.0f ? 1.0f : x);
-}
 
 static inline void normalize3(float v[3])
 {
@@ -84,7 +80,7 @@ static void reflect(const float wi[3], const float n[3], float out[3])
 
 static float schlick1(float f0, float cos_t)
 {
-    float k = 1.0f - clamp01(cos_t);
+    float k = 1.0f - bsdf_clamp01(cos_t);
     float k2 = k * k;
     return f0 + (1.0f - f0) * k2 * k2 * k;
 }
@@ -97,7 +93,7 @@ static float ggx_g1(float ndotv, float alpha)
 
 float bsdf_fresnel_dielectric(float cos_i, float n1, float n2)
 {
-    cos_i = clamp01(cos_i);
+    cos_i = bsdf_clamp01(cos_i);
     float e = n1 / n2;
     float sin2t = e * e * (1.0f - cos_i * cos_i);
     if (sin2t >= 1.0f)
@@ -129,7 +125,7 @@ static inline bsdf_lobe roulette(bsdf_lobe lobe, float u, float weight[3], float
     for (int i = 0; i < 3; i++)
         if (!(weight[i] > 0.0f))
             weight[i] = 0.0f; /* also drops NaN */
-    float p = clamp01(max3(weight));
+    float p = bsdf_clamp01(max3(weight));
     if (!(u < p))
         return absorbed(wo, weight, density_factor);
     for (int i = 0; i < 3; i++)

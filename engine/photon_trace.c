@@ -69,9 +69,10 @@ typedef struct pt_buf {
     char apart[64]; /* the next thread's buffer starts a cache line later: no line shared */
 } pt_buf;
 
-/* Where a path's photons are: buffer `thread`, [at, at + count). */
+/* A path's photons until its batch ends: count of them, the first at index `at` of the
+ * batch's stage, each linked to the next (pt_buf.link). */
 typedef struct pt_path {
-    size_t at; /* in the stage, then in the buffer (batch_done) */
+    size_t at;
     uint32_t count;
     uint8_t truncated;
 } pt_path;
