@@ -69,7 +69,11 @@ for _ in $(seq 50); do [ -s "$WORK/display" ] && break; sleep 0.1; done
 export DISPLAY=:$(head -n1 "$WORK/display")
 # Wait until the server answers clients (on a loaded machine -displayfd can come first).
 for _ in $(seq 50); do xdotool getdisplaygeometry > /dev/null 2>&1 && break; sleep 0.1; done
-export SDL_RENDER_DRIVER=software SDL_VIDEODRIVER=x11
+# SDL_FRAMEBUFFER_ACCELERATION=0: otherwise SDL 2.26 backs the software renderer's window surface
+# with a GL texture, and to get one it destroys and recreates the X window (SDL_RecreateWindow)
+# after the window is first mapped: a window id found before that is gone (CI once failed with
+# BadWindow in XSetInputFocus).
+export SDL_RENDER_DRIVER=software SDL_VIDEODRIVER=x11 SDL_FRAMEBUFFER_ACCELERATION=0
 
 # start_viewer ARGS...: runs the viewer, waits for its window; sets VPID and WIN.
 start_viewer() {
@@ -85,9 +89,18 @@ start_viewer() {
   [ -n "$WIN" ] || fail "no viewer window"
   sleep 0.7
   # No window manager: give the window the keyboard focus, and park the pointer on the
-  # status line, where it neither probes nor clicks anything.
+  # status line, where it neither probes nor clicks anything. The window is looked up again
+  # on each try, and the focus read back: a focus that did not land is tried again (up to 10 s).
   xdotool mousemove --sync 640 792
-  xdotool windowfocus --sync "$WIN" || fail "cannot focus the viewer window"
+  local ok=
+  for _ in $(seq 40); do
+    WIN=$(xdotool search --onlyvisible --name '^ispm-view' 2> /dev/null | head -n1)
+    if [ -n "$WIN" ] && xdotool windowfocus --sync "$WIN" 2> "$WORK/focus.log" &&
+       [ "$(xdotool getwindowfocus 2> /dev/null)" = "$WIN" ]; then ok=1; break; fi
+    kill -0 $VPID 2> /dev/null || { cat "$WORK/view.log"; fail "viewer exited at start"; }
+    sleep 0.25
+  done
+  [ -n "$ok" ] || { cat "$WORK/focus.log"; fail "cannot focus the viewer window"; }
   sleep 0.3
 }
 keys() { xdotool key "$@"; sleep 0.35; }
