@@ -3,6 +3,8 @@
 #include "glctx_backend.h"
 
 #include <GL/osmesa.h>
+#include <dlfcn.h>
+#include <pthread.h>
 #include <stdio.h>
 #include <stdlib.h>
 
@@ -10,6 +12,45 @@ typedef struct osm_ctx {
     OSMesaContext ctx;
     unsigned char dummy[16 * 16 * 4]; /* the context's own framebuffer; passes use FBOs */
 } osm_ctx;
+
+/* libOSMesa is opened when the first context is (like libEGL in glctx_egl.c), not linked: it
+ * brings libLLVM, whose relocation costs every process ~67 ms at start (an empty program linked
+ * with -lOSMesa: 71 ms against 4 ms, this 2-core VM), and most commands (replay, bless, inspect,
+ * the viewer's reader) never render. Kept open for the process's life. */
+#define OSM_LIB "libOSMesa.so.8"
+static struct {
+    OSMesaContext (*CreateContextAttribs)(const int *attribs, OSMesaContext share);
+    GLboolean (*MakeCurrent)(OSMesaContext ctx, void *buffer, GLenum type, GLsizei width, GLsizei height);
+    void (*DestroyContext)(OSMesaContext ctx);
+    OSMESAproc (*GetProcAddress)(const char *name);
+    char error[320]; /* why loading failed; empty when it did not */
+} osm;
+static pthread_once_t osm_once = PTHREAD_ONCE_INIT;
+
+static void osm_load_once(void)
+{
+    void *lib = dlopen(OSM_LIB, RTLD_NOW | RTLD_LOCAL);
+    if (!lib) {
+        snprintf(osm.error, sizeof osm.error, "cannot load %s (install libosmesa6): %s", OSM_LIB, dlerror());
+        return;
+    }
+    /* POSIX: a dlsym result converts to a function pointer. */
+#define SYM(field, name)                                                                    \
+    if (!(*(void **)&osm.field = dlsym(lib, name))) {                                       \
+        snprintf(osm.error, sizeof osm.error, "%s has no %s", OSM_LIB, name);                \
+        return;                                                                             \
+    }
+    SYM(CreateContextAttribs, "OSMesaCreateContextAttribs")
+    SYM(MakeCurrent, "OSMesaMakeCurrent")
+    SYM(DestroyContext, "OSMesaDestroyContext")
+    SYM(GetProcAddress, "OSMesaGetProcAddress")
+#undef SYM
+}
+
+void glctx_osmesa_preload(void)
+{
+    pthread_once(&osm_once, osm_load_once);
+}
 
 static eng_result osm_open(int use_device, int device, void **impl, char *where, size_t where_size,
                            eng_error *err)
@@ -28,13 +69,18 @@ static eng_result osm_open(int use_device, int device, void **impl, char *where,
         OSMESA_CONTEXT_MINOR_VERSION, 5,
         0,
     };
-    c->ctx = OSMesaCreateContextAttribs(attribs, NULL);
+    glctx_osmesa_preload();
+    if (osm.error[0]) {
+        free(c);
+        return eng_fail(err, ENG_ERR_GL, "OSMesa: %s", osm.error);
+    }
+    c->ctx = osm.CreateContextAttribs(attribs, NULL);
     if (!c->ctx) {
         free(c);
         return eng_fail(err, ENG_ERR_GL, "OSMesa: cannot create a GL 4.5 core context (is libosmesa6 from Mesa >= 20 installed?)");
     }
-    if (!OSMesaMakeCurrent(c->ctx, c->dummy, GL_UNSIGNED_BYTE, 16, 16)) {
-        OSMesaDestroyContext(c->ctx);
+    if (!osm.MakeCurrent(c->ctx, c->dummy, GL_UNSIGNED_BYTE, 16, 16)) {
+        osm.DestroyContext(c->ctx);
         free(c);
         return eng_fail(err, ENG_ERR_GL, "OSMesa: cannot make the context current");
     }
@@ -46,13 +92,13 @@ static eng_result osm_open(int use_device, int device, void **impl, char *where,
 static glctx_proc osm_get_proc(void *impl, const char *name)
 {
     (void)impl;
-    return (glctx_proc)OSMesaGetProcAddress(name);
+    return (glctx_proc)osm.GetProcAddress(name);
 }
 
 static void osm_close(void *impl)
 {
     osm_ctx *c = impl;
-    OSMesaDestroyContext(c->ctx);
+    osm.DestroyContext(c->ctx);
     free(c);
 }
 

@@ -80,6 +80,11 @@ void rep_flip_compute(const float *test, const float *ref, int w, int h, int str
  * nothing, so this is the ꟻLIP of two uniform images. Exposed for the tests' hand computations. */
 double rep_flip_uniform_ldr(const double a[3], const double b[3]);
 
+/* One 1-D pass of ꟻLIP's filters: out = in convolved with the 2r+1 taps along x (dir 0) or y
+ * (dir 1), edge pixels repeated; each output is 0.0 + taps[0]·p0, then + taps[i]·pi in increasing
+ * i, bit for bit whatever the vector width. Exposed for the tests. */
+void rep_flip_convolve(const double *in, double *out, int w, int h, const double *taps, int r, int dir);
+
 /* The heat map of a ꟻLIP map (0 black through purple and orange to pale yellow at 1, a magma-like
  * ramp as in the paper's figures), RGB bytes, box-maximum reduced so the longest side is at most
  * max_side (0: full size). Caller frees. */

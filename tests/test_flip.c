@@ -188,6 +188,50 @@ START_TEST(one_pixel_change)
 }
 END_TEST
 
+/* The convolution sums each output's taps in order (0.0 + k0·p0, then + ki·pi) with repeated
+ * edges, whatever the width (blocks of outputs and their tails, vector widths): bit for bit the
+ * scalar loop below, in both directions; a reassociated sum (pairing the symmetric taps, say)
+ * fails. */
+START_TEST(convolution_is_the_ordered_tap_sum)
+{
+    const int ws[] = {1, 5, 16, 17, 37, 160}, r = 4;
+    double taps[2 * 4 + 1];
+    unsigned st = 12345;
+    for (int i = 0; i <= 2 * r; i++) {
+        st = st * 1103515245u + 12345u;
+        taps[i] = (double)(st >> 8) / 16777216.0 - 0.3;
+    }
+    for (size_t t = 0; t < sizeof ws / sizeof ws[0]; t++) {
+        int w = ws[t], h = 7;
+        size_t n = (size_t)w * (size_t)h;
+        double *in = malloc(n * sizeof *in), *out = malloc(n * sizeof *out), *ref = malloc(n * sizeof *ref);
+        for (size_t p = 0; p < n; p++) {
+            st = st * 1103515245u + 12345u;
+            in[p] = (double)(st >> 8) / 65536.0 - 100.0;
+        }
+        for (int dir = 0; dir < 2; dir++) {
+            for (int y = 0; y < h; y++)
+                for (int x = 0; x < w; x++) {
+                    double s = 0.0;
+                    for (int i = 0; i <= 2 * r; i++) {
+                        int xx = dir == 0 ? x + i - r : x, yy = dir == 1 ? y + i - r : y;
+                        xx = xx < 0 ? 0 : xx >= w ? w - 1 : xx;
+                        yy = yy < 0 ? 0 : yy >= h ? h - 1 : yy;
+                        double v = taps[i] * in[(size_t)yy * (size_t)w + (size_t)xx];
+                        s = i == 0 ? 0.0 + v : s + v;
+                    }
+                    ref[(size_t)y * (size_t)w + (size_t)x] = s;
+                }
+            rep_flip_convolve(in, out, w, h, taps, r, dir);
+            ck_assert_msg(memcmp(out, ref, n * sizeof *out) == 0, "width %d, direction %d", w, dir);
+        }
+        free(in);
+        free(out);
+        free(ref);
+    }
+}
+END_TEST
+
 static void edge_image(float *img, int w, int h, int at)
 {
     for (int y = 0; y < h; y++)
@@ -311,6 +355,7 @@ static Suite *flip_suite(void)
     tcase_add_test(tc, uniform_images_match_hand_computation);
     tcase_add_test(tc, hdr_uniform_matches_hand_computation);
     tcase_add_test(tc, one_pixel_change);
+    tcase_add_test(tc, convolution_is_the_ordered_tap_sum);
     tcase_add_test(tc, shift_grows_with_distance);
     tcase_add_test(tc, contrast_change_is_monotone);
     tcase_add_test(tc, stats_by_nearest_rank);
