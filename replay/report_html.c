@@ -25,6 +25,7 @@
 #include <errno.h>
 #include <limits.h>
 #include <math.h>
+#include <pthread.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -878,6 +879,20 @@ static const char *final_buffer(const page *pg, int frame)
     return k >= 0 ? f->buffers[k].name : NULL;
 }
 
+/* The stability charts of a report (rep_stab_charts), on the thread that runs charts_main. */
+typedef struct chart_job {
+    const rep_report *r;
+    const char *dir;
+    char *rel[2];
+} chart_job;
+
+static void *charts_main(void *arg)
+{
+    chart_job *cj = arg;
+    rep_stab_charts(cj->r, cj->dir, cj->rel);
+    return NULL;
+}
+
 eng_result rep_report_html_write(const rep_report *r, const rep_run *run, const rep_run *golden, const char *dir,
                                  eng_error *err)
 {
@@ -936,8 +951,18 @@ eng_result rep_report_html_write(const rep_report *r, const rep_run *run, const 
     eng_result res = rep_remove_tree(imgdir, err);
     if (res == ENG_OK && (nj > 0 || r->stab))
         res = rep_mkdirs(imgdir, err);
+    /* The stability charts (PLplot, which loads its cairo driver and fontconfig on first use,
+     * ~0.1 s of one core) are drawn on a thread of their own while the thumbnails are made: their
+     * files are their own and the page names them the same whichever finishes first. */
+    chart_job cj = {r, dir, {NULL, NULL}};
+    pthread_t chart_thread;
+    int charting = res == ENG_OK && r->stab && pthread_create(&chart_thread, NULL, charts_main, &cj) == 0;
+    if (res == ENG_OK && r->stab && !charting)
+        charts_main(&cj);
     if (res == ENG_OK)
         run_jobs(&pg, jobs, nj);
+    if (charting)
+        pthread_join(chart_thread, NULL);
 
     rep_sb sb = {0};
     if (res == ENG_OK) {
@@ -950,7 +975,7 @@ eng_result rep_report_html_write(const rep_report *r, const rep_run *run, const 
         for (size_t i = 0; i < listed; i++)
             card(&sb, &pg, order[i], &sets[order[i] - r->entries]);
         rep_sb_printf(&sb, "</section>\n");
-        rep_stab_html(&sb, r, dir);
+        rep_stab_html(&sb, r, cj.rel);
         if (npreviews) {
             rep_sb_printf(&sb, "<section id=\"previews\"><h2>Final image, first and last frame</h2><div class=\"previews\">\n");
             for (int i = 0; i < npreviews; i++) {
@@ -990,6 +1015,8 @@ eng_result rep_report_html_write(const rep_report *r, const rep_run *run, const 
     }
     free(sb.s);
     free(imgdir);
+    free(cj.rel[0]);
+    free(cj.rel[1]);
     for (size_t i = 0; i < r->count; i++) {
         free(sets[i].golden);
         free(sets[i].run);

@@ -173,10 +173,12 @@ eng_result rep_stab_write_frame(const char *run_dir, const rep_frame_info *f, co
 eng_result rep_stab_write_manifest(const char *run_dir, const char *sequence_name, const rep_stab_run *st,
                                    char **records, int count, eng_error *err);
 
-/* report.txt's stability section; report.json's "stability" object (cJSON *), the HTML section
- * with its charts (written into dir/img). */
+/* report.txt's stability section; report.json's "stability" object (cJSON *); the HTML
+ * section's two charts, written into dir/img (rel: their page-relative names, NULL for a chart not
+ * made; caller frees), and the HTML section that shows them. */
 void rep_stab_text(rep_sb *sb, const rep_report *r);
 void *rep_stab_json(const rep_report *r);
-void rep_stab_html(rep_sb *sb, const rep_report *r, const char *dir);
+void rep_stab_charts(const rep_report *r, const char *dir, char *rel[2]);
+void rep_stab_html(rep_sb *sb, const rep_report *r, char *const charts[2]);
 
 #endif

@@ -400,7 +400,16 @@ static void cell(rep_sb *sb, double v)
         rep_sb_printf(sb, "<td>–</td>");
 }
 
-void rep_stab_html(rep_sb *sb, const rep_report *r, const char *dir)
+void rep_stab_charts(const rep_report *r, const char *dir, char *rel[2])
+{
+    rel[0] = rel[1] = NULL;
+    if (!r->stab)
+        return;
+    rel[0] = chart(&r->stab->run, dir, "stability-static.png", "Static-pixel flicker per pass", 0);
+    rel[1] = chart(&r->stab->run, dir, "stability-reprojected.png", "Reprojected flicker per pass", 1);
+}
+
+void rep_stab_html(rep_sb *sb, const rep_report *r, char *const charts[2])
 {
     const rep_stab_report *s = r->stab;
     if (!s)
@@ -446,11 +455,9 @@ void rep_stab_html(rep_sb *sb, const rep_report *r, const char *dir)
         rep_sb_printf(sb, "</td></tr>\n");
     }
     rep_sb_printf(sb, "</tbody></table>\n");
-    char *c1 = chart(st, dir, "stability-static.png", "Static-pixel flicker per pass", 0);
-    char *c2 = chart(st, dir, "stability-reprojected.png", "Reprojected flicker per pass", 1);
+    const char *c1 = charts[0], *c2 = charts[1];
     rep_sb_printf(sb, "<div class=\"previews\">");
-    char *charts[2] = {c1, c2};
-    for (char **c = charts; c < charts + 2; c++) {
+    for (char *const *c = charts; c < charts + 2; c++) {
         if (!*c)
             continue;
         rep_sb_printf(sb, "<a href=\"");
@@ -467,6 +474,4 @@ void rep_stab_html(rep_sb *sb, const rep_report *r, const char *dir)
                           "a run of its own: <a href=\"stability/manifest.json\">stability/</a> "
                           "(<code>ispm-view stability</code>).</p>\n");
     rep_sb_printf(sb, "</section>\n");
-    free(c1);
-    free(c2);
 }
