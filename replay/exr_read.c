@@ -15,22 +15,27 @@
  * give the same parts on every golden frame. Every chunk is decompressed and unpacked by
  * OpenEXR's own decoding pipeline (exr_decoding_run): the codec stays the library's.
  */
+#define _POSIX_C_SOURCE 200809L /* O_CLOEXEC */
 #include "oiio_shim.h"
 
 #include "exr_planes.h"
 
 #include <openexr.h>
 
+#include <errno.h>
+#include <fcntl.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <strings.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
 /* OpenImageIO's ImageInput::check_open limits on an EXR part (exrinput.cpp, seek_subimage). */
 #define OIIO_MAX_SIDE (1 << 20)
 
-static char *dup(const char *s)
+static char *str_dup(const char *s)
 {
     size_t n = strlen(s) + 1;
     char *p = malloc(n);
@@ -181,12 +186,12 @@ static eng_result read_header(exr_context_t ctxt, const char *path, int p, size_
     oiio_channel_order(ch, n);
     if (luminance_chroma(ch, n))
         return leave(path, p, "luminance-chroma channels", err);
-    out->name = dup(name);
+    out->name = str_dup(name);
     out->width = (int)w;
     out->height = (int)h;
     out->channel_count = n;
     for (int c = 0; c < n; c++)
-        out->channels[c] = dup(ch[c].name);
+        out->channels[c] = str_dup(ch[c].name);
     out->data = malloc(w * h * (size_t)n * sizeof(float));
     if (!out->name || !out->data)
         return eng_fail(err, ENG_ERR_NOMEM, "%s: part %s: out of memory", path, name);
@@ -209,6 +214,71 @@ static eng_result read_pixels(exr_context_t ctxt, const char *path, int p, rep_p
     return rv == EXR_ERR_SUCCESS ? ENG_OK : lib_failed(path, p, rv, err);
 }
 
+/* The whole file in memory, for OpenEXR's custom read (exr_context_initializer_t.read_fn): the
+ * library reads a frame chunk by chunk, one pread each (a 160x160 frame of 43 one-scanline parts:
+ * ~7,000 system calls; a replay of the CI run against a 43-part run ~71,000), and on a virtual
+ * machine each costs microseconds of kernel entry. Read once, served by memcpy: the same bytes
+ * at the same offsets, so the same parts. */
+typedef struct mem_file {
+    uint8_t *data;
+    size_t size;
+} mem_file;
+
+#define MEM_FILE_MAX ((size_t)256 << 20) /* larger files are left to the library's own reads */
+
+static int64_t mem_read(exr_const_context_t ctxt, void *user, void *buf, uint64_t sz, uint64_t off,
+                        exr_stream_error_func_ptr_t error_cb)
+{
+    (void)ctxt;
+    (void)error_cb; /* a short read is the library's to report, as with its pread */
+    const mem_file *m = user;
+    if (off >= m->size)
+        return 0; /* end of file, as pread says it */
+    uint64_t n = m->size - off < sz ? m->size - off : sz;
+    memcpy(buf, m->data + off, (size_t)n);
+    return (int64_t)n;
+}
+
+static int64_t mem_size(exr_const_context_t ctxt, void *user)
+{
+    (void)ctxt;
+    return (int64_t)((const mem_file *)user)->size;
+}
+
+/* The file's bytes, or 0 with m->data NULL when it cannot be read whole (the library then opens
+ * it itself and reports what is wrong as before). */
+static int mem_load(const char *path, mem_file *m)
+{
+    m->data = NULL;
+    m->size = 0;
+    int fd = open(path, O_RDONLY | O_CLOEXEC);
+    if (fd < 0)
+        return 0;
+    struct stat st;
+    if (fstat(fd, &st) != 0 || !S_ISREG(st.st_mode) || st.st_size <= 0 || (uint64_t)st.st_size > MEM_FILE_MAX ||
+        !(m->data = malloc((size_t)st.st_size))) {
+        close(fd);
+        return 0;
+    }
+    size_t got = 0, want = (size_t)st.st_size;
+    while (got < want) {
+        ssize_t n = read(fd, m->data + got, want - got);
+        if (n < 0 && errno == EINTR)
+            continue;
+        if (n <= 0)
+            break;
+        got += (size_t)n;
+    }
+    close(fd);
+    if (got != want) {
+        free(m->data);
+        m->data = NULL;
+        return 0;
+    }
+    m->size = want;
+    return 1;
+}
+
 eng_result rep_exr_read_parts(const char *path, size_t max_floats, rep_part **parts, int *count, eng_error *err)
 {
     *parts = NULL;
@@ -218,20 +288,29 @@ eng_result rep_exr_read_parts(const char *path, size_t max_floats, rep_part **pa
         return r;
     exr_context_initializer_t init = EXR_DEFAULT_CONTEXT_INITIALIZER;
     init.error_handler_fn = quiet;
+    mem_file mf;
+    if (mem_load(path, &mf)) {
+        init.user_data = &mf;
+        init.read_fn = mem_read;
+        init.size_fn = mem_size;
+    }
     exr_context_t ctxt = NULL;
     exr_result_t rv = exr_start_read(&ctxt, path, &init);
     if (rv != EXR_ERR_SUCCESS) {
         exr_finish(&ctxt);
+        free(mf.data);
         return leave(path, -1, exr_get_default_error_message(rv), err);
     }
     int n = 0;
     if ((rv = exr_get_count(ctxt, &n)) != EXR_ERR_SUCCESS || n < 1 || n > REP_MAX_PARTS) {
         exr_finish(&ctxt);
+        free(mf.data);
         return leave(path, -1, "no parts, or too many", err);
     }
     rep_part *arr = calloc((size_t)n, sizeof *arr);
     if (!arr) {
         exr_finish(&ctxt);
+        free(mf.data);
         return eng_fail(err, ENG_ERR_NOMEM, "%s: out of memory while reading", path);
     }
     for (int p = 0; p < n && r == ENG_OK; p++) {
@@ -240,6 +319,7 @@ eng_result rep_exr_read_parts(const char *path, size_t max_floats, rep_part **pa
             r = read_pixels(ctxt, path, p, &arr[p], err);
     }
     exr_finish(&ctxt);
+    free(mf.data);
     if (r != ENG_OK) {
         rep_parts_free(arr, n);
         return r;
