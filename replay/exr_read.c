@@ -203,15 +203,14 @@ static eng_result read_header(exr_context_t ctxt, const char *path, int p, size_
 
 /* The pixels of part p into out->data (interleaved in out's channel order, top row first),
  * through capture's decoding loop (capture/exr_planes.h): one plane per channel. */
-static eng_result read_pixels(exr_context_t ctxt, const char *path, int p, rep_part *out, eng_error *err)
+static exr_result_t read_pixels(exr_context_t ctxt, int p, rep_part *out)
 {
     const size_t nc = (size_t)out->channel_count, row = (size_t)out->width * nc;
     cap_exr_plane planes[ENG_MAX_CHANNELS];
     for (size_t c = 0; c < nc; c++)
         planes[c] = (cap_exr_plane){out->channels[c], (const uint8_t *)(out->data + c), (int32_t)(nc * sizeof(float)),
                                     (int32_t)(row * sizeof(float)), (int16_t)sizeof(float), EXR_PIXEL_FLOAT};
-    exr_result_t rv = cap_exr_decode_part(ctxt, p, 0, out->height, out->width, planes, (int)nc);
-    return rv == EXR_ERR_SUCCESS ? ENG_OK : lib_failed(path, p, rv, err);
+    return cap_exr_decode_part(ctxt, p, 0, out->height, out->width, planes, (int)nc);
 }
 
 /* The whole file in memory, for OpenEXR's custom read (exr_context_initializer_t.read_fn): the
@@ -313,10 +312,32 @@ eng_result rep_exr_read_parts(const char *path, size_t max_floats, rep_part **pa
         free(mf.data);
         return eng_fail(err, ENG_ERR_NOMEM, "%s: out of memory while reading", path);
     }
-    for (int p = 0; p < n && r == ENG_OK; p++) {
-        r = read_header(ctxt, path, p, max_floats, &arr[p], err);
-        if (r == ENG_OK)
-            r = read_pixels(ctxt, path, p, &arr[p], err);
+    /* Headers in order up to the first that fails (h), then the pixels of parts 0..h-1 as tasks
+     * (OpenEXR decodes chunks of one context on several threads; each part has its own pipeline
+     * and planes): inside replay's parallel region another thread takes parts of a large frame,
+     * outside one this thread decodes them all. The error is the one the serial order meets
+     * first: a part's pixels before a later part's header. */
+    int h = 0;
+    eng_error herr;
+    eng_result hres = ENG_OK;
+    while (h < n && (hres = read_header(ctxt, path, h, max_floats, &arr[h], &herr)) == ENG_OK)
+        h++;
+    exr_result_t *prv = calloc((size_t)(h > 0 ? h : 1), sizeof *prv);
+    if (!prv) {
+        r = eng_fail(err, ENG_ERR_NOMEM, "%s: out of memory while reading", path);
+    } else {
+#pragma omp taskloop grainsize(1) default(none) shared(ctxt, arr, prv, h)
+        for (int p = 0; p < h; p++)
+            prv[p] = read_pixels(ctxt, p, &arr[p]);
+        for (int p = 0; p < h && r == ENG_OK; p++)
+            if (prv[p] != EXR_ERR_SUCCESS)
+                r = lib_failed(path, p, prv[p], err);
+        if (r == ENG_OK && hres != ENG_OK) {
+            r = hres;
+            if (err)
+                *err = herr;
+        }
+        free(prv);
     }
     exr_finish(&ctxt);
     free(mf.data);
