@@ -17,7 +17,8 @@
  * passes (exact, the kernels are products); image borders repeat the edge pixel. HDR ([H] §3):
  * each exposure c scales by 2^c, tone-maps with the ACES fit of [H] Eq. 2 per channel, clamps
  * to [0,1] and runs LDR-ꟻLIP from linear RGB; the per-pixel maximum over the exposures is the
- * result. One thread, double arithmetic, fixed loop order: bit-identical everywhere.
+ * result. Double arithmetic, fixed loop order within an exposure, exposures as OpenMP tasks whose
+ * per-pixel results are combined in exposure order: bit-identical everywhere, whatever the threads.
  */
 #include "flip.h"
 
@@ -431,15 +432,12 @@ int rep_flip_exposures(const rep_flip_desc *d)
     return exposure_range(d, &start, &step);
 }
 
-void rep_flip_map(const float *test, const float *ref, int w, int h, int stride, const rep_flip_desc *d, float *map)
+/* One exposure of rep_flip_map: the per-pixel ΔE of test against ref at exposure scale `scale`
+ * (LDR: 1) into v[0..n-1], with scratch of its own (so exposures may run at once). */
+static void flip_exposure(const float *test, const float *ref, int w, int h, int stride, rep_flip_kind kind,
+                          const filters *f, double cm, double scale, double *v)
 {
     size_t n = (size_t)w * (size_t)h;
-    rep_flip_desc def = {REP_FLIP_LDR, 0, 0, 0};
-    if (!d || d->kind == REP_FLIP_NONE)
-        d = &def;
-    filters f;
-    filters_make(&f, d->ppd > 0 ? d->ppd : REP_FLIP_PPD_DEFAULT);
-    double cm = cmax();
     side s[2];
     for (int i = 0; i < 2; i++) {
         for (int c = 0; c < 3; c++) {
@@ -451,32 +449,23 @@ void rep_flip_map(const float *test, const float *ref, int w, int h, int stride,
     }
     double *t0 = rep_xmalloc(n * sizeof(double)), *t1 = rep_xmalloc(n * sizeof(double)),
            *t2 = rep_xmalloc(n * sizeof(double)), *t3 = rep_xmalloc(n * sizeof(double));
-    int rmax = f.csf[2][0].r > f.gauss.r ? f.csf[2][0].r : f.gauss.r;
+    int rmax = f->csf[2][0].r > f->gauss.r ? f->csf[2][0].r : f->gauss.r;
     double *pad = rep_xmalloc((size_t)(w + 2 * rmax + 1) * sizeof(double));
     const double **src = rep_xmalloc((size_t)(2 * rmax + 1) * sizeof *src);
 
-    double start, step;
-    int exposures = exposure_range(d, &start, &step);
-    for (size_t p = 0; p < n; p++)
-        map[p] = 0;
-    for (int e = 0; e < exposures; e++) {
-        double scale = exp2(start + e * step);
-        to_opponent(test, n, stride, d->kind, scale, &s[0]);
-        to_opponent(ref, n, stride, d->kind, scale, &s[1]);
-        for (int i = 0; i < 2; i++)
-            side_eval(&s[i], &f, w, h, t0, t1, t2, t3, pad, src);
-        for (size_t p = 0; p < n; p++) {
-            double a[3] = {s[0].lab[0][p], s[0].lab[1][p], s[0].lab[2][p]};
-            double b[3] = {s[1].lab[0][p], s[1].lab[1][p], s[1].lab[2][p]};
-            double dc = remap(hyab(a, b), cm);
-            double fe = fmax(fabs(s[0].edge[p] - s[1].edge[p]), fabs(s[0].point[p] - s[1].point[p]));
-            double df = pow(fe / sqrt(2.0), QF);
-            if (df > 1)
-                df = 1;
-            double v = pow(dc, 1.0 - df); /* [F] Eq. 9 */
-            if (v > map[p])
-                map[p] = (float)v;
-        }
+    to_opponent(test, n, stride, kind, scale, &s[0]);
+    to_opponent(ref, n, stride, kind, scale, &s[1]);
+    for (int i = 0; i < 2; i++)
+        side_eval(&s[i], f, w, h, t0, t1, t2, t3, pad, src);
+    for (size_t p = 0; p < n; p++) {
+        double a[3] = {s[0].lab[0][p], s[0].lab[1][p], s[0].lab[2][p]};
+        double b[3] = {s[1].lab[0][p], s[1].lab[1][p], s[1].lab[2][p]};
+        double dc = remap(hyab(a, b), cm);
+        double fe = fmax(fabs(s[0].edge[p] - s[1].edge[p]), fabs(s[0].point[p] - s[1].point[p]));
+        double df = pow(fe / sqrt(2.0), QF);
+        if (df > 1)
+            df = 1;
+        v[p] = pow(dc, 1.0 - df); /* [F] Eq. 9 */
     }
     for (int i = 0; i < 2; i++) {
         for (int c = 0; c < 3; c++) {
@@ -492,6 +481,37 @@ void rep_flip_map(const float *test, const float *ref, int w, int h, int stride,
     free(t3);
     free(pad);
     free(src);
+}
+
+void rep_flip_map(const float *test, const float *ref, int w, int h, int stride, const rep_flip_desc *d, float *map)
+{
+    size_t n = (size_t)w * (size_t)h;
+    rep_flip_desc def = {REP_FLIP_LDR, 0, 0, 0};
+    if (!d || d->kind == REP_FLIP_NONE)
+        d = &def;
+    filters f;
+    filters_make(&f, d->ppd > 0 ? d->ppd : REP_FLIP_PPD_DEFAULT);
+    double cm = cmax();
+    double start, step;
+    int exposures = exposure_range(d, &start, &step);
+    /* The exposures are independent: OpenMP tasks (inside replay's parallel region another thread
+     * takes some, so an HDR buffer's 8 exposures no longer run on one thread at the end of a
+     * frame); each keeps its ΔE per pixel, and the maximum is taken afterwards in exposure order
+     * with the serial loop's comparison, so the map is the same bits. */
+    double *v = rep_xmalloc((size_t)exposures * n * sizeof *v);
+    rep_flip_kind kind = d->kind;
+#pragma omp taskloop grainsize(1) default(none) shared(test, ref, w, h, stride, kind, f, cm, start, step, v, n, exposures)
+    for (int e = 0; e < exposures; e++)
+        flip_exposure(test, ref, w, h, stride, kind, &f, cm, exp2(start + e * step), v + (size_t)e * n);
+    for (size_t p = 0; p < n; p++)
+        map[p] = 0;
+    for (int e = 0; e < exposures; e++) {
+        const double *ve = v + (size_t)e * n;
+        for (size_t p = 0; p < n; p++)
+            if (ve[p] > map[p])
+                map[p] = (float)ve[p];
+    }
+    free(v);
     filters_free(&f);
 }
 
