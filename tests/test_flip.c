@@ -232,6 +232,38 @@ START_TEST(convolution_is_the_ordered_tap_sum)
 }
 END_TEST
 
+/* An HDR map's exposures run as OpenMP tasks when rep_flip_map is called inside a parallel
+ * region (as replay does): the map is the same bits as the serial call's. */
+START_TEST(hdr_map_same_inside_a_parallel_region)
+{
+    int w = 37, h = 29;
+    size_t n = (size_t)w * (size_t)h;
+    float *a = image(w, h), *b = image(w, h);
+    unsigned st = 777;
+    for (size_t i = 0; i < 3 * n; i++) {
+        st = st * 1103515245u + 12345u;
+        a[i] = (float)(st >> 8) / 2097152.0f; /* 0..8 */
+        st = st * 1103515245u + 12345u;
+        b[i] = a[i] * (0.75f + (float)(st >> 8) / 33554432.0f);
+    }
+    float *m1 = malloc(n * sizeof(float)), *m2 = malloc(n * sizeof(float));
+    rep_flip_desc hdr = {REP_FLIP_HDR, 0, 0, 0};
+    ck_assert_int_gt(rep_flip_exposures(&hdr), 2);
+    rep_flip_map(a, b, w, h, 3, &hdr, m1);
+#pragma omp parallel num_threads(3)
+#pragma omp single
+    rep_flip_map(a, b, w, h, 3, &hdr, m2);
+    ck_assert_mem_eq(m1, m2, n * sizeof(float));
+    rep_flip_stats s;
+    rep_flip_stats_of(m1, n, &s);
+    ck_assert(s.mean > 0.01);
+    free(a);
+    free(b);
+    free(m1);
+    free(m2);
+}
+END_TEST
+
 static void edge_image(float *img, int w, int h, int at)
 {
     for (int y = 0; y < h; y++)
@@ -356,6 +388,7 @@ static Suite *flip_suite(void)
     tcase_add_test(tc, hdr_uniform_matches_hand_computation);
     tcase_add_test(tc, one_pixel_change);
     tcase_add_test(tc, convolution_is_the_ordered_tap_sum);
+    tcase_add_test(tc, hdr_map_same_inside_a_parallel_region);
     tcase_add_test(tc, shift_grows_with_distance);
     tcase_add_test(tc, contrast_change_is_monotone);
     tcase_add_test(tc, stats_by_nearest_rank);
