@@ -16,7 +16,8 @@ typedef struct osm_ctx {
 /* libOSMesa is opened when the first context is (like libEGL in glctx_egl.c), not linked: it
  * brings libLLVM, whose relocation costs every process ~67 ms at start (an empty program linked
  * with -lOSMesa: 71 ms against 4 ms, this 2-core VM), and most commands (replay, bless, inspect,
- * the viewer's reader) never render. Kept open for the process's life. */
+ * the viewer's reader) never render. Kept open for the process's life. $ISPM_OSMESA_LIB names
+ * another build of it (a path or a soname). */
 #define OSM_LIB "libOSMesa.so.8"
 static struct {
     OSMesaContext (*CreateContextAttribs)(const int *attribs, OSMesaContext share);
@@ -29,15 +30,17 @@ static pthread_once_t osm_once = PTHREAD_ONCE_INIT;
 
 static void osm_load_once(void)
 {
-    void *lib = dlopen(OSM_LIB, RTLD_NOW | RTLD_LOCAL);
+    const char *env = getenv("ISPM_OSMESA_LIB");
+    const char *name = env && *env ? env : OSM_LIB;
+    void *lib = dlopen(name, RTLD_NOW | RTLD_LOCAL);
     if (!lib) {
-        snprintf(osm.error, sizeof osm.error, "cannot load %s (install libosmesa6): %s", OSM_LIB, dlerror());
+        snprintf(osm.error, sizeof osm.error, "cannot load %s (install libosmesa6): %s", name, dlerror());
         return;
     }
     /* POSIX: a dlsym result converts to a function pointer. */
-#define SYM(field, name)                                                                    \
-    if (!(*(void **)&osm.field = dlsym(lib, name))) {                                       \
-        snprintf(osm.error, sizeof osm.error, "%s has no %s", OSM_LIB, name);                \
+#define SYM(field, sym)                                                                     \
+    if (!(*(void **)&osm.field = dlsym(lib, sym))) {                                        \
+        snprintf(osm.error, sizeof osm.error, "%s has no %s", name, sym);                    \
         return;                                                                             \
     }
     SYM(CreateContextAttribs, "OSMesaCreateContextAttribs")
@@ -47,7 +50,7 @@ static void osm_load_once(void)
 #undef SYM
 }
 
-void glctx_osmesa_preload(void)
+static void osm_load(void)
 {
     pthread_once(&osm_once, osm_load_once);
 }
@@ -69,7 +72,7 @@ static eng_result osm_open(int use_device, int device, void **impl, char *where,
         OSMESA_CONTEXT_MINOR_VERSION, 5,
         0,
     };
-    glctx_osmesa_preload();
+    osm_load();
     if (osm.error[0]) {
         free(c);
         return eng_fail(err, ENG_ERR_GL, "OSMesa: %s", osm.error);

@@ -33,6 +33,11 @@ seq_with "$WORK/emptyglb.json" "[8, 8]" "$WORK/empty.glb"; expect 2 empty.glb "$
 head -c 40 "$SRC/tests/data/gltf/valid-triangle.glb" > "$WORK/cut.glb"
 seq_with "$WORK/cutglb.json" "[8, 8]" "$WORK/cut.glb"; expect 2 cut.glb "$ISPM" record "$WORK/cutglb.json" -o "$WORK/r" --quiet
 [ ! -e "$WORK/r/manifest.json" ] || fail "a manifest was written for bad input"
+# A GL library that cannot be loaded (libOSMesa is opened at the first context,
+# $ISPM_OSMESA_LIB names it): one line naming it, and no run that looks complete.
+seq_with "$WORK/nogl.json" "[8, 8]" "$SCENE"
+expect 1 libOSMesa-missing.so env ISPM_OSMESA_LIB=/nonexistent/libOSMesa-missing.so "$ISPM" record "$WORK/nogl.json" -o "$WORK/nogl" --quiet
+[ ! -e "$WORK/nogl/manifest.json" ] || fail "a manifest was written without a GL context"
 
 # ---- replay: a small good run to spoil in different ways
 seq_with "$WORK/tiny.json" "[32, 24]" "$SCENE"
