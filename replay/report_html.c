@@ -956,9 +956,10 @@ eng_result rep_report_html_write(const rep_report *r, const rep_run *run, const 
      * files are their own and the page names them the same whichever finishes first. */
     chart_job cj = {r, dir, {NULL, NULL}};
     pthread_t chart_thread;
-    int charting = res == ENG_OK && r->stab && pthread_create(&chart_thread, NULL, charts_main, &cj) == 0;
-    if (res == ENG_OK && r->stab && !charting)
-        charts_main(&cj);
+    int charts = res == ENG_OK && r->stab != NULL;
+    int charting = charts && pthread_create(&chart_thread, NULL, charts_main, &cj) == 0;
+    if (charts && !charting)
+        charts_main(&cj); /* no thread to be had: drawn here, as before */
     if (res == ENG_OK)
         run_jobs(&pg, jobs, nj);
     if (charting)
