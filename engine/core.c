@@ -96,27 +96,59 @@ void eng_buffer_digest(const eng_buffer *b, char out[40])
     XXH3_freeState(st);
 }
 
+/* Whether every value of v[0..n) is finite. With the sign cleared, a float's bits are at least
+ * infinity's (0x7f800000) exactly when it is NaN or infinite, and adding 0x00800000 then carries
+ * into bit 31: so OR the sums and test that bit. Blocks of 16 lanes with a fixed inner loop, so
+ * that -O2 vectorises it (and, pand, paddd, por a vector); the tail one at a time. */
+static int all_finite(const float *v, size_t n)
+{
+    enum { BLOCK = 16 };
+    uint32_t acc[BLOCK] = {0};
+    size_t i = 0;
+    for (; i + BLOCK <= n; i += BLOCK)
+#pragma GCC unroll 16
+        for (int k = 0; k < BLOCK; k++) {
+            uint32_t u;
+            memcpy(&u, v + i + k, sizeof u);
+            acc[k] |= (u & 0x7fffffffu) + 0x00800000u;
+        }
+    uint32_t m = 0;
+    for (int k = 0; k < BLOCK; k++)
+        m |= acc[k];
+    for (; i < n; i++) {
+        uint32_t u;
+        memcpy(&u, v + i, sizeof u);
+        m |= (u & 0x7fffffffu) + 0x00800000u;
+    }
+    return !(m & 0x80000000u);
+}
+
 void eng_buffer_nonfinite(const eng_buffer *b, uint64_t *nan_count, uint64_t *inf_count,
                           int *first_x, int *first_y)
 {
     uint64_t nn = 0, ni = 0;
     int fx = -1, fy = -1;
     size_t npix = (size_t)b->width * (size_t)b->height;
-    for (size_t p = 0; p < npix; p++) {
-        int bad = 0;
-        for (int c = 0; c < b->channel_count; c++) {
-            float v = b->data[p * (size_t)b->channel_count + (size_t)c];
-            if (isnan(v)) {
-                nn++;
-                bad = 1;
-            } else if (isinf(v)) {
-                ni++;
-                bad = 1;
+    /* Most buffers have none: one pass over the bits decides (the counting loop below, per
+     * value with two tests and a branch, was ~2 ms of the capture's CPU a frame for the 43
+     * buffers of cornell-box-ci). The counts and the first pixel are the loop's either way. */
+    if (!all_finite(b->data, npix * (size_t)b->channel_count)) {
+        for (size_t p = 0; p < npix; p++) {
+            int bad = 0;
+            for (int c = 0; c < b->channel_count; c++) {
+                float v = b->data[p * (size_t)b->channel_count + (size_t)c];
+                if (isnan(v)) {
+                    nn++;
+                    bad = 1;
+                } else if (isinf(v)) {
+                    ni++;
+                    bad = 1;
+                }
             }
-        }
-        if (bad && fx < 0) {
-            fx = (int)(p % (size_t)b->width);
-            fy = (int)(p / (size_t)b->width);
+            if (bad && fx < 0) {
+                fx = (int)(p % (size_t)b->width);
+                fy = (int)(p / (size_t)b->width);
+            }
         }
     }
     if (nan_count) *nan_count = nn;

@@ -1341,6 +1341,82 @@ START_TEST(test_recompress)
 }
 END_TEST
 
+/* eng_buffer_nonfinite (what the capture records per buffer, and replay per run buffer) gives
+ * the per-value loop's counts and first pixel, whatever the length (blocks of 16 and a tail),
+ * the channel count and the kind: quiet and signalling NaN of either sign and any payload,
+ * either infinity, beside the largest finite values and subnormals, which are not counted. */
+static void nonfinite_reference(const eng_buffer *b, uint64_t *nn, uint64_t *ni, int *fx, int *fy)
+{
+    *nn = *ni = 0;
+    *fx = *fy = -1;
+    for (int y = 0; y < b->height; y++)
+        for (int x = 0; x < b->width; x++)
+            for (int c = 0; c < b->channel_count; c++) {
+                float v = b->data[((size_t)y * (size_t)b->width + (size_t)x) * (size_t)b->channel_count + (size_t)c];
+                if (!isfinite(v)) {
+                    if (isnan(v))
+                        (*nn)++;
+                    else
+                        (*ni)++;
+                    if (*fx < 0) {
+                        *fx = x;
+                        *fy = y;
+                    }
+                }
+            }
+}
+
+START_TEST(test_nonfinite_counts)
+{
+    const uint32_t bad[] = {0x7f800000u, 0xff800000u, 0x7fc00000u, 0xffc00000u,
+                            0x7f800001u, 0xffffffffu, 0x7fbfffffu, 0x7fffffffu};
+    const uint32_t good[] = {0x7f7fffffu, 0xff7fffffu, 0x00000001u, 0x80000001u,
+                             0x007fffffu, 0x00000000u, 0x80000000u, 0x3f800000u};
+    static const char *names[] = {"R", "G", "B", "A"};
+    uint32_t seed = 12345u;
+    int checked = 0;
+    for (int w = 1; w <= 41; w += 4)
+        for (int h = 1; h <= 3; h++)
+            for (int ch = 1; ch <= 4; ch++) {
+                size_t n = (size_t)w * (size_t)h * (size_t)ch;
+                float *data = malloc(n * sizeof *data);
+                ck_assert_ptr_nonnull(data);
+                eng_buffer b = {"t", w, h, ch, names, data};
+                /* none, then one at each place (first, inside, the last value: the tail), then several */
+                for (int trial = 0; trial < 6; trial++) {
+                    for (size_t i = 0; i < n; i++) {
+                        seed = seed * 1664525u + 1013904223u;
+                        uint32_t u = good[seed >> 29];
+                        memcpy(&data[i], &u, sizeof u);
+                    }
+                    size_t at[3] = {0, n / 2, n - 1};
+                    int put = trial == 0 ? 0 : trial <= 3 ? 1 : 3;
+                    for (int k = 0; k < put; k++) {
+                        seed = seed * 1664525u + 1013904223u;
+                        uint32_t u = bad[seed >> 29];
+                        size_t i = put == 1 ? at[trial - 1] : at[k];
+                        memcpy(&data[i], &u, sizeof u);
+                    }
+                    uint64_t nn, ni, rn, ri;
+                    int fx, fy, rx, ry;
+                    eng_buffer_nonfinite(&b, &nn, &ni, &fx, &fy);
+                    nonfinite_reference(&b, &rn, &ri, &rx, &ry);
+                    ck_assert_uint_eq(nn, rn);
+                    ck_assert_uint_eq(ni, ri);
+                    ck_assert_int_eq(fx, rx);
+                    ck_assert_int_eq(fy, ry);
+                    if (trial == 0)
+                        ck_assert_uint_eq(nn + ni, 0);
+                    else
+                        ck_assert_uint_ge(nn + ni, 1);
+                    checked++;
+                }
+                free(data);
+            }
+    ck_assert_int_eq(checked, 11 * 3 * 4 * 6);
+}
+END_TEST
+
 static Suite *capture_suite(void)
 {
     Suite *s = suite_create("capture");
@@ -1350,6 +1426,7 @@ static Suite *capture_suite(void)
     tcase_add_test(exr, test_exr_unsynced_same_bytes);
     tcase_add_test(exr, test_exr_zip_same_size_chunk);
     tcase_add_test(exr, test_exr_rejects_bad_input);
+    tcase_add_test(exr, test_nonfinite_counts);
     suite_add_tcase(s, exr);
     TCase *run = tcase_create("run");
     tcase_add_test(run, test_listener_full_flow);
