@@ -519,12 +519,6 @@ void rep_flip_map(const float *test, const float *ref, int w, int h, int stride,
     filters_free(&f);
 }
 
-static int cmp_float(const void *a, const void *b)
-{
-    float x = *(const float *)a, y = *(const float *)b;
-    return (x > y) - (x < y);
-}
-
 /* Nearest rank: the smallest value with at least q of the values at or below it. */
 static double rank(const float *sorted, size_t n, double q)
 {
@@ -536,7 +530,7 @@ void rep_flip_stats_of(const float *map, size_t n, rep_flip_stats *s)
 {
     float *sorted = rep_xmalloc(n * sizeof *sorted);
     memcpy(sorted, map, n * sizeof *sorted);
-    qsort(sorted, n, sizeof *sorted, cmp_float);
+    rep_sort_floats(sorted, n); /* was qsort: ~3 % of a differing replay's CPU */
     double sum = 0;
     for (size_t p = 0; p < n; p++)
         sum += map[p];

@@ -44,6 +44,9 @@ char *rep_xprintf(const char *fmt, ...)
     __attribute__((format(printf, 1, 2)))
 #endif
     ;
+/* Sorts v ascending: the array qsort with a < / > comparison leaves (a radix sort where every
+ * value is finite and non-negative, as ꟻLIP maps and flicker measures are; qsort otherwise). */
+void rep_sort_floats(float *v, size_t n);
 /* dir + "/" + name, without doubling a trailing slash. Caller frees. */
 char *rep_path_join(const char *dir, const char *name);
 

@@ -220,43 +220,6 @@ double rep_stab_flicker(const float *a, const float *b, int n)
     return f;
 }
 
-static int cmp_float(const void *pa, const void *pb)
-{
-    float a = *(const float *)pa, b = *(const float *)pb;
-    return a < b ? -1 : a > b;
-}
-
-/* Sorts v ascending when every value is finite and non-negative (+0 to +Inf excluded: the
- * flicker measures are), by an LSD radix sort on the bit patterns, whose order is then the
- * values' order: the same array qsort would leave, in O(n). Returns 0 (v untouched) otherwise. */
-static int radix_sort_nonneg(float *v, size_t n)
-{
-    uint32_t *keys = rep_xcalloc(2 * n, sizeof *keys), *src = keys, *dst = keys + n;
-    memcpy(keys, v, n * sizeof *keys);
-    for (size_t i = 0; i < n; i++)
-        if (keys[i] >= 0x7f800000u) { /* sign bit, Inf or NaN */
-            free(keys);
-            return 0;
-        }
-    for (int shift = 0; shift < 32; shift += 8) {
-        size_t count[257] = {0};
-        for (size_t i = 0; i < n; i++)
-            count[((src[i] >> shift) & 0xffu) + 1]++;
-        if (count[1 + ((src[0] >> shift) & 0xffu)] == n)
-            continue; /* every key has this byte: the pass would not move anything */
-        for (int b = 0; b < 256; b++)
-            count[b + 1] += count[b];
-        for (size_t i = 0; i < n; i++)
-            dst[count[(src[i] >> shift) & 0xffu]++] = src[i];
-        uint32_t *t = src;
-        src = dst;
-        dst = t;
-    }
-    memcpy(v, src, n * sizeof *src);
-    free(keys);
-    return 1;
-}
-
 void rep_stab_summarise(float *v, size_t n, rep_stab_stats *s)
 {
     uint64_t changed = s->changed;
@@ -265,8 +228,7 @@ void rep_stab_summarise(float *v, size_t n, rep_stab_stats *s)
     s->pixels = n;
     if (n == 0)
         return;
-    if (!radix_sort_nonneg(v, n))
-        qsort(v, n, sizeof *v, cmp_float);
+    rep_sort_floats(v, n);
     double sum = 0;
     for (size_t i = 0; i < n; i++)
         sum += v[i];

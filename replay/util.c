@@ -10,6 +10,7 @@
 #include <errno.h>
 #include <fcntl.h>
 #include <ftw.h>
+#include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -74,6 +75,49 @@ char *rep_xprintf(const char *fmt, ...)
     char *p = vxprintf(fmt, ap);
     va_end(ap);
     return p;
+}
+
+static int cmp_float(const void *pa, const void *pb)
+{
+    float a = *(const float *)pa, b = *(const float *)pb;
+    return a < b ? -1 : a > b;
+}
+
+/* An LSD radix sort on the bit patterns when every value is finite and non-negative (+0 up,
+ * no -0: then the bits' order is the values' order and equal values have equal bits, so the
+ * array is the one qsort leaves, in O(n)); returns 0 with v untouched otherwise. */
+static int radix_sort_nonneg(float *v, size_t n)
+{
+    uint32_t *keys = rep_xcalloc(2 * n, sizeof *keys), *src = keys, *dst = keys + n;
+    memcpy(keys, v, n * sizeof *keys);
+    for (size_t i = 0; i < n; i++)
+        if (keys[i] >= 0x7f800000u) { /* sign bit, Inf or NaN */
+            free(keys);
+            return 0;
+        }
+    for (int shift = 0; shift < 32; shift += 8) {
+        size_t count[257] = {0};
+        for (size_t i = 0; i < n; i++)
+            count[((src[i] >> shift) & 0xffu) + 1]++;
+        if (count[1 + ((src[0] >> shift) & 0xffu)] == n)
+            continue; /* every key has this byte: the pass would not move anything */
+        for (int b = 0; b < 256; b++)
+            count[b + 1] += count[b];
+        for (size_t i = 0; i < n; i++)
+            dst[count[(src[i] >> shift) & 0xffu]++] = src[i];
+        uint32_t *t = src;
+        src = dst;
+        dst = t;
+    }
+    memcpy(v, src, n * sizeof *src);
+    free(keys);
+    return 1;
+}
+
+void rep_sort_floats(float *v, size_t n)
+{
+    if (n > 1 && !radix_sort_nonneg(v, n))
+        qsort(v, n, sizeof *v, cmp_float);
 }
 
 char *rep_path_join(const char *dir, const char *name)

@@ -2,9 +2,11 @@
  * uniform images against values computed by hand from the papers' formulas, and the metric's
  * documented behaviour on constructed images (a one-pixel change, a shift, a contrast change). */
 #include "flip.h"
+#include "rep_internal.h"
 
 #include <check.h>
 #include <math.h>
+#include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -354,6 +356,45 @@ START_TEST(stats_by_nearest_rank)
 }
 END_TEST
 
+/* rep_sort_floats leaves the array qsort leaves, bit for bit: by radix where every value is
+ * finite and non-negative (duplicates, zeros, subnormals, the largest floats), by qsort where one
+ * is negative, -0 or infinite. */
+static int cmp_f(const void *a, const void *b)
+{
+    float x = *(const float *)a, y = *(const float *)b;
+    return (x > y) - (x < y);
+}
+
+START_TEST(sort_is_qsorts_order)
+{
+    uint32_t seed = 7u;
+    const float odd[] = {0.0f, -0.0f, -1.5f, INFINITY, 1e-45f, 3.4e38f};
+    for (int trial = 0; trial < 40; trial++) {
+        size_t n = (size_t)(1 + trial * 97);
+        float *a = malloc(n * sizeof *a), *b = malloc(n * sizeof *b);
+        ck_assert_ptr_nonnull(a);
+        ck_assert_ptr_nonnull(b);
+        for (size_t i = 0; i < n; i++) {
+            seed = seed * 1664525u + 1013904223u;
+            float v = (float)(seed >> 8) / (float)(1u << 24); /* [0, 1), many repeats below */
+            a[i] = trial % 3 == 0 ? floorf(v * 8.0f) / 8.0f : v * (float)(1 + trial);
+        }
+        if (trial % 2) { /* one value from the odd ones at a varying place */
+            seed = seed * 1664525u + 1013904223u;
+            a[seed % n] = odd[(seed >> 8) % 6];
+        }
+        memcpy(b, a, n * sizeof *a);
+        rep_sort_floats(a, n);
+        qsort(b, n, sizeof *b, cmp_f);
+        for (size_t i = 0; i < n; i++) /* bits: +0 and -0 compare equal */
+            ck_assert_msg(memcmp(&a[i], &b[i], sizeof a[i]) == 0, "trial %d, n %zu: element %zu differs", trial,
+                          n, i);
+        free(a);
+        free(b);
+    }
+}
+END_TEST
+
 START_TEST(kinds_and_heat_map)
 {
     ck_assert_int_eq(rep_flip_kind_of("final.display"), REP_FLIP_LDR);
@@ -392,6 +433,7 @@ static Suite *flip_suite(void)
     tcase_add_test(tc, shift_grows_with_distance);
     tcase_add_test(tc, contrast_change_is_monotone);
     tcase_add_test(tc, stats_by_nearest_rank);
+    tcase_add_test(tc, sort_is_qsorts_order);
     tcase_add_test(tc, kinds_and_heat_map);
     suite_add_tcase(s, tc);
     return s;
