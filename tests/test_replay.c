@@ -2257,6 +2257,53 @@ START_TEST(report_thumbnails_map_and_mark)
 }
 END_TEST
 
+/* A display buffer's bytes are lround(v * 255) of its values, ties away from zero, at and beside
+ * every tie (k + 0.5) / 255 (thumb.c rounds without libm); a scaled thumbnail averages the same
+ * source boxes in every row (the column boxes are computed once). */
+START_TEST(report_thumbnail_bytes_round_as_lround)
+{
+    static const char *const RGB[] = {"R", "G", "B"};
+    enum { W = 255 * 7 };
+    float *a = malloc((size_t)W * 3 * sizeof *a);
+    ck_assert_ptr_nonnull(a);
+    for (int k = 0; k < 255; k++) {
+        float t = (float)(((double)k + 0.5) / 255.0);
+        float near[7] = {t, nextafterf(t, 0), nextafterf(t, 1), nextafterf(nextafterf(t, 0), 0),
+                         nextafterf(nextafterf(t, 1), 1), (float)((double)k / 255.0), (float)(((double)k + 0.25) / 255.0)};
+        for (int j = 0; j < 7; j++)
+            for (int c = 0; c < 3; c++)
+                a[((size_t)k * 7 + (size_t)j) * 3 + (size_t)c] = near[j];
+    }
+    eng_buffer run = {"final.display", W, 1, 3, RGB, a};
+    rep_thumb_map m;
+    rep_thumb_map_make(run.name, &run, NULL, &m);
+    ck_assert_int_eq(m.kind, REP_THUMB_DISPLAY);
+    int w, h;
+    unsigned char *px = rep_image_render(&run, &m, 0, &w, &h);
+    ck_assert_int_eq(w, W);
+    for (int i = 0; i < W; i++) {
+        double v = a[(size_t)i * 3];
+        long want = v > 0 ? (v >= 1 ? 255 : lround(v * 255.0)) : 0;
+        ck_assert_msg(px[(size_t)i * 3] == want, "value %.9g: byte %d, lround %ld", v, px[(size_t)i * 3], want);
+    }
+    free(px);
+    /* 5 x 3 source, 2 x 1 thumbnail: columns [0,2) and [2,5), rows [0,3) */
+    float s[5 * 3 * 3];
+    for (int y = 0; y < 3; y++)
+        for (int x = 0; x < 5; x++)
+            for (int c = 0; c < 3; c++)
+                s[(y * 5 + x) * 3 + c] = (float)(x + 5 * y) / 20.0f;
+    eng_buffer src = {"final.display", 5, 3, 3, RGB, s};
+    px = rep_image_render(&src, &m, 2, &w, &h);
+    ck_assert_int_eq(w, 2);
+    ck_assert_int_eq(h, 1);
+    ck_assert_int_eq(px[0], lround((0 + 1 + 5 + 6 + 10 + 11) / 20.0 / 6.0 * 255.0));
+    ck_assert_int_eq(px[3], lround((2 + 3 + 4 + 7 + 8 + 9 + 12 + 13 + 14) / 20.0 / 9.0 * 255.0));
+    free(px);
+    free(a);
+}
+END_TEST
+
 /* ---------------------------------------------------------------- suite */
 
 static Suite *replay_suite(void)
@@ -2285,6 +2332,7 @@ static Suite *replay_suite(void)
     tcase_add_test(unit, cmp_size_and_channels);
     tcase_add_test(unit, report_xml_escapes_everything);
     tcase_add_test(unit, report_thumbnails_map_and_mark);
+    tcase_add_test(unit, report_thumbnail_bytes_round_as_lround);
     suite_add_tcase(s, unit);
 
     TCase *files = tcase_create("files");
