@@ -15,22 +15,17 @@
  * give the same parts on every golden frame. Every chunk is decompressed and unpacked by
  * OpenEXR's own decoding pipeline (exr_decoding_run): the codec stays the library's.
  */
-#define _POSIX_C_SOURCE 200809L /* O_CLOEXEC */
 #include "oiio_shim.h"
 
 #include "exr_planes.h"
 
 #include <openexr.h>
 
-#include <errno.h>
-#include <fcntl.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <strings.h>
-#include <sys/stat.h>
-#include <unistd.h>
 
 /* OpenImageIO's ImageInput::check_open limits on an EXR part (exrinput.cpp, seek_subimage). */
 #define OIIO_MAX_SIDE (1 << 20)
@@ -244,37 +239,19 @@ static int64_t mem_size(exr_const_context_t ctxt, void *user)
     return (int64_t)((const mem_file *)user)->size;
 }
 
-/* The file's bytes, or 0 with m->data NULL when it cannot be read whole (the library then opens
- * it itself and reports what is wrong as before). */
+/* The file's bytes (eng_read_file), or 0 with m->data NULL when it cannot be read whole or is
+ * empty: the library then opens it itself and reports what is wrong as before. */
 static int mem_load(const char *path, mem_file *m)
 {
-    m->data = NULL;
-    m->size = 0;
-    int fd = open(path, O_RDONLY | O_CLOEXEC);
-    if (fd < 0)
-        return 0;
-    struct stat st;
-    if (fstat(fd, &st) != 0 || !S_ISREG(st.st_mode) || st.st_size <= 0 || (uint64_t)st.st_size > MEM_FILE_MAX ||
-        !(m->data = malloc((size_t)st.st_size))) {
-        close(fd);
-        return 0;
-    }
-    size_t got = 0, want = (size_t)st.st_size;
-    while (got < want) {
-        ssize_t n = read(fd, m->data + got, want - got);
-        if (n < 0 && errno == EINTR)
-            continue;
-        if (n <= 0)
-            break;
-        got += (size_t)n;
-    }
-    close(fd);
-    if (got != want) {
-        free(m->data);
+    char *data;
+    eng_error ignored;
+    if (eng_read_file(path, MEM_FILE_MAX, &data, &m->size, &ignored) != ENG_OK || m->size == 0) {
+        free(data); /* NULL when nothing was read */
         m->data = NULL;
+        m->size = 0;
         return 0;
     }
-    m->size = want;
+    m->data = (uint8_t *)data;
     return 1;
 }
 
