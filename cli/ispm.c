@@ -444,6 +444,10 @@ static int cmd_record(int argc, char **argv, const char *command_line)
     }
     if (!quiet)
         rep_progress_end(&prog.p);
+    /* The renderer is torn down (GL objects, the context: 20-30 ms) while the writer still
+     * encodes, writes and syncs the last frame, which cap_finish waits for. */
+    eng_destroy(eng);
+    eng = NULL;
     r = cap_finish(cap, &err);
     if (r != ENG_OK) {
         fprintf(stderr, "ispm record: %s\n", err.msg);

@@ -57,8 +57,8 @@ static int exists(const char *dir, const char *name)
     return stat(p, &st) == 0;
 }
 
-/* Number of entries in dir whose name ends with suffix. */
-static int count_suffix(const char *dir, const char *suffix)
+/* Number of entries in dir whose name starts with prefix and ends with suffix. */
+static int count_named(const char *dir, const char *prefix, const char *suffix)
 {
     DIR *d = opendir(dir);
     if (!d)
@@ -68,11 +68,16 @@ static int count_suffix(const char *dir, const char *suffix)
     size_t m = strlen(suffix);
     while ((e = readdir(d)) != NULL) {
         size_t k = strlen(e->d_name);
-        if (k >= m && strcmp(e->d_name + k - m, suffix) == 0)
+        if (k >= m && strcmp(e->d_name + k - m, suffix) == 0 && strncmp(e->d_name, prefix, strlen(prefix)) == 0)
             n++;
     }
     closedir(d);
     return n;
+}
+
+static int count_suffix(const char *dir, const char *suffix)
+{
+    return count_named(dir, "", suffix);
 }
 
 static uint32_t bits(float f)
@@ -952,6 +957,67 @@ START_TEST(test_overwrite_removes_manifest_first)
 }
 END_TEST
 
+static void touch(const char *dir, const char *name)
+{
+    char p[512];
+    snprintf(p, sizeof p, "%s/%s", dir, name);
+    FILE *f = fopen(p, "w");
+    ck_assert_ptr_nonnull(f);
+    fputs("x\n", f);
+    fclose(f);
+}
+
+/* Overwriting a run sets its frames/ aside and removes it on a thread (capture.c,
+ * set_aside_frames): right after cap_create frames/ is empty, and once the new run is finished
+ * no set-aside folder is left, also none an earlier, killed run left behind; a frames/ holding
+ * anything but frame files is cleaned in place as before, and a set-aside folder that holds a
+ * foreign file keeps it (and stays) while its frame files go. */
+START_TEST(test_overwrite_sets_frames_aside)
+{
+    char dir[256], frames[300], p[512];
+    make_tmpdir(dir);
+    snprintf(frames, sizeof frames, "%s/frames", dir);
+    seq_sequence seq;
+    make_seq(&seq, 2, 8, 8);
+    scn_scene scene;
+    make_scene(&scene);
+    eng_error err = {{0}};
+    for (int pass = 0; pass < 3; pass++) {
+        if (pass == 1) { /* an earlier run's leftovers: one removable, one with a foreign file */
+            snprintf(p, sizeof p, "%s/.frames-removed-old", dir);
+            ck_assert_int_eq(mkdir(p, 0777), 0);
+            touch(p, "000009.exr");
+            touch(p, "000009.json");
+            snprintf(p, sizeof p, "%s/.frames-removed-mine", dir);
+            ck_assert_int_eq(mkdir(p, 0777), 0);
+            touch(p, "000003.exr");
+            touch(p, "keep.txt");
+        }
+        if (pass == 2)
+            touch(frames, "notes.txt"); /* not a frame file: frames/ is cleaned in place */
+        cap_capture *c = make_capture(dir, &seq, &scene, pass > 0);
+        ck_assert_int_eq(count_suffix(frames, ".exr"), 0);
+        ck_assert_int_eq(count_suffix(frames, ".json"), 0);
+        eng_listener l = cap_listener(c);
+        ck_assert_int_eq(run_frame(&l, 0, 8, 8), 0);
+        ck_assert_int_eq(run_frame(&l, 1, 8, 8), 0);
+        ck_assert_int_eq(cap_finish(c, &err), ENG_OK);
+        cap_destroy(c);
+        ck_assert(exists(dir, "manifest.json"));
+        ck_assert_int_eq(count_suffix(frames, ".exr"), 2);
+        ck_assert_int_eq(count_suffix(frames, ".json"), 2);
+        ck_assert(!exists(dir, ".frames-removed-old"));
+        ck_assert_int_eq(count_named(dir, ".frames-removed-", ""), pass > 0 ? 1 : 0);
+        if (pass > 0) {
+            ck_assert(exists(dir, ".frames-removed-mine/keep.txt"));
+            ck_assert(!exists(dir, ".frames-removed-mine/000003.exr"));
+        }
+        ck_assert_int_eq(exists(frames, "notes.txt"), pass == 2);
+    }
+    rm_rf(dir);
+}
+END_TEST
+
 /* Runs one frame in a child whose file-size limit is limit bytes (writes past it fail
  * with EFBIG, the stand-in for a full disk). Exit status 0 when every expectation held,
  * otherwise the number of the failed one. */
@@ -1434,6 +1500,7 @@ static Suite *capture_suite(void)
     tcase_add_test(run, test_existing_run);
     tcase_add_test(run, test_resume);
     tcase_add_test(run, test_overwrite_removes_manifest_first);
+    tcase_add_test(run, test_overwrite_sets_frames_aside);
     tcase_add_test(run, test_disk_full);
     tcase_add_test(run, test_duplicate_buffer_rejected);
     tcase_add_test(run, test_bad_buffers_rejected);
