@@ -126,6 +126,15 @@ echo "  2 threads are ${r}x faster   (goal >= 1.8x: $(verdict "$r" ge 1.8))"
 # 1-thread wall / (2-thread CPU / 2) is the most any scheduling of that work could give.
 echo "  bound: 1-thread wall / (2-thread CPU / 2) = $(awk -v a="$A_MED" -v c="$CB_MED" 'BEGIN { printf "%.2f", a / (c / 2) }')x" \
      "(2-thread CPU / 1-thread CPU $(ratio "$CB_MED" "$CA_MED"); 2-thread cores busy $(ratio "$CB_MED" "$B_MED") of 2)"
+# Where it goes, from the last run of each side (`ispm info`: the passes' times as recorded, summed
+# over the frames): the splat (llvmpipe rasterising the photon volumes) and every other pass.
+pass_sum() { "$ISPM" info "$1" | awk -v p="$2" '/^passes/ { on = 1; next } on && !/^  / { on = 0 } on && $1 == p { print $NF }'; }
+s1=$(pass_sum "$OUT/t1" splat) s2=$(pass_sum "$OUT/t2" splat)
+e1=$(pass_sum "$OUT/t1" "(every") e2=$(pass_sum "$OUT/t2" "(every")
+if [ -n "$s1" ] && [ -n "$s2" ] && [ -n "$e1" ] && [ -n "$e2" ]; then
+    o1=$(awk -v a="$e1" -v b="$s1" 'BEGIN { printf "%.1f", a - b }') o2=$(awk -v a="$e2" -v b="$s2" 'BEGIN { printf "%.1f", a - b }')
+    echo "  last runs' passes: splat $s1 -> $s2 ms ($(ratio "$s1" "$s2")x); the other passes $o1 -> $o2 ms ($(ratio "$o1" "$o2")x)"
+fi
 fi
 
 # Row 4 belongs to issue 22 item 4 (the photon-trace helper): its `ispm tracebench` prints the

@@ -8,6 +8,7 @@
 
 #include <cjson/cJSON.h>
 #include <getopt.h>
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -18,7 +19,8 @@ static void info_usage(FILE *f)
 {
     fprintf(f, "usage: ispm info RUN\n"
                "\n"
-               "Prints what a run holds: frames, buffers (of frame 0: size and channels), settings,\n"
+               "Prints what a run holds: frames, buffers (of frame 0: size and channels), the passes'\n"
+               "times as recorded (frame 0, median of the later frames, sum), settings,\n"
                "provenance (sequence, scene, tool, GL, Embree, determinism pins) and the verdict of its\n"
                "last replay (RUN/replay/report.json), without decoding any frame.\n"
                "\n"
@@ -50,6 +52,84 @@ static cJSON *load_json(const char *path)
     cJSON *j = cJSON_ParseWithLength(text, len);
     free(text);
     return j;
+}
+
+static int cmp_double(const void *a, const void *b)
+{
+    double x = *(const double *)a, y = *(const double *)b;
+    return x < y ? -1 : x > y;
+}
+
+/* Milliseconds of pass `name` in frame fr of a manifest; -1 when the frame has no such pass. */
+static double pass_ms(const cJSON *fr, const char *name)
+{
+    const cJSON *passes = cJSON_GetObjectItemCaseSensitive(fr, "passes");
+    for (const cJSON *ps = passes ? passes->child : NULL; ps; ps = ps->next) {
+        const cJSON *pn = cJSON_GetObjectItemCaseSensitive(ps, "name");
+        const cJSON *pm = cJSON_GetObjectItemCaseSensitive(ps, "ms");
+        if (cJSON_IsString(pn) && strcmp(pn->valuestring, name) == 0 && cJSON_IsNumber(pm) &&
+            isfinite(pm->valuedouble) && pm->valuedouble >= 0)
+            return pm->valuedouble;
+    }
+    return -1.0;
+}
+
+/* The manifest's per-pass times (frames[].passes, what the engine measured on its clock while
+ * recording): per pass in the order the passes first appear, frame 0's milliseconds (start-up
+ * work such as first-use shader variants lands there), the median over the later frames and the
+ * sum over all frames; a last line sums every pass. The passes of a frame may overlap (the
+ * photon trace runs beside the eye passes on two or more threads), so the sum can exceed the
+ * frame's wall time. */
+static void print_passes(const cJSON *frames)
+{
+    int nf = cJSON_GetArraySize(frames);
+    if (nf < 1)
+        return;
+    const char *names[ENG_MAX_PASSES * 2];
+    int count = 0;
+    for (const cJSON *fr = frames->child; fr; fr = fr->next) {
+        const cJSON *passes = cJSON_GetObjectItemCaseSensitive(fr, "passes");
+        for (const cJSON *ps = passes ? passes->child : NULL; ps; ps = ps->next) {
+            const cJSON *pn = cJSON_GetObjectItemCaseSensitive(ps, "name");
+            if (!cJSON_IsString(pn))
+                continue;
+            int seen = 0;
+            for (int i = 0; i < count && !seen; i++)
+                seen = strcmp(names[i], pn->valuestring) == 0;
+            if (!seen && count < (int)(sizeof names / sizeof names[0]))
+                names[count++] = pn->valuestring;
+        }
+    }
+    if (!count)
+        return;
+    printf("passes (ms): %-14s %10s %10s %12s\n", "", "frame 0", nf > 1 ? "median 1+" : "", "all frames");
+    double *later = malloc((size_t)nf * sizeof *later);
+    if (!later)
+        return;
+    double all0 = 0, all = 0;
+    for (int i = 0; i < count; i++) {
+        double f0 = -1, sum = 0;
+        int k = 0, j = 0;
+        for (const cJSON *fr = frames->child; fr; fr = fr->next, j++) {
+            double ms = pass_ms(fr, names[i]);
+            if (ms < 0)
+                continue;
+            sum += ms;
+            if (j == 0)
+                f0 = ms;
+            else
+                later[k++] = ms;
+        }
+        qsort(later, (size_t)k, sizeof *later, cmp_double);
+        char med[32] = "";
+        if (k > 0)
+            snprintf(med, sizeof med, "%.1f", k % 2 ? later[k / 2] : 0.5 * (later[k / 2 - 1] + later[k / 2]));
+        printf("  %-25s %10.1f %10s %12.1f\n", names[i], f0 < 0 ? 0.0 : f0, med, sum);
+        all0 += f0 < 0 ? 0.0 : f0;
+        all += sum;
+    }
+    printf("  %-25s %10.1f %10s %12.1f\n", "(every pass)", all0, "", all);
+    free(later);
 }
 
 static void print_object(const char *title, const cJSON *o)
@@ -101,6 +181,7 @@ int cmd_info(int argc, char **argv)
         printf("\n");
     }
     cJSON *m = load_json(run->manifest_path);
+    print_passes(cJSON_GetObjectItemCaseSensitive(m, "frames"));
     print_object("settings", cJSON_GetObjectItemCaseSensitive(m, "settings"));
     print_object("tool", cJSON_GetObjectItemCaseSensitive(m, "tool"));
     print_object("gl", cJSON_GetObjectItemCaseSensitive(m, "gl"));

@@ -139,6 +139,19 @@ grep -q '^frames: 2 at 48x48' "$WORK/info.txt" || fail "info: frames"
 grep -q 'final.display .*48x48 *R,G,B' "$WORK/info.txt" || fail "info: buffers"
 grep -q 'kernel_radius *0.25' "$WORK/info.txt" || fail "info: settings"
 grep -q '^last replay: OK against' "$WORK/info.txt" || fail "info: last verdict"
+# The passes' times: frame 0, median of the later frames and sum, as the manifest holds them
+# (the run whose gbuffer pass was doubled above).
+"$ISPM" info "$WORK/slow" > "$WORK/info-slow.txt" || fail "info of the slowed run exited $?"
+want=$(python3 - "$WORK/slow/manifest.json" <<'EOF'
+import json, statistics, sys
+m = json.load(open(sys.argv[1]))
+for name in ("gbuffer", "splat"):
+    ms = [p["ms"] for f in m["frames"] for p in f["passes"] if p["name"] == name]
+    print("%s %.1f %.1f %.1f" % (name, ms[0], statistics.median(ms[1:]), sum(ms)))
+EOF
+)
+got=$(awk '/^passes \(ms\)/ { on = 1; next } on && /^  (gbuffer|splat) / { print $1, $2, $3, $4 } on && !/^  / { on = 0 }' "$WORK/info-slow.txt")
+[ -n "$want" ] && [ "$got" = "$want" ] || { cat "$WORK/info-slow.txt"; fail "info: pass times '$got', want '$want'"; }
 "$ISPM" info "$WORK/nowhere" > /dev/null 2>&1; [ $? -eq 2 ] || fail "info of a missing run: want exit 2"
 "$ISPM" export "$WORK/b" --frame 1 --buffer final.display -o "$WORK/f1.png" > /dev/null || fail "export png"
 [ "$(head -c 4 "$WORK/f1.png" | tail -c 3)" = "PNG" ] || fail "export did not write a PNG"
