@@ -967,14 +967,22 @@ static void touch(const char *dir, const char *name)
     fclose(f);
 }
 
-/* Overwriting a run sets its frames/ aside and removes it on a thread (capture.c,
- * set_aside_frames): right after cap_create frames/ is empty, and once the new run is finished
- * no set-aside folder is left, also none an earlier, killed run left behind; a frames/ holding
- * anything but frame files is cleaned in place as before, and a set-aside folder that holds a
- * foreign file keeps it (and stays) while its frame files go. */
+static ino_t inode_of(const char *path)
+{
+    struct stat st;
+    ck_assert_int_eq(stat(path, &st), 0);
+    return st.st_ino;
+}
+
+/* Overwriting a run whose frames/ holds many frame files (or many bytes) sets that folder aside
+ * and removes it on a thread (capture.c, set_aside_frames): right after cap_create frames/ is a
+ * new, empty folder, and once the new run is finished no set-aside folder is left, also none an
+ * earlier, killed run left behind. A frames/ holding anything but frame files, or a few small
+ * ones, is cleaned in place as before; a set-aside folder that holds a foreign file keeps it
+ * (and stays) while its frame files go. */
 START_TEST(test_overwrite_sets_frames_aside)
 {
-    char dir[256], frames[300], p[512];
+    char dir[256], frames[300], p[512], name[32];
     make_tmpdir(dir);
     snprintf(frames, sizeof frames, "%s/frames", dir);
     seq_sequence seq;
@@ -982,7 +990,7 @@ START_TEST(test_overwrite_sets_frames_aside)
     scn_scene scene;
     make_scene(&scene);
     eng_error err = {{0}};
-    for (int pass = 0; pass < 3; pass++) {
+    for (int pass = 0; pass < 4; pass++) {
         if (pass == 1) { /* an earlier run's leftovers: one removable, one with a foreign file */
             snprintf(p, sizeof p, "%s/.frames-removed-old", dir);
             ck_assert_int_eq(mkdir(p, 0777), 0);
@@ -993,11 +1001,19 @@ START_TEST(test_overwrite_sets_frames_aside)
             touch(p, "000003.exr");
             touch(p, "keep.txt");
         }
+        if (pass == 1 || pass == 2) /* many frame files: worth setting aside */
+            for (int i = 100; i < 164; i++) {
+                snprintf(name, sizeof name, "%06d.%s", i, i % 2 ? "exr" : "json");
+                touch(frames, name);
+            }
         if (pass == 2)
             touch(frames, "notes.txt"); /* not a frame file: frames/ is cleaned in place */
+        ino_t before = pass ? inode_of(frames) : 0;
         cap_capture *c = make_capture(dir, &seq, &scene, pass > 0);
         ck_assert_int_eq(count_suffix(frames, ".exr"), 0);
         ck_assert_int_eq(count_suffix(frames, ".json"), 0);
+        if (pass) /* set aside: a new folder; in place: the same one */
+            ck_assert_int_eq(inode_of(frames) != before, pass == 1);
         eng_listener l = cap_listener(c);
         ck_assert_int_eq(run_frame(&l, 0, 8, 8), 0);
         ck_assert_int_eq(run_frame(&l, 1, 8, 8), 0);
@@ -1012,7 +1028,7 @@ START_TEST(test_overwrite_sets_frames_aside)
             ck_assert(exists(dir, ".frames-removed-mine/keep.txt"));
             ck_assert(!exists(dir, ".frames-removed-mine/000003.exr"));
         }
-        ck_assert_int_eq(exists(frames, "notes.txt"), pass == 2);
+        ck_assert_int_eq(exists(frames, "notes.txt"), pass >= 2);
     }
     rm_rf(dir);
 }
