@@ -278,14 +278,14 @@ static int frame_file(const char *name)
  * run's 8 frames of 5 MB took 20-25 ms of `ispm record --force`'s start (issue 22 row 1).
  * Only when frames/ holds nothing but frame files (anything else stays where it is, as with
  * clean_frames), at least SET_ASIDE_FILES of them or SET_ASIDE_BYTES, and only run_dir's
- * entries change; the run.json written next is fsynced with
- * its folder, which makes the rename durable with it, as the unlinks were. Returns the new
- * folder's path, or NULL when nothing was set aside (then clean_frames does it as before). */
-static char *set_aside_frames(const char *run_dir, const char *frames_dir)
+ * entries change; the run.json written next is fsynced with its folder, which makes the rename
+ * durable with it, as the unlinks were. Returns 1 when frames/ was set aside, 0 when not (then
+ * clean_frames removes the old frames as before). */
+static int set_aside_frames(const char *run_dir, const char *frames_dir)
 {
     DIR *d = opendir(frames_dir);
     if (!d)
-        return NULL;
+        return 0;
     int only_frames = 1;
     size_t files = 0;
     off_t bytes = 0;
@@ -303,19 +303,16 @@ static char *set_aside_frames(const char *run_dir, const char *frames_dir)
     /* A few small files go faster in place (~0.4 ms each here) than a rename, a second
      * thread and its unlinks beside run.json's fsyncs. */
     if (!only_frames || (files < SET_ASIDE_FILES && bytes < SET_ASIDE_BYTES))
-        return NULL;
+        return 0;
     char *aside = cap__join(run_dir, SET_ASIDE_PREFIX "XXXXXX");
     /* An empty folder of a unique name, which the rename then replaces. */
-    if (!mkdtemp(aside)) {
-        free(aside);
-        return NULL;
-    }
-    if (rename(frames_dir, aside) != 0) {
+    int done = mkdtemp(aside) != NULL;
+    if (done && rename(frames_dir, aside) != 0) {
         rmdir(aside);
-        free(aside);
-        return NULL;
+        done = 0;
     }
-    return aside;
+    free(aside);
+    return done;
 }
 
 /* Removes a set-aside folder's frame files, then the folder (which stays if anything else was
@@ -455,7 +452,7 @@ static eng_result prepare_run_dir(const char *run_dir, const char *frames_dir, i
         r = remove_file(runinfo_tmp, err);
     /* The old frames: set aside for the remover thread (set_aside_frames), or removed here. */
     if (r == ENG_OK && set_aside && overwrite && !*resume && has_frames)
-        free(set_aside_frames(run_dir, frames_dir));
+        set_aside_frames(run_dir, frames_dir);
     if (r == ENG_OK)
         r = make_dirs(frames_dir, err);
     if (r == ENG_OK)
