@@ -283,6 +283,9 @@ static int frame_file(const char *name)
  * clean_frames removes the old frames as before). */
 static int set_aside_frames(const char *run_dir, const char *frames_dir)
 {
+    struct stat fst;
+    if (lstat(frames_dir, &fst) != 0 || !S_ISDIR(fst.st_mode))
+        return 0; /* a link to a folder elsewhere stays, its frames are removed in place */
     DIR *d = opendir(frames_dir);
     if (!d)
         return 0;

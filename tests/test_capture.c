@@ -1030,7 +1030,28 @@ START_TEST(test_overwrite_sets_frames_aside)
         }
         ck_assert_int_eq(exists(frames, "notes.txt"), pass >= 2);
     }
+    /* frames/ a link to a folder elsewhere that holds only frame files, many: the link stays,
+     * the frames there are removed in place (a link set aside would leave them behind). */
+    char elsewhere[256], cmd[1400];
+    make_tmpdir(elsewhere);
+    char *fr = realpath(frames, NULL);
+    ck_assert_ptr_nonnull(fr);
+    snprintf(cmd, sizeof cmd, "mv '%s'/* '%s'/ && rmdir '%s' && rm '%s/notes.txt'", fr, elsewhere, fr, elsewhere);
+    ck_assert_int_eq(system(cmd), 0);
+    free(fr);
+    ck_assert_int_eq(symlink(elsewhere, frames), 0);
+    for (int i = 100; i < 164; i++) {
+        snprintf(name, sizeof name, "%06d.exr", i);
+        touch(elsewhere, name);
+    }
+    cap_capture *c = make_capture(dir, &seq, &scene, 1);
+    struct stat st;
+    ck_assert_int_eq(lstat(frames, &st), 0);
+    ck_assert(S_ISLNK(st.st_mode));
+    ck_assert_int_eq(count_suffix(elsewhere, ".exr"), 0);
+    cap_destroy(c);
     rm_rf(dir);
+    rm_rf(elsewhere);
 }
 END_TEST
 
