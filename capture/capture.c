@@ -395,8 +395,8 @@ static eng_result clean_frames(const char *frames_dir, int remove_frames, eng_er
     eng_result r = ENG_OK;
     struct dirent *e;
     while (r == ENG_OK && (errno = 0, e = readdir(d)) != NULL) {
-        if (!ends_with(e->d_name, ".exr.tmp") && !ends_with(e->d_name, ".json.tmp") &&
-            !(remove_frames && (ends_with(e->d_name, ".exr") || ends_with(e->d_name, ".json"))))
+        const int tmp = ends_with(e->d_name, ".exr.tmp") || ends_with(e->d_name, ".json.tmp");
+        if (!frame_file(e->d_name) || !(tmp || remove_frames))
             continue;
         char *p = cap__join(frames_dir, e->d_name);
         if (unlink(p) != 0 && errno != ENOENT)

@@ -515,18 +515,6 @@ static int pass_slot(pass_names *p, const char *name)
     return p->count++;
 }
 
-static int cmp_double(const void *a, const void *b)
-{
-    double x = *(const double *)a, y = *(const double *)b;
-    return (x > y) - (x < y);
-}
-
-static double median(double *v, int n)
-{
-    qsort(v, (size_t)n, sizeof *v, cmp_double);
-    return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
-
 static void bias_add(rep_metrics_bias *acc, const rep_metrics_bias *m, double weight)
 {
     acc->mean_ratio += m->mean_ratio * weight;
@@ -753,9 +741,9 @@ static eng_result run_point(const bench_config *c, const scn_scene *scene, bench
     for (int s = 0; s < passes->count; s++) {
         for (int k = 0; k < p->sample_count; k++)
             tmp[k] = p->pass_samples[(size_t)k * ENG_MAX_PASSES + (size_t)s];
-        p->pass_ms[s] = median(tmp, p->sample_count);
+        p->pass_ms[s] = rep_median(tmp, p->sample_count);
     }
-    p->frame_ms = median(p->frame_samples, p->sample_count);
+    p->frame_ms = rep_median(p->frame_samples, p->sample_count);
     free(tmp);
     return ENG_OK;
 }

@@ -54,12 +54,6 @@ static cJSON *load_json(const char *path)
     return j;
 }
 
-static int cmp_double(const void *a, const void *b)
-{
-    double x = *(const double *)a, y = *(const double *)b;
-    return x < y ? -1 : x > y;
-}
-
 /* Milliseconds of pass `name` in frame fr of a manifest; -1 when the frame has no such pass. */
 static double pass_ms(const cJSON *fr, const char *name)
 {
@@ -120,10 +114,9 @@ static void print_passes(const cJSON *frames)
             else
                 later[k++] = ms;
         }
-        qsort(later, (size_t)k, sizeof *later, cmp_double);
         char med[32] = "";
         if (k > 0)
-            snprintf(med, sizeof med, "%.1f", k % 2 ? later[k / 2] : 0.5 * (later[k / 2 - 1] + later[k / 2]));
+            snprintf(med, sizeof med, "%.1f", rep_median(later, k));
         printf("  %-25s %10.1f %10s %12.1f\n", names[i], f0 < 0 ? 0.0 : f0, med, sum);
         all0 += f0 < 0 ? 0.0 : f0;
         all += sum;

@@ -5,6 +5,7 @@
  * bit-identical to the ray-by-ray one-thread trace. Exit: 0 measured; 1 the trace failed or
  * its map differed; 2 bad arguments or an unreadable sequence or scene. */
 #include "eng.h"
+#include "rep_internal.h"
 #include "tracebench.h"
 
 #include <getopt.h>
@@ -47,18 +48,11 @@ static long long tb_count(const char *s, long long lo, long long hi)
     return *end || v < lo || v > hi ? -1 : v;
 }
 
-static int cmp_double(const void *a, const void *b)
-{
-    double x = *(const double *)a, y = *(const double *)b;
-    return (x > y) - (x < y);
-}
-
 static double median(const double *v, int n)
 {
     double s[TB_MAX_REPEATS];
     memcpy(s, v, (size_t)n * sizeof *s);
-    qsort(s, (size_t)n, sizeof *s, cmp_double);
-    return n % 2 ? s[n / 2] : 0.5 * (s[n / 2 - 1] + s[n / 2]);
+    return rep_median(s, n);
 }
 
 int cmd_tracebench(int argc, char **argv)

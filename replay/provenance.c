@@ -89,19 +89,6 @@ static void diff(rep_prov *p, const char *key, const cJSON *a, const cJSON *b, i
 static const char *const KEYS[] = {"sequence", "scene", "resolution", "fps", "frame_count", "camera",
                                    "settings", "tool", "gl", "determinism"};
 
-static int cmp_double(const void *a, const void *b)
-{
-    double x = *(const double *)a, y = *(const double *)b;
-    return x < y ? -1 : x > y;
-}
-
-static double median(double *v, int n)
-{
-    if (n == 0)
-        return NAN;
-    qsort(v, (size_t)n, sizeof *v, cmp_double);
-    return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
 
 /* Median over the manifest's frames of pass `name`'s share of its frame's time (and of its ms,
  * and of the frame's total ms). NAN when no frame has the pass. */
@@ -129,9 +116,9 @@ static void pass_stats(const cJSON *frames, const char *name, double *share, dou
             m[k++] = mine;
         }
     }
-    *share = median(s, k);
-    *ms = median(m, k);
-    *frame_ms = median(f, kf);
+    *share = rep_median(s, k);
+    *ms = rep_median(m, k);
+    *frame_ms = rep_median(f, kf);
     free(s);
     free(m);
     free(f);

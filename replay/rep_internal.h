@@ -47,6 +47,9 @@ char *rep_xprintf(const char *fmt, ...)
 /* Sorts v ascending: the array qsort with a < / > comparison leaves (a radix sort where every
  * value is finite and non-negative, as ꟻLIP maps and flicker measures are; qsort otherwise). */
 void rep_sort_floats(float *v, size_t n);
+/* The median of v[0..n) (the mean of the middle two when n is even), sorting v in place; NAN
+ * when n is 0. */
+double rep_median(double *v, int n);
 /* dir + "/" + name, without doubling a trailing slash. Caller frees. */
 char *rep_path_join(const char *dir, const char *name);
 

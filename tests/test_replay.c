@@ -2260,6 +2260,21 @@ END_TEST
 /* A display buffer's bytes are lround(v * 255) of its values, ties away from zero, at and beside
  * every tie (k + 0.5) / 255 (thumb.c rounds without libm); a scaled thumbnail averages the same
  * source boxes in every row (the column boxes are computed once). */
+/* rep_median (provenance's timing, ispm info and bench): the middle value, the mean of the
+ * middle two, NAN for none; v comes back sorted. */
+START_TEST(median_of_doubles)
+{
+    double odd[] = {5, 1, 4, 2, 3};
+    ck_assert(rep_median(odd, 5) == 3.0);
+    ck_assert(odd[0] == 1.0 && odd[4] == 5.0);
+    double even[] = {10, -2, 7, 1};
+    ck_assert(rep_median(even, 4) == 4.0);
+    double one[] = {0.25};
+    ck_assert(rep_median(one, 1) == 0.25);
+    ck_assert(isnan(rep_median(one, 0)));
+}
+END_TEST
+
 START_TEST(report_thumbnail_bytes_round_as_lround)
 {
     static const char *const RGB[] = {"R", "G", "B"};
@@ -2333,6 +2348,7 @@ static Suite *replay_suite(void)
     tcase_add_test(unit, report_xml_escapes_everything);
     tcase_add_test(unit, report_thumbnails_map_and_mark);
     tcase_add_test(unit, report_thumbnail_bytes_round_as_lround);
+    tcase_add_test(unit, median_of_doubles);
     suite_add_tcase(s, unit);
 
     TCase *files = tcase_create("files");
