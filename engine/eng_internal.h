@@ -459,14 +459,18 @@ typedef struct eng_photon_map {
     struct pt_path *trace_paths; /* ... and where each path's photons are: trace_path_capacity */
     size_t trace_path_capacity;
     /* The last trace's rays and photons per batch of inputs (trace_batch_count of them; 0
-     * before the first trace): where the next trace splits its inputs over the threads, and
-     * where in the map each thread starts writing. */
+     * before the first trace): where in the map the next trace puts each batch's photons. */
     struct eng_trace_batch *trace_batches;
     size_t trace_batch_count, trace_batch_capacity;
 } eng_photon_map;
 typedef struct eng_trace_batch {
     uint32_t rays, photons;
+    /* During a trace, where the batch's photons are: PT_IN_MAP, at index `at` of the map (where
+     * the last trace's counts put them), or thread `held`'s buffer from index `at` on. */
+    uint32_t held;
+    size_t at;
 } eng_trace_batch;
+#define PT_IN_MAP UINT32_MAX
 
 typedef struct eng_trace_settings {
     int max_bounces;     /* optional cap on photons stored per path after the bounce map; 0 = none

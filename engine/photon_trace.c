@@ -31,12 +31,13 @@
  * (tracebench and test_photon check it), so the map is the one-by-one trace's.
  *
  * Determinism and the map: a path's photons go to its batch's stage, linked path by path; when
- * the batch ends they are put in input order into the thread's window of the map (where the
- * last trace's per-batch counts say its batches' photons begin: in place for a static scene),
- * or its own buffer once the window is full. After the trace, windows that are not where
- * their photons belong are moved and buffers copied after them, so the map is in input order
- * for any thread count and whatever the last trace left; the statistics are summed
- * sequentially after that. The threads split the batches by the last trace's ray counts.
+ * the batch ends they are put in input order where the last trace's per-batch counts say the
+ * batch's photons begin in the map (in place, for a static scene), or, when it stored another
+ * count or the last trace had other batches, into the buffer of the thread that traced it.
+ * After the trace, batches that are not where their photons belong are moved and the buffered
+ * ones copied, so the map is in input order for any thread count, whichever thread traced a
+ * batch and whatever the last trace left; the statistics are summed sequentially after that.
+ * The threads take the batches one at a time in input order as they become free.
  *
  * Speed (issue 22 item 4) also: the random-map entries of an event are prefetched as its ray
  * is set up, the BSDF reads a bsdf_params rather than a copy of the material, and the per-thread
@@ -57,9 +58,7 @@
 
 /* A growable list of photons, one per thread. */
 typedef struct pt_buf {
-    eng_photon *win; /* the thread's window in the map (win_n of win_cap used), filled first */
-    size_t win_n, win_cap;
-    eng_photon *p; /* then its own buffer, once the window is full */
+    eng_photon *p; /* the photons of its batches that could not go to the map at once */
     size_t n, cap;
     eng_photon *stage; /* the batch in hand: its paths' photons as they are stored, */
     uint32_t *link;    /* each linked to the next of its path (UINT32_MAX: the last) */
@@ -318,37 +317,41 @@ static void lane_finish(const pt_lane *l, pt_path *rec)
     rec->count = l->n;
 }
 
-/* Moves the batch's photons from the stage to the thread's window in the map, or when that is
- * full to its buffer, in input order (paths end in any order): a thread's photons are its paths'
- * in order, the window's then the buffer's. Returns the batch's photon count. */
-static size_t batch_done(pt_buf *buf, pt_path *paths, size_t b0, size_t b1)
+/* Moves the batch's photons from the stage, in input order (paths end in any order), to where
+ * the last trace put this batch's in the map (map + stat->at; map NULL: no such place) when
+ * there are as many as then, else to the end of the thread's buffer (stat->held = self).
+ * Returns the batch's photon count. */
+static size_t batch_done(pt_buf *buf, uint32_t self, const pt_path *paths, size_t b0, size_t b1, eng_photon *map,
+                         eng_trace_batch *stat)
 {
     const size_t stored = buf->stage_n;
+    eng_photon *to;
+    if (map && stored == stat->photons) {
+        to = map + stat->at;
+        stat->held = PT_IN_MAP;
+    } else {
+        if (buf->n + stored > buf->cap) {
+            size_t cap = buf->cap ? buf->cap : 1024;
+            while (cap < buf->n + stored)
+                cap *= 2;
+            eng_photon *p = realloc(buf->p, cap * sizeof *p);
+            if (!p) {
+                buf->oom = 1;
+                buf->stage_n = 0;
+                return stored;
+            }
+            buf->p = p;
+            buf->cap = cap;
+        }
+        to = buf->p + buf->n;
+        stat->held = self;
+        stat->at = buf->n;
+        buf->n += stored;
+    }
     for (size_t i = b0; i < b1; i++) {
         uint32_t from = (uint32_t)paths[i].at;
-        const uint32_t c = paths[i].count;
-        eng_photon *to;
-        if (buf->n == 0 && buf->win_n + c <= buf->win_cap) {
-            to = buf->win + buf->win_n;
-            buf->win_n += c;
-        } else {
-            if (buf->n + c > buf->cap) {
-                size_t cap = buf->cap ? buf->cap : 1024;
-                while (cap < buf->n + c)
-                    cap *= 2;
-                eng_photon *p = realloc(buf->p, cap * sizeof *p);
-                if (!p) {
-                    buf->oom = 1;
-                    break;
-                }
-                buf->p = p;
-                buf->cap = cap;
-            }
-            to = buf->p + buf->n;
-            buf->n += c;
-        }
-        for (uint32_t k = 0; k < c; k++, from = buf->link[from])
-            to[k] = buf->stage[from];
+        for (uint32_t k = 0; k < paths[i].count; k++, from = buf->link[from])
+            *to++ = buf->stage[from];
     }
     buf->stage_n = 0;
     return stored;
@@ -364,8 +367,8 @@ static size_t batch_done(pt_buf *buf, pt_path *paths, size_t b0, size_t b1)
  * whatever travels beside it, so the photons are those of tracing the paths one by one. */
 static void trace_batch(const pt_tracer *tr, const eng_frame_scene *fs, const scn_material *default_material,
                         const eng_random_maps *rm, const eng_bounce_photon *in, size_t b0, size_t b1,
-                        const eng_trace_settings *s, int width, pt_lane *lanes, pt_buf *buf, pt_path *paths,
-                        eng_trace_batch *stat)
+                        const eng_trace_settings *s, int width, pt_lane *lanes, pt_buf *buf, uint32_t self,
+                        pt_path *paths, eng_photon *map, eng_trace_batch *stat)
 {
     uint32_t rays_cast = 0;
     pt_lane *act[PT_LANES], *spare[PT_LANES];
@@ -389,7 +392,7 @@ static void trace_batch(const pt_tracer *tr, const eng_frame_scene *fs, const sc
             next++;
         }
         if (active == 0) {
-            stat->photons = (uint32_t)batch_done(buf, paths, b0, b1);
+            stat->photons = (uint32_t)batch_done(buf, self, paths, b0, b1, map, stat);
             stat->rays = rays_cast;
             return;
         }
@@ -554,96 +557,69 @@ eng_result photon_trace_with(const pt_tracer *tr, const eng_frame_scene *fs, con
         out->trace_batch_capacity = batches;
     }
     eng_trace_batch *stat = out->trace_batches;
-    /* Where each thread's batches start (from[t], from[threads] = batches) and where in the map
-     * its photons go (at[t]): with the last trace's figures (frame coherence: what did not move
-     * traces the same paths again), equal shares of its rays and the map offsets of its
-     * photons, so that a static scene's threads finish together and write the map in place;
-     * before that, equal shares of the inputs and of the map's room. The photons do not depend
-     * on either (a path is the same whoever traces it). */
-    size_t *from = malloc(2 * ((size_t)threads + 1) * sizeof *from), *at = from + threads + 1;
-    if (!from)
-        return eng_fail(err, ENG_ERR_NOMEM, "photon trace: out of memory for %zu photons", count);
-    uint64_t rays = 0, stored = 0;
-    for (size_t b = 0; coherent && b < batches; b++) {
-        rays += stat[b].rays;
-        stored += stat[b].photons;
-    }
-    if (coherent && stored > out->capacity) {
-        eng_photon *p = realloc(out->photons, (size_t)stored * sizeof *p);
-        if (p) {
-            out->photons = p;
-            out->capacity = (size_t)stored;
+    /* Where each batch's photons go (frame coherence: what did not move traces the same paths
+     * again): where the last trace's counts put them, the map's photons being in input order.
+     * A batch that stores as many as then writes them there, in place; one that stores another
+     * count, or any batch of a trace whose batches are not the last trace's, writes them to
+     * the buffer of the thread that traced it. The photons do not depend on where they wait. */
+    eng_photon *home = NULL;
+    if (coherent) {
+        size_t stored = 0;
+        for (size_t b = 0; b < batches; b++) {
+            stat[b].at = stored;
+            stored += stat[b].photons;
         }
-    }
-    from[0] = at[0] = 0;
-    {
-        uint64_t r = 0, ph = 0;
-        size_t b = 0;
-        for (int t = 1; t <= threads; t++) {
-            if (t == threads) {
-                b = batches;
-            } else if (coherent && rays > 0) {
-                while (b < batches && (r + stat[b].rays) * (uint64_t)threads <= rays * (uint64_t)t) {
-                    r += stat[b].rays;
-                    ph += stat[b++].photons;
-                }
-            } else {
-                b = batches * (size_t)t / (size_t)threads;
+        if (stored > out->capacity) {
+            eng_photon *p = realloc(out->photons, stored * sizeof *p);
+            if (p) {
+                out->photons = p;
+                out->capacity = stored;
             }
-            from[t] = b;
-            at[t] = coherent ? (size_t)ph : out->capacity * b / (batches ? batches : 1);
-            if (at[t] > out->capacity)
-                at[t] = out->capacity;
         }
-        at[threads] = out->capacity;
+        if (stored <= out->capacity)
+            home = out->photons;
     }
     pt_buf *bufs = out->trace_bufs;
     for (int t = 0; t < threads; t++) {
-        bufs[t].n = bufs[t].stage_n = bufs[t].win_n = 0;
+        bufs[t].n = bufs[t].stage_n = 0;
         bufs[t].oom = 0;
-        bufs[t].win = out->photons ? out->photons + at[t] : NULL;
-        bufs[t].win_cap = at[t + 1] - at[t];
         memset(&bufs[t].counts, 0, sizeof bufs[t].counts);
     }
     const scn_material default_material = eng_material_of(fs->scene, -1);
     const int width = tr->intersect_n ? PT_LANES : 1;
-    int lanes_oom = 0, team = 1;
+    int lanes_oom = 0;
 #pragma omp parallel num_threads(threads) reduction(| : lanes_oom)
     {
-        /* Thread t traces batches [from[t], from[t + 1]) (all of them when the team is smaller
-         * than asked for: then thread 0 takes them in order). */
-        const int t = omp_get_thread_num(), nt = omp_get_num_threads();
-        if (t == 0)
-            team = nt;
+        const int t = omp_get_thread_num();
         pt_buf *mine = &bufs[t];
         /* whole cache lines of its own: the threads' lanes never share one */
         pt_lane *lanes = aligned_alloc(64, ((size_t)width * sizeof *lanes + 63) / 64 * 64);
         lanes_oom = !lanes;
-        const size_t b_end = nt == threads ? from[t + 1] : (t == 0 ? batches : 0);
-        for (size_t b = nt == threads ? from[t] : 0; lanes && b < b_end; b++) {
-            const size_t b0 = b * PT_BATCH, b1 = b0 + PT_BATCH < count ? b0 + PT_BATCH : count;
-            trace_batch(tr, fs, &default_material, rm, in, b0, b1, s, width, lanes, mine, paths, &stat[b]);
+        /* The batches go one at a time, in input order, to whichever thread is free: the threads
+         * finish together whatever else the cores run (a frame's GL passes beside the trace). */
+#pragma omp for schedule(guided) nowait
+        for (ptrdiff_t b = 0; b < (ptrdiff_t)batches; b++) {
+            const size_t b0 = (size_t)b * PT_BATCH, b1 = b0 + PT_BATCH < count ? b0 + PT_BATCH : count;
+            if (lanes)
+                trace_batch(tr, fs, &default_material, rm, in, b0, b1, s, width, lanes, mine, (uint32_t)t, paths,
+                            home, &stat[b]);
         }
         free(lanes);
     }
     out->trace_batch_count = lanes_oom ? 0 : batches;
-    if (team != threads) { /* thread 0 traced everything into its window and buffer */
-        for (int t = 1; t < threads; t++)
-            bufs[t].win_n = bufs[t].n = 0;
-    }
-    if (lanes_oom) {
-        free(from);
+    if (lanes_oom)
         return eng_fail(err, ENG_ERR_NOMEM, "photon trace: out of memory for %zu photons", count);
-    }
 
-    size_t total = 0;
+    size_t total = 0, away = 0;
     int oom = 0;
-    for (int t = 0; t < threads; t++) {
-        total += bufs[t].win_n + bufs[t].n;
+    for (int t = 0; t < threads; t++)
         oom |= bufs[t].oom;
+    for (size_t b = 0; b < batches; b++) {
+        total += stat[b].photons;
+        away += stat[b].held != PT_IN_MAP;
     }
     if (!oom && total > out->capacity) {
-        eng_photon *p = realloc(out->photons, total * sizeof *p); /* keeps the windows' photons */
+        eng_photon *p = realloc(out->photons, total * sizeof *p); /* keeps the photons in place */
         if (p) {
             out->photons = p;
             out->capacity = total;
@@ -661,7 +637,6 @@ eng_result photon_trace_with(const pt_tracer *tr, const eng_frame_scene *fs, con
         }
     }
     if (oom) {
-        free(from);
         out->trace_batch_count = 0;
         return eng_fail(err, ENG_ERR_NOMEM, "photon trace: out of memory for %zu stored photons", total);
     }
@@ -671,32 +646,34 @@ eng_result photon_trace_with(const pt_tracer *tr, const eng_frame_scene *fs, con
             for (uint32_t c = 0; c < paths[i].count; c++)
                 out->source[k++] = (uint32_t)i;
     }
-    /* The map: thread t's photons belong at fin[t] (the photons of the threads before it); its
-     * window's lie at at[t]. Those that must move up move first, from the last thread down, then
-     * those that must move down, from the first up (no move overwrites photons still to move);
-     * then the threads' buffers are copied after their windows', in pieces on all threads. A
-     * static scene's windows are in place: nothing moves. */
-    size_t *fin = from; /* from[] is not needed any more */
-    for (size_t t = 0, f = 0; t < (size_t)threads; t++) {
-        fin[t] = f;
-        f += bufs[t].win_n + bufs[t].n;
-    }
-    for (int t = threads - 1; t >= 0; t--)
-        if (bufs[t].win_n && fin[t] > at[t])
-            memmove(out->photons + fin[t], out->photons + at[t], bufs[t].win_n * sizeof(eng_photon));
-    for (int t = 0; t < threads; t++)
-        if (bufs[t].win_n && fin[t] < at[t])
-            memmove(out->photons + fin[t], out->photons + at[t], bufs[t].win_n * sizeof(eng_photon));
-#pragma omp parallel num_threads(threads)
-    {
-        const size_t k = (size_t)omp_get_thread_num(), nk = (size_t)omp_get_num_threads();
-        for (int t = 0; t < threads; t++) {
-            const size_t n = bufs[t].n, lo = n * k / nk, hi = n * (k + 1) / nk;
-            if (hi > lo)
-                memcpy(out->photons + fin[t] + bufs[t].win_n + lo, bufs[t].p + lo, (hi - lo) * sizeof(eng_photon));
+    /* The map: batch b's photons belong after those of the batches before it (fin). Where no
+     * batch stored another count than last time, every batch is there already. Otherwise those
+     * in the map that must move up move first, from the last batch down, then those that must
+     * move down, from the first up (no move overwrites photons still to move: the batches keep
+     * their order), then the batches in the threads' buffers are copied, on all threads. */
+    if (away) {
+        size_t *fin = malloc(batches * sizeof *fin);
+        if (!fin) {
+            out->trace_batch_count = 0;
+            return eng_fail(err, ENG_ERR_NOMEM, "photon trace: out of memory for %zu stored photons", total);
         }
+        for (size_t b = 0, f = 0; b < batches; b++) {
+            fin[b] = f;
+            f += stat[b].photons;
+        }
+        eng_photon *map = out->photons;
+        for (size_t b = batches; b-- > 0;)
+            if (stat[b].held == PT_IN_MAP && fin[b] > stat[b].at)
+                memmove(map + fin[b], map + stat[b].at, stat[b].photons * sizeof *map);
+        for (size_t b = 0; b < batches; b++)
+            if (stat[b].held == PT_IN_MAP && fin[b] < stat[b].at)
+                memmove(map + fin[b], map + stat[b].at, stat[b].photons * sizeof *map);
+#pragma omp parallel for schedule(dynamic, 4) num_threads(threads)
+        for (ptrdiff_t b = 0; b < (ptrdiff_t)batches; b++)
+            if (stat[b].held != PT_IN_MAP && stat[b].photons)
+                memcpy(map + fin[b], bufs[stat[b].held].p + stat[b].at, stat[b].photons * sizeof *map);
+        free(fin);
     }
-    free(from);
     out->count = total;
     eng_trace_counts counts;
     memset(&counts, 0, sizeof counts);
