@@ -456,8 +456,8 @@ typedef struct eng_photon_map {
      * next so that a frame reuses the last frame's memory; freed by photon_map_free. */
     struct pt_buf *trace_bufs;
     int trace_buf_count;
-    struct pt_path *trace_paths; /* ... and where each path's photons are: trace_path_capacity */
-    size_t trace_path_capacity;
+    struct pt_path *trace_paths; /* ... and where each path's photons are: trace_path_capacity, */
+    size_t trace_path_capacity, trace_path_count; /* the last trace's trace_path_count */
     /* The last trace's rays and photons per batch of inputs (trace_batch_count of them; 0
      * before the first trace): where in the map the next trace puts each batch's photons. */
     struct eng_trace_batch *trace_batches;

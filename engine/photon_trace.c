@@ -60,19 +60,22 @@
 typedef struct pt_buf {
     eng_photon *p; /* the photons of its batches that could not go to the map at once */
     size_t n, cap;
-    eng_photon *stage; /* the batch in hand: its paths' photons as they are stored, */
+    eng_photon *stage; /* the batch in hand: its paths' photons that have no slot in the map, */
     uint32_t *link;    /* each linked to the next of its path (UINT32_MAX: the last) */
     size_t stage_n, stage_cap;
+    int moved; /* a path of the batch in hand stored another count than its slot holds */
     int oom; /* a photon did not fit */
     eng_trace_counts counts; /* the tracer's counts on this thread (integer sums: order-free) */
     char apart[64]; /* the next thread's buffer starts a cache line later: no line shared */
 } pt_buf;
 
-/* A path's photons until its batch ends: count of them, the first at index `at` of the
- * batch's stage, each linked to the next (pt_buf.link). */
+/* A path's photons (count of them): the first `room` in its slot of the map (from index `slot`
+ * of its batch's place: as many as it stored in the last trace, where that trace put them),
+ * the rest until its batch ends in the batch's stage from index `extra` on, each linked to the
+ * next (pt_buf.link). A batch traced elsewhere than in place gives its paths no room. */
 typedef struct pt_path {
-    size_t at;
-    uint32_t count;
+    size_t slot;
+    uint32_t count, room, extra;
     uint8_t truncated;
 } pt_path;
 
@@ -103,8 +106,10 @@ typedef struct pt_lane {
     int delta_only; /* every scatter so far a delta lobe (eng_photon.caustic) */
     float power[3], rho, eta;
     rt_ray ray; /* the next ray */
-    uint32_t n; /* photons stored so far: in the stage from index first on, linked (pt_buf.link) */
-    uint32_t first, last;
+    uint32_t n; /* photons stored so far: the first room at slot, the rest in the stage from */
+    uint32_t first, last; /* index first on, linked (pt_buf.link) */
+    uint32_t room;
+    eng_photon *slot;
 } pt_lane;
 
 /* Event k's random numbers sit at a scattered place in maps of a few MB: ask for them as the
@@ -118,13 +123,15 @@ static void lane_prefetch(const pt_lane *l, const eng_random_maps *rm)
 
 /* Starts bounce-map photon bp's path in l (rec gets its flags); 0 when it has nothing to trace. */
 static int lane_start(pt_lane *l, size_t path, const eng_bounce_photon *bp, const eng_random_maps *rm,
-                      const eng_trace_settings *s, pt_path *rec)
+                      const eng_trace_settings *s, eng_photon *place, pt_path *rec)
 {
     rec->count = 0;
     rec->truncated = 0;
     if (!has_power(bp->power))
         return 0;
     l->path = path;
+    l->room = rec->room;
+    l->slot = place ? place + rec->slot : NULL;
     l->seed = rmap_hash3(bp->position, s->salt);
     l->k = 0;
     l->n = 0;
@@ -147,10 +154,12 @@ static int lane_start(pt_lane *l, size_t path, const eng_bounce_photon *bp, cons
     return 1;
 }
 
-/* A photon of l's path appended to the stage and linked after the path's last; NULL when out
- * of memory (buf->oom set). */
-static eng_photon *stage_push(pt_buf *buf, pt_lane *l)
+/* A photon of l's path: in its slot while there is room, else appended to the stage and linked
+ * after the path's last there; NULL when out of memory (buf->oom set). */
+static eng_photon *photon_push(pt_buf *buf, pt_lane *l)
 {
+    if (l->n < l->room)
+        return &l->slot[l->n++];
     if (buf->stage_n == buf->stage_cap) {
         size_t cap = buf->stage_cap ? 2 * buf->stage_cap : 1024;
         eng_photon *p = realloc(buf->stage, cap * sizeof *p);
@@ -166,7 +175,7 @@ static eng_photon *stage_push(pt_buf *buf, pt_lane *l)
     }
     const uint32_t j = (uint32_t)buf->stage_n++;
     buf->link[j] = UINT32_MAX;
-    if (l->n++ == 0)
+    if (l->n++ == l->room)
         l->first = j;
     else
         buf->link[l->last] = j;
@@ -219,7 +228,7 @@ static int lane_surface(pt_lane *l, rt_hit *h, int found, const eng_frame_scene 
                                                                                       : default_material,
                    h, &sh->m);
     if (bsdf_stores_photons_params(&sh->m)) {
-        eng_photon *ph = stage_push(buf, l);
+        eng_photon *ph = photon_push(buf, l);
         if (!ph)
             return 0;
         float side = dot3(n, wi) >= 0.0f ? 1.0f : -1.0f;
@@ -310,50 +319,56 @@ static int lane_next(pt_lane *l, const rt_hit *h, const pt_shade *sh, const eng_
     return 1;
 }
 
-/* Where l's path's photons are: rec->at the first in the stage (until batch_done). */
-static void lane_finish(const pt_lane *l, pt_path *rec)
+/* How many photons l's path stored, and where those beyond its room are (until batch_done). */
+static void lane_finish(const pt_lane *l, pt_buf *buf, pt_path *rec)
 {
-    rec->at = l->first;
+    rec->extra = l->first;
     rec->count = l->n;
+    buf->moved |= l->n != l->room;
 }
 
-/* Moves the batch's photons from the stage, in input order (paths end in any order), to where
- * the last trace put this batch's in the map (map + stat->at; map NULL: no such place) when
- * there are as many as then, else to the end of the thread's buffer (stat->held = self).
- * Returns the batch's photon count. */
-static size_t batch_done(pt_buf *buf, uint32_t self, const pt_path *paths, size_t b0, size_t b1, eng_photon *map,
-                         eng_trace_batch *stat)
+/* Where the batch's photons are once it ends. Traced in place (place: where the last trace put
+ * the batch's photons in the map) with every path storing as many as then: there already
+ * (stat->held = PT_IN_MAP). Otherwise they are put, in input order (paths end in any order), at
+ * the end of the thread's buffer (stat->held = self): each path's from its slot, then from the
+ * stage. Returns the batch's photon count. */
+static size_t batch_done(pt_buf *buf, uint32_t self, const pt_path *paths, size_t b0, size_t b1,
+                         const eng_photon *place, eng_trace_batch *stat)
 {
-    const size_t stored = buf->stage_n;
-    eng_photon *to;
-    if (map && stored == stat->photons) {
-        to = map + stat->at;
+    size_t stored = 0;
+    for (size_t i = b0; i < b1; i++)
+        stored += paths[i].count;
+    buf->stage_n = 0;
+    if (place && !buf->moved) {
         stat->held = PT_IN_MAP;
-    } else {
-        if (buf->n + stored > buf->cap) {
-            size_t cap = buf->cap ? buf->cap : 1024;
-            while (cap < buf->n + stored)
-                cap *= 2;
-            eng_photon *p = realloc(buf->p, cap * sizeof *p);
-            if (!p) {
-                buf->oom = 1;
-                buf->stage_n = 0;
-                return stored;
-            }
-            buf->p = p;
-            buf->cap = cap;
-        }
-        to = buf->p + buf->n;
-        stat->held = self;
-        stat->at = buf->n;
-        buf->n += stored;
+        return stored;
     }
+    if (buf->n + stored > buf->cap) {
+        size_t cap = buf->cap ? buf->cap : 1024;
+        while (cap < buf->n + stored)
+            cap *= 2;
+        eng_photon *p = realloc(buf->p, cap * sizeof *p);
+        if (!p) {
+            buf->oom = 1;
+            return stored;
+        }
+        buf->p = p;
+        buf->cap = cap;
+    }
+    eng_photon *to = buf->p + buf->n;
+    stat->held = self;
+    stat->at = buf->n;
+    buf->n += stored;
     for (size_t i = b0; i < b1; i++) {
-        uint32_t from = (uint32_t)paths[i].at;
-        for (uint32_t k = 0; k < paths[i].count; k++, from = buf->link[from])
+        const uint32_t c = paths[i].count, in_slot = c < paths[i].room ? c : paths[i].room;
+        if (in_slot) {
+            memcpy(to, place + paths[i].slot, in_slot * sizeof *to);
+            to += in_slot;
+        }
+        uint32_t from = paths[i].extra;
+        for (uint32_t k = in_slot; k < c; k++, from = buf->link[from])
             *to++ = buf->stage[from];
     }
-    buf->stage_n = 0;
     return stored;
 }
 
@@ -368,8 +383,24 @@ static size_t batch_done(pt_buf *buf, uint32_t self, const pt_path *paths, size_
 static void trace_batch(const pt_tracer *tr, const eng_frame_scene *fs, const scn_material *default_material,
                         const eng_random_maps *rm, const eng_bounce_photon *in, size_t b0, size_t b1,
                         const eng_trace_settings *s, int width, pt_lane *lanes, pt_buf *buf, uint32_t self,
-                        pt_path *paths, eng_photon *map, eng_trace_batch *stat)
+                        pt_path *paths, size_t last_paths, eng_photon *map, eng_trace_batch *stat)
 {
+    /* In place when the last trace's counts of the batch's paths (those of its first last_paths
+     * inputs) add up to its count there: each path's slot is where that trace put its photons. */
+    eng_photon *place = NULL;
+    if (map) {
+        uint64_t sum = 0;
+        for (size_t i = b0; i < b1 && i < last_paths; i++)
+            sum += paths[i].count;
+        if (sum == stat->photons)
+            place = map + stat->at;
+    }
+    for (size_t i = b0, at = 0; i < b1; i++) {
+        paths[i].room = place && i < last_paths ? paths[i].count : 0;
+        paths[i].slot = at;
+        at += paths[i].room;
+    }
+    buf->moved = 0;
     uint32_t rays_cast = 0;
     pt_lane *act[PT_LANES], *spare[PT_LANES];
     rt_ray rays[PT_LANES];
@@ -383,16 +414,16 @@ static void trace_batch(const pt_tracer *tr, const eng_frame_scene *fs, const sc
     for (;;) {
         while (active < width && next < b1) {
             pt_lane *l = spare[free_count - 1];
-            if (lane_start(l, next, &in[next], rm, s, &paths[next])) {
+            if (lane_start(l, next, &in[next], rm, s, place, &paths[next])) {
                 act[active++] = l;
                 free_count--;
             } else {
-                paths[next].at = buf->stage_n;
+                buf->moved |= paths[next].room != 0;
             }
             next++;
         }
         if (active == 0) {
-            stat->photons = (uint32_t)batch_done(buf, self, paths, b0, b1, map, stat);
+            stat->photons = (uint32_t)batch_done(buf, self, paths, b0, b1, place, stat);
             stat->rays = rays_cast;
             return;
         }
@@ -434,7 +465,7 @@ static void trace_batch(const pt_tracer *tr, const eng_frame_scene *fs, const sc
             if (on[i] && lane_next(l, &hits[i], &shade[i], rm, rec)) {
                 act[keep++] = l;
             } else {
-                lane_finish(l, rec);
+                lane_finish(l, buf, rec);
                 spare[free_count++] = l;
             }
         }
@@ -563,6 +594,7 @@ eng_result photon_trace_with(const pt_tracer *tr, const eng_frame_scene *fs, con
      * count, or any batch of a trace whose batches are not the last trace's, writes them to
      * the buffer of the thread that traced it. The photons do not depend on where they wait. */
     eng_photon *home = NULL;
+    const size_t last_paths = coherent ? out->trace_path_count : 0;
     if (coherent) {
         size_t stored = 0;
         for (size_t b = 0; b < batches; b++) {
@@ -602,11 +634,12 @@ eng_result photon_trace_with(const pt_tracer *tr, const eng_frame_scene *fs, con
             const size_t b0 = (size_t)b * PT_BATCH, b1 = b0 + PT_BATCH < count ? b0 + PT_BATCH : count;
             if (lanes)
                 trace_batch(tr, fs, &default_material, rm, in, b0, b1, s, width, lanes, mine, (uint32_t)t, paths,
-                            home, &stat[b]);
+                            last_paths, home, &stat[b]);
         }
         free(lanes);
     }
     out->trace_batch_count = lanes_oom ? 0 : batches;
+    out->trace_path_count = lanes_oom ? 0 : count;
     if (lanes_oom)
         return eng_fail(err, ENG_ERR_NOMEM, "photon trace: out of memory for %zu photons", count);
 
@@ -637,7 +670,7 @@ eng_result photon_trace_with(const pt_tracer *tr, const eng_frame_scene *fs, con
         }
     }
     if (oom) {
-        out->trace_batch_count = 0;
+        out->trace_batch_count = out->trace_path_count = 0;
         return eng_fail(err, ENG_ERR_NOMEM, "photon trace: out of memory for %zu stored photons", total);
     }
     if (out->want_source) {
@@ -654,7 +687,7 @@ eng_result photon_trace_with(const pt_tracer *tr, const eng_frame_scene *fs, con
     if (away) {
         size_t *fin = malloc(batches * sizeof *fin);
         if (!fin) {
-            out->trace_batch_count = 0;
+            out->trace_batch_count = out->trace_path_count = 0;
             return eng_fail(err, ENG_ERR_NOMEM, "photon trace: out of memory for %zu stored photons", total);
         }
         for (size_t b = 0, f = 0; b < batches; b++) {
