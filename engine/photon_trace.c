@@ -589,10 +589,11 @@ eng_result photon_trace_with(const pt_tracer *tr, const eng_frame_scene *fs, con
     }
     eng_trace_batch *stat = out->trace_batches;
     /* Where each batch's photons go (frame coherence: what did not move traces the same paths
-     * again): where the last trace's counts put them, the map's photons being in input order.
-     * A batch that stores as many as then writes them there, in place; one that stores another
-     * count, or any batch of a trace whose batches are not the last trace's, writes them to
-     * the buffer of the thread that traced it. The photons do not depend on where they wait. */
+     * again): where the last trace's counts put them, the map's photons being in input order
+     * (trace_batch gives each path its slot there). A batch whose paths store as many as then
+     * is then in place; one whose paths store other counts, or any batch of a trace whose
+     * batches are not the last trace's, is gathered into the buffer of the thread that traced
+     * it. The photons do not depend on where they wait. */
     eng_photon *home = NULL;
     const size_t last_paths = coherent ? out->trace_path_count : 0;
     if (coherent) {

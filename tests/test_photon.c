@@ -731,11 +731,12 @@ START_TEST(determinism_threads)
 }
 END_TEST
 
-/* The map a trace writes in place (photon_trace_with: each thread into the window the last
- * trace's figures give it, the rest moved or copied after): whatever the last trace left, the
- * map is the ray-by-ray trace's (one path after the other, single rays, one thread). Fewer
- * photons in the first thread's range than last time moves the second thread's down, more moves
- * it up and overflows the first window; a thread count other than last time's splits elsewhere. */
+/* The map a trace writes in place (photon_trace_with: each batch where the last trace's counts
+ * put its photons, each path into its slot there, the rest gathered, moved or copied after):
+ * whatever the last trace left, the map is the ray-by-ray trace's (one path after the other,
+ * single rays, one thread). Fewer photons in the first inputs than last time moves the later
+ * batches down, more moves them up; another thread count or batch count, or paths that store
+ * other counts than their slots hold, changes nothing either. */
 static void same_as_ray_by_ray(cornell *c, const eng_random_maps *rm, const eng_bounce_photon *in, size_t n,
                                const eng_photon_map *m)
 {
@@ -781,6 +782,32 @@ START_TEST(map_in_place)
     memcpy(in, orig, n * sizeof *orig);
     ck_assert_int_eq(photon_trace(c.rt, &c.fs, &rm, in, n - 300, &s2, &m, NULL, &err), ENG_OK); /* fewer batches */
     same_as_ray_by_ray(&c, &rm, in, n - 300, &m);
+    /* Every batch in place: each path's photons written straight into its slot of the map. */
+    ck_assert_int_eq(photon_trace(c.rt, &c.fs, &rm, in, n, &s2, &m, NULL, &err), ENG_OK);
+    ck_assert_int_eq(photon_trace(c.rt, &c.fs, &rm, in, n, &s2, &m, NULL, &err), ENG_OK);
+    same_as_ray_by_ray(&c, &rm, in, n, &m);
+    for (size_t b = 0; b < m.trace_batch_count; b++)
+        ck_assert_uint_eq(m.trace_batches[b].held, PT_IN_MAP);
+    /* Neighbours swapped: each batch stores as many photons as before (its paths are the same
+     * set), but path by path other counts than its slots hold, so the paths overflow their slots
+     * and leave room unused: such batches are gathered from the slots and the stage instead. */
+    for (size_t i = 0; i + 1 < n; i += 2) {
+        eng_bounce_photon t = in[i];
+        in[i] = in[i + 1];
+        in[i + 1] = t;
+    }
+    for (int threads = 2; threads >= 1; threads--) {
+        eng_trace_settings sw = {.max_bounces = 0, .threads = threads};
+        ck_assert_int_eq(photon_trace(c.rt, &c.fs, &rm, in, n, &sw, &m, NULL, &err), ENG_OK);
+        same_as_ray_by_ray(&c, &rm, in, n, &m);
+        size_t gathered = 0;
+        for (size_t b = 0; b < m.trace_batch_count; b++)
+            gathered += m.trace_batches[b].held != PT_IN_MAP;
+        if (threads == 2)
+            ck_assert_uint_eq(gathered, m.trace_batch_count);
+        else
+            ck_assert_uint_eq(gathered, 0); /* the same inputs again: in place */
+    }
     photon_map_free(&m);
     free(orig);
     free(in);
