@@ -30,14 +30,15 @@
  * share one does not depend on the thread count; a packet's hits are its rays' single-ray hits
  * (tracebench and test_photon check it), so the map is the one-by-one trace's.
  *
- * Determinism and the map: a path's photons go to its batch's stage, linked path by path; when
- * the batch ends they are put in input order where the last trace's per-batch counts say the
- * batch's photons begin in the map (in place, for a static scene), or, when it stored another
- * count or the last trace had other batches, into the buffer of the thread that traced it.
- * After the trace, batches that are not where their photons belong are moved and the buffered
- * ones copied, so the map is in input order for any thread count, whichever thread traced a
- * batch and whatever the last trace left; the statistics are summed sequentially after that.
- * The threads take the batches one at a time in input order as they become free.
+ * Determinism and the map: a batch's photons belong where the last trace's per-batch counts
+ * put them; each path writes its photons straight into its slot there (as many as it stored
+ * last time), those beyond it go to the batch's stage, linked path by path. A batch whose paths
+ * all fill their slots exactly is in place (a static scene: every batch); any other is gathered
+ * in input order into the buffer of the thread that traced it. After the trace, batches that
+ * are not where their photons belong are moved and the gathered ones copied, so the map is in
+ * input order for any thread count, whichever thread traced a batch and whatever the last trace
+ * left; the statistics are summed sequentially after that. The threads take the batches as
+ * they become free (OpenMP guided: long runs of consecutive batches first, single ones last).
  *
  * Speed (issue 22 item 4) also: the random-map entries of an event are prefetched as its ray
  * is set up, the BSDF reads a bsdf_params rather than a copy of the material, and the per-thread
@@ -159,8 +160,8 @@ static int lane_start(pt_lane *l, size_t path, const eng_bounce_photon *bp, cons
 
 /* A photon written into the map past the caches (non-temporal stores): the map, 4.4 MB for
  * cornell-box-perf, is not read again by the trace, and ordinary stores would first read every
- * line they write (the trace 1.18x faster in tracebench when the VM is busy). Visible to other
- * threads after the writer's sfence (photon_trace_with). */
+ * line they write (tracebench: the trace 1.13x faster, 9 alternated runs over the VM's busy and
+ * quiet spells). Visible to other threads after the writer's sfence (photon_trace_with). */
 static void photon_stream(eng_photon *to, const eng_photon *ph)
 {
 #if defined(__SSE2__)
@@ -174,12 +175,10 @@ static void photon_stream(eng_photon *to, const eng_photon *ph)
 #endif
 }
 
-/* A photon of l's path: in its slot while there is room, else appended to the stage and linked
- * after the path's last there; NULL when out of memory (buf->oom set). */
-static eng_photon *photon_push(pt_buf *buf, pt_lane *l)
+/* A photon of l's path beyond its slot, appended to the stage and linked after the path's last
+ * there; NULL when out of memory (buf->oom set). */
+static eng_photon *stage_push(pt_buf *buf, pt_lane *l)
 {
-    if (l->n < l->room)
-        return &l->slot[l->n++];
     if (buf->stage_n == buf->stage_cap) {
         size_t cap = buf->stage_cap ? 2 * buf->stage_cap : 1024;
         eng_photon *p = realloc(buf->stage, cap * sizeof *p);
@@ -248,10 +247,7 @@ static int lane_surface(pt_lane *l, rt_hit *h, int found, const eng_frame_scene 
                                                                                       : default_material,
                    h, &sh->m);
     if (bsdf_stores_photons_params(&sh->m)) {
-        const int in_slot = l->n < l->room;
-        eng_photon *to = photon_push(buf, l), ph;
-        if (!to)
-            return 0;
+        eng_photon ph;
         float side = dot3(n, wi) >= 0.0f ? 1.0f : -1.0f;
         for (int i = 0; i < 3; i++) {
             ph.position[i] = h->position[i];
@@ -263,10 +259,14 @@ static int lane_surface(pt_lane *l, rt_hit *h, int found, const eng_frame_scene 
         ph.bounce = (uint16_t)(2 + l->k);
         ph.caustic = (uint16_t)l->delta_only;
         ph.ray_length = h->t;
-        if (in_slot)
-            photon_stream(to, &ph);
-        else
+        if (l->n < l->room) {
+            photon_stream(&l->slot[l->n++], &ph);
+        } else {
+            eng_photon *to = stage_push(buf, l);
+            if (!to)
+                return 0;
             *to = ph;
+        }
         if (s->max_bounces > 0 && l->n == (uint32_t)s->max_bounces)
             return 0;
     }
@@ -653,8 +653,9 @@ eng_result photon_trace_with(const pt_tracer *tr, const eng_frame_scene *fs, con
         /* whole cache lines of its own: the threads' lanes never share one */
         pt_lane *lanes = aligned_alloc(64, ((size_t)width * sizeof *lanes + 63) / 64 * 64);
         lanes_oom = !lanes;
-        /* The batches go one at a time, in input order, to whichever thread is free: the threads
-         * finish together whatever else the cores run (a frame's GL passes beside the trace). */
+        /* The batches go to whichever thread is free (guided: long runs of consecutive batches
+         * first, single ones at the end): the threads finish together whatever else the cores
+         * run (a frame's GL passes beside the trace). */
 #pragma omp for schedule(guided) nowait
         for (ptrdiff_t b = 0; b < (ptrdiff_t)batches; b++) {
             const size_t b0 = (size_t)b * PT_BATCH, b1 = b0 + PT_BATCH < count ? b0 + PT_BATCH : count;
