@@ -55,7 +55,7 @@ echo "  --threads 1: new takes $(ratio "$m_n1" "$m_o1")x old's time (must not be
 echo "  2 threads faster than 1: old $(ratio "$m_o1" "$m_o2")x, new $(ratio "$m_n1" "$m_n2")x   (goal >= 1.8x)"
 for t in 1 2; do
     # Bytes differ where the two binaries' default capture_compression does (zip before
-    # session 8, rle since): then the pixels are compared through the frame's buffer digests.
+    # session 8, rle in sessions 8-16, none since): then the pixels are compared through the frame's buffer digests.
     digests() { tr -d ' \t\n' < "$1" | grep -o '"digest":"[0-9a-f]*"'; }
     if cmp -s "$OUT/o$t/frames/000002.exr" "$OUT/n$t/frames/000002.exr"; then same="EXR files identical"
     elif [ -n "$(digests "$OUT/o$t/frames/000002.json")" ] &&

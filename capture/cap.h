@@ -129,7 +129,7 @@ eng_result cap_write_exr(const char *path, const eng_buffer *const *bufs, int co
 eng_result cap_write_exr_unsynced(const char *path, const eng_buffer *const *bufs, int count, eng_error *err);
 
 /* The EXR file src written again as dst with every part compressed with m (lossless: none,
- * rle, zips, zip, piz; DEFAULT is rle): the same parts in the same order, every attribute
+ * rle, zips, zip, piz; DEFAULT is none): the same parts in the same order, every attribute
  * copied (ispm:frame, ispm:time, windows, channels and their types), the pixels decoded and
  * encoded again in their own type, so dst decodes to src's bits. Used by ispm bless, which
  * keeps goldens in zip whatever the run was recorded with. Atomic as cap_write_exr (dst.tmp,

@@ -8,7 +8,7 @@
  * of the library's generic "write failed"; and the library's error callback is captured
  * instead of printed, so a failure is reported once, through eng_error. The library's many
  * small writes are coalesced in a write-behind buffer (issue 22). Pixels are float32 in and
- * float32 out (FLOAT channels, the lossless compression capture_compression names: rle by
+ * float32 out (FLOAT channels, the lossless compression capture_compression names: none by
  * default, ZIP for cap_write_exr), so what is written is bit-exact what was announced, NaN
  * payloads and -0.0 included, and replay's digests match capture's.
  *
@@ -300,12 +300,12 @@ static exr_result_t write_buffer_pixels(exr_context_t ctxt, int part, const eng_
 static exr_compression_t exr_type(eng_capture_compression m)
 {
     switch (m) {
-    case ENG_COMPRESSION_NONE: return EXR_COMPRESSION_NONE;
+    case ENG_COMPRESSION_NONE:
+    case ENG_COMPRESSION_DEFAULT: return EXR_COMPRESSION_NONE;
     case ENG_COMPRESSION_ZIPS: return EXR_COMPRESSION_ZIPS;
     case ENG_COMPRESSION_ZIP: return EXR_COMPRESSION_ZIP;
     case ENG_COMPRESSION_PIZ: return EXR_COMPRESSION_PIZ;
-    case ENG_COMPRESSION_RLE:
-    case ENG_COMPRESSION_DEFAULT: break;
+    case ENG_COMPRESSION_RLE: break;
     }
     return EXR_COMPRESSION_RLE;
 }

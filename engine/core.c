@@ -225,10 +225,10 @@ void eng_settings_defaults(eng_settings *s)
     if (s->specular_depth == 0) s->specular_depth = 4;
     if (s->final_gather_rays == 0) s->final_gather_rays = 64;
     if (s->final_gather_radius == 0.0f) s->final_gather_radius = 0.25f;
-    if (s->capture_compression == ENG_COMPRESSION_DEFAULT) s->capture_compression = ENG_COMPRESSION_RLE;
+    if (s->capture_compression == ENG_COMPRESSION_DEFAULT) s->capture_compression = ENG_COMPRESSION_NONE;
 }
 
-static const char *const COMPRESSION_NAMES[] = {"rle", "none", "rle", "zips", "zip", "piz"};
+static const char *const COMPRESSION_NAMES[] = {"none", "none", "rle", "zips", "zip", "piz"};
 
 const char *eng_compression_name(eng_capture_compression m)
 {

@@ -423,7 +423,7 @@ typedef enum eng_miss_mode {
 /* How capture compresses each EXR part (lossless only: what replay decodes is bit-exact what
  * was announced whatever the choice; only the file's bytes and size change). */
 typedef enum eng_capture_compression {
-    ENG_COMPRESSION_DEFAULT = 0, /* = zip */
+    ENG_COMPRESSION_DEFAULT = 0, /* record's default: none (issue 22 row 1) */
     ENG_COMPRESSION_NONE,
     ENG_COMPRESSION_RLE,
     ENG_COMPRESSION_ZIPS,        /* zlib, one scanline per block */
