@@ -21,10 +21,17 @@
  * only rt_intersect_blend sees.
  *
  * Determinism: the device is made with a pinned ISA (isa=sse2) and thread count, recorded in
- * the manifest, so ray results do not follow the host's SIMD width. */
+ * the manifest, so ray results do not follow the host's SIMD width. Embree finds which
+ * triangle a ray hits; the hit's distance and barycentrics are then computed again here
+ * (exact_hit), because Embree's divide by the triangle's determinant through the processor's
+ * approximate reciprocal (RCPPS, refined by one Newton step), whose bits differ between
+ * processor models: the same binary on two hosts gave a third of cornell-box-ci's photons
+ * positions 1-2 ulps apart (issue 22, session 17). IEEE division and products (no FMA:
+ * -ffp-contract=off) give the same bits on every x86-64. */
 #include "eng_internal.h"
 
 #include <embree3/rtcore.h>
+#include <emmintrin.h>
 #include <math.h>
 #include <stddef.h>
 #include <stdio.h>
@@ -40,6 +47,7 @@ typedef struct rt_geom {
     int32_t material;
     float *normals; /* world space, 3 per vertex, unit (zero where the authored normal is) */
     float *tangents; /* world space xyz (not renormalised, as the G-buffers interpolate them) + w; NULL without */
+    const float *verts; /* world space, 4 floats per vertex: Embree's vertex buffer (pose writes it) */
     float world[16];
     int posed;
     /* What a hit on this draw looks up (rt_geom_lookups): fixed by the material and the
@@ -94,11 +102,94 @@ static float hitn_float(const struct RTCHitN *h, unsigned n, unsigned field, uns
     return f;
 }
 
+/* RTCRayN's SOA fields (org_x, org_y, org_z, tnear, dir_x, dir_y, dir_z, ...). */
+static float rayn_float(const struct RTCRayN *r, unsigned n, unsigned field, unsigned i)
+{
+    float f;
+    memcpy(&f, (const char *)r + ((size_t)field * n + i) * 4, 4);
+    return f;
+}
+
 static unsigned hitn_uint(const struct RTCHitN *h, unsigned n, unsigned field, unsigned i)
 {
     unsigned u;
     memcpy(&u, (const char *)h + ((size_t)field * n + i) * 4, 4);
     return u;
+}
+
+/* The distance and barycentrics (Embree's u, v: the weights of the triangle's second and third
+ * vertex) of the ray org + t·dir on triangle prim of draw g, by Möller and Trumbore's
+ * algorithm in IEEE single precision. Leaves *t, *u, *v as they were (Embree's) where the
+ * determinant is 0 or a result is not finite: a ray Embree reports as a hit is never parallel
+ * to its triangle, so that is only a safeguard. */
+static void exact_hit(const rt_geom *g, const scn_primitive *p, unsigned prim, const float org[3],
+                      const float dir[3], float *t, float *u, float *v)
+{
+    const uint32_t *tri = p->indices + 3 * (size_t)prim;
+    const float *a = g->verts + 4 * tri[0], *b = g->verts + 4 * tri[1], *c = g->verts + 4 * tri[2];
+    const float e1[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
+    const float e2[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+    const float pv[3] = {dir[1] * e2[2] - dir[2] * e2[1], dir[2] * e2[0] - dir[0] * e2[2],
+                         dir[0] * e2[1] - dir[1] * e2[0]};
+    const float det = e1[0] * pv[0] + e1[1] * pv[1] + e1[2] * pv[2];
+    if (det == 0.0f)
+        return;
+    const float inv = 1.0f / det;
+    const float tv[3] = {org[0] - a[0], org[1] - a[1], org[2] - a[2]};
+    const float qv[3] = {tv[1] * e1[2] - tv[2] * e1[1], tv[2] * e1[0] - tv[0] * e1[2], tv[0] * e1[1] - tv[1] * e1[0]};
+    const float eu = (tv[0] * pv[0] + tv[1] * pv[1] + tv[2] * pv[2]) * inv;
+    const float ev = (dir[0] * qv[0] + dir[1] * qv[1] + dir[2] * qv[2]) * inv;
+    const float et = (e2[0] * qv[0] + e2[1] * qv[1] + e2[2] * qv[2]) * inv;
+    if (isfinite(eu) && isfinite(ev) && isfinite(et))
+        *t = et, *u = eu, *v = ev;
+}
+
+/* exact_hit for up to 4 hits at once (n; the lanes past n repeat hit 0), with SSE: each lane
+ * computes exact_hit's products, sums and division in its order (IEEE single precision, like
+ * the scalar code), so a hit gets the same bits either way; ok[j] is 0 where exact_hit would
+ * leave Embree's values. geom[j], prim[j]: the hit triangles. */
+static void exact_hit4(const eng_rt *rt, int n, const unsigned *geom, const unsigned *prim,
+                       const float *const *org, const float *const *dir, float t[4], float u[4], float v[4])
+{
+    __m128 va[4], vb[4], vc[4]; /* the triangles' vertices, one per lane, xyz_ */
+    float o[3][4], d[3][4];
+    for (int j = 0; j < 4; j++) {
+        const int k = j < n ? j : 0;
+        const rt_geom *g = &rt->geoms[geom[k]];
+        const uint32_t *tri = rt->scene->primitives[g->primitive].indices + 3 * (size_t)prim[k];
+        va[j] = _mm_loadu_ps(g->verts + 4 * tri[0]);
+        vb[j] = _mm_loadu_ps(g->verts + 4 * tri[1]);
+        vc[j] = _mm_loadu_ps(g->verts + 4 * tri[2]);
+        for (int i = 0; i < 3; i++)
+            o[i][j] = org[k][i], d[i][j] = dir[k][i];
+    }
+    _MM_TRANSPOSE4_PS(va[0], va[1], va[2], va[3]); /* va[0] = the lanes' x, ... */
+    _MM_TRANSPOSE4_PS(vb[0], vb[1], vb[2], vb[3]);
+    _MM_TRANSPOSE4_PS(vc[0], vc[1], vc[2], vc[3]);
+    const __m128 dx = _mm_loadu_ps(d[0]), dy = _mm_loadu_ps(d[1]), dz = _mm_loadu_ps(d[2]);
+    const __m128 e1x = _mm_sub_ps(vb[0], va[0]), e1y = _mm_sub_ps(vb[1], va[1]), e1z = _mm_sub_ps(vb[2], va[2]);
+    const __m128 e2x = _mm_sub_ps(vc[0], va[0]), e2y = _mm_sub_ps(vc[1], va[1]), e2z = _mm_sub_ps(vc[2], va[2]);
+    const __m128 pvx = _mm_sub_ps(_mm_mul_ps(dy, e2z), _mm_mul_ps(dz, e2y));
+    const __m128 pvy = _mm_sub_ps(_mm_mul_ps(dz, e2x), _mm_mul_ps(dx, e2z));
+    const __m128 pvz = _mm_sub_ps(_mm_mul_ps(dx, e2y), _mm_mul_ps(dy, e2x));
+    const __m128 det = _mm_add_ps(_mm_add_ps(_mm_mul_ps(e1x, pvx), _mm_mul_ps(e1y, pvy)), _mm_mul_ps(e1z, pvz));
+    const __m128 inv = _mm_div_ps(_mm_set1_ps(1.0f), det);
+    const __m128 tx = _mm_sub_ps(_mm_loadu_ps(o[0]), va[0]), ty = _mm_sub_ps(_mm_loadu_ps(o[1]), va[1]),
+                 tz = _mm_sub_ps(_mm_loadu_ps(o[2]), va[2]);
+    const __m128 qx = _mm_sub_ps(_mm_mul_ps(ty, e1z), _mm_mul_ps(tz, e1y));
+    const __m128 qy = _mm_sub_ps(_mm_mul_ps(tz, e1x), _mm_mul_ps(tx, e1z));
+    const __m128 qz = _mm_sub_ps(_mm_mul_ps(tx, e1y), _mm_mul_ps(ty, e1x));
+    const __m128 eu = _mm_mul_ps(_mm_add_ps(_mm_add_ps(_mm_mul_ps(tx, pvx), _mm_mul_ps(ty, pvy)), _mm_mul_ps(tz, pvz)), inv);
+    const __m128 ev = _mm_mul_ps(_mm_add_ps(_mm_add_ps(_mm_mul_ps(dx, qx), _mm_mul_ps(dy, qy)), _mm_mul_ps(dz, qz)), inv);
+    const __m128 et = _mm_mul_ps(_mm_add_ps(_mm_add_ps(_mm_mul_ps(e2x, qx), _mm_mul_ps(e2y, qy)), _mm_mul_ps(e2z, qz)), inv);
+    float fd[4], fu[4], fv[4], ft[4];
+    _mm_storeu_ps(fd, det);
+    _mm_storeu_ps(fu, eu);
+    _mm_storeu_ps(fv, ev);
+    _mm_storeu_ps(ft, et);
+    for (int j = 0; j < n; j++)
+        if (fd[j] != 0.0f && isfinite(fu[j]) && isfinite(fv[j]) && isfinite(ft[j]))
+            t[j] = ft[j], u[j] = fu[j], v[j] = fv[j];
 }
 
 static void mask_filter(const struct RTCFilterFunctionNArguments *args)
@@ -109,9 +200,15 @@ static void mask_filter(const struct RTCFilterFunctionNArguments *args)
     for (unsigned i = 0; i < args->N; i++) {
         if (args->valid[i] != -1)
             continue;
+        const unsigned prim = hitn_uint(args->hit, args->N, 5, i);
+        const float org[3] = {rayn_float(args->ray, args->N, 0, i), rayn_float(args->ray, args->N, 1, i),
+                              rayn_float(args->ray, args->N, 2, i)};
+        const float dir[3] = {rayn_float(args->ray, args->N, 4, i), rayn_float(args->ray, args->N, 5, i),
+                              rayn_float(args->ray, args->N, 6, i)};
+        float t, u = hitn_float(args->hit, args->N, 3, i), v = hitn_float(args->hit, args->N, 4, i);
+        exact_hit(g, p, prim, org, dir, &t, &u, &v);
         float c[4];
-        scn_base_color_at(g->scene, m, p, hitn_uint(args->hit, args->N, 5, i), hitn_float(args->hit, args->N, 3, i),
-                          hitn_float(args->hit, args->N, 4, i), c);
+        scn_base_color_at(g->scene, m, p, prim, u, v, c);
         if (m->base_color[3] * c[3] < m->alpha_cutoff)
             args->valid[i] = 0;
     }
@@ -146,6 +243,7 @@ static void pose(rt_geom *g, const scn_primitive *p, const eng_draw *d)
     const float *positions = d->positions ? d->positions : p->positions;
     const float *normals = d->normals ? d->normals : p->normals;
     float *v = rtcGetGeometryBufferData(g->geom, RTC_BUFFER_TYPE_VERTEX, 0);
+    g->verts = v;
     for (uint32_t i = 0; i < p->vertex_count; i++)
         m4_transform_point(world, positions + 3 * i, v + 4 * i);
     float nm[9];
@@ -352,7 +450,8 @@ typedef struct rt_answer {
     unsigned geom_id, prim_id;
 } rt_answer;
 
-/* Step 1: lamps, the hit point and the geometric normal; 0 when there is no hit. */
+/* Step 1: lamps, the hit point and the geometric normal; 0 when there is no hit. a's t, u, v
+ * are exact_hit's (the caller's). */
 static int hit_geometry(const eng_rt *rt, int lamps, const float org[3], const float dir[3], float tnear, float tfar,
                         const rt_answer *a, rt_hit *hit)
 {
@@ -413,8 +512,12 @@ static int intersect_in(const eng_rt *rt, RTCScene scene, int lamps, int untextu
     struct RTCRayHit rh;
     ray_init(&rh, org, dir, tnear, tfar);
     rtcIntersect1(scene, &ctx, &rh);
-    const rt_answer a = {rh.ray.tfar, rh.hit.u, rh.hit.v, {rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z}, rh.hit.geomID,
-                         rh.hit.primID};
+    rt_answer a = {rh.ray.tfar, rh.hit.u, rh.hit.v, {rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z}, rh.hit.geomID,
+                   rh.hit.primID};
+    if (a.geom_id != RTC_INVALID_GEOMETRY_ID && a.geom_id < rt->geom_count) {
+        const rt_geom *g = &rt->geoms[a.geom_id];
+        exact_hit(g, &rt->scene->primitives[g->primitive], a.prim_id, org, dir, &a.t, &a.u, &a.v);
+    }
     if (!hit_geometry(rt, lamps, org, dir, tnear, tfar, &a, hit))
         return 0;
     hit_surface(rt, untextured, &a, hit);
@@ -458,6 +561,25 @@ void rt_intersect4_untextured(const eng_rt *rt, int n, const rt_ray *rays, rt_hi
         rh.hit.instID[0][j] = RTC_INVALID_GEOMETRY_ID;
     }
     rtcIntersect4(valid, rt->rtscene, &ctx, &rh);
+    /* The hits, packed, through exact_hit4 (rays that missed are left out). */
+    int hit_of[4], m = 0;
+    unsigned geom[4], prim[4];
+    const float *org[4], *dir[4];
+    float t[4], u[4], v[4];
+    for (int j = 0; j < n; j++) {
+        if (rh.hit.geomID[j] == RTC_INVALID_GEOMETRY_ID || rh.hit.geomID[j] >= rt->geom_count)
+            continue;
+        hit_of[m] = j, geom[m] = rh.hit.geomID[j], prim[m] = rh.hit.primID[j];
+        org[m] = rays[j].org, dir[m] = rays[j].dir;
+        t[m] = rh.ray.tfar[j], u[m] = rh.hit.u[j], v[m] = rh.hit.v[j];
+        m++;
+    }
+    if (m)
+        exact_hit4(rt, m, geom, prim, org, dir, t, u, v);
+    for (int k = 0; k < m; k++) {
+        const int j = hit_of[k];
+        rh.ray.tfar[j] = t[k], rh.hit.u[j] = u[k], rh.hit.v[j] = v[k];
+    }
     rt_answer a[4];
     for (int j = 0; j < n; j++) {
         a[j] = (rt_answer){rh.ray.tfar[j], rh.hit.u[j], rh.hit.v[j], {rh.hit.Ng_x[j], rh.hit.Ng_y[j], rh.hit.Ng_z[j]},
