@@ -1613,7 +1613,8 @@ static int exr_compression_of(const char *path)
     return out;
 }
 
-/* Issue 22: record writes rle, goldens stay ZIP. bless recompresses a run's frame files to ZIP
+/* Issue 22: record writes uncompressed (rle in sessions 8-16; this test makes an rle run), goldens
+ * stay ZIP. bless recompresses a run's frame files to ZIP
  * (same pixels and digests, verified), its manifest then says so and nothing else changes; the
  * run is left as it was; a golden blessed from a ZIP run replays bit-exact against the same
  * pixels in rle (re-blessing is "unchanged"); a ZIP run is still copied byte for byte. */
