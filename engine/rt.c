@@ -146,8 +146,8 @@ static void exact_hit(const rt_geom *g, const scn_primitive *p, unsigned prim, c
 
 /* exact_hit for up to 4 hits at once (n; the lanes past n repeat hit 0), with SSE: each lane
  * computes exact_hit's products, sums and division in its order (IEEE single precision, like
- * the scalar code), so a hit gets the same bits either way; ok[j] is 0 where exact_hit would
- * leave Embree's values. geom[j], prim[j]: the hit triangles. */
+ * the scalar code), so a hit gets the same bits either way; t, u, v keep Embree's values in the
+ * lanes where exact_hit would. geom[j], prim[j]: the hit triangles. */
 static void exact_hit4(const eng_rt *rt, int n, const unsigned *geom, const unsigned *prim,
                        const float *const *org, const float *const *dir, float t[4], float u[4], float v[4])
 {
@@ -561,31 +561,27 @@ void rt_intersect4_untextured(const eng_rt *rt, int n, const rt_ray *rays, rt_hi
         rh.hit.instID[0][j] = RTC_INVALID_GEOMETRY_ID;
     }
     rtcIntersect4(valid, rt->rtscene, &ctx, &rh);
-    /* The hits, packed, through exact_hit4 (rays that missed are left out). */
+    /* Embree's answers; the hits (packed, the misses left out) then through exact_hit4. */
+    rt_answer a[4];
     int hit_of[4], m = 0;
     unsigned geom[4], prim[4];
     const float *org[4], *dir[4];
     float t[4], u[4], v[4];
     for (int j = 0; j < n; j++) {
-        if (rh.hit.geomID[j] == RTC_INVALID_GEOMETRY_ID || rh.hit.geomID[j] >= rt->geom_count)
+        a[j] = (rt_answer){rh.ray.tfar[j], rh.hit.u[j], rh.hit.v[j], {rh.hit.Ng_x[j], rh.hit.Ng_y[j], rh.hit.Ng_z[j]},
+                           rh.hit.geomID[j], rh.hit.primID[j]};
+        if (a[j].geom_id == RTC_INVALID_GEOMETRY_ID || a[j].geom_id >= rt->geom_count)
             continue;
-        hit_of[m] = j, geom[m] = rh.hit.geomID[j], prim[m] = rh.hit.primID[j];
-        org[m] = rays[j].org, dir[m] = rays[j].dir;
-        t[m] = rh.ray.tfar[j], u[m] = rh.hit.u[j], v[m] = rh.hit.v[j];
+        hit_of[m] = j, geom[m] = a[j].geom_id, prim[m] = a[j].prim_id, org[m] = rays[j].org, dir[m] = rays[j].dir;
+        t[m] = a[j].t, u[m] = a[j].u, v[m] = a[j].v;
         m++;
     }
     if (m)
         exact_hit4(rt, m, geom, prim, org, dir, t, u, v);
-    for (int k = 0; k < m; k++) {
-        const int j = hit_of[k];
-        rh.ray.tfar[j] = t[k], rh.hit.u[j] = u[k], rh.hit.v[j] = v[k];
-    }
-    rt_answer a[4];
-    for (int j = 0; j < n; j++) {
-        a[j] = (rt_answer){rh.ray.tfar[j], rh.hit.u[j], rh.hit.v[j], {rh.hit.Ng_x[j], rh.hit.Ng_y[j], rh.hit.Ng_z[j]},
-                           rh.hit.geomID[j], rh.hit.primID[j]};
+    for (int k = 0; k < m; k++)
+        a[hit_of[k]].t = t[k], a[hit_of[k]].u = u[k], a[hit_of[k]].v = v[k];
+    for (int j = 0; j < n; j++)
         found[j] = hit_geometry(rt, 1, rays[j].org, rays[j].dir, rays[j].tnear, INFINITY, &a[j], &hits[j]);
-    }
     for (int j = 0; j < n; j++)
         if (found[j])
             hit_surface(rt, 1, &a[j], &hits[j]);
