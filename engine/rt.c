@@ -47,7 +47,7 @@ typedef struct rt_geom {
     int32_t material;
     float *normals; /* world space, 3 per vertex, unit (zero where the authored normal is) */
     float *tangents; /* world space xyz (not renormalised, as the G-buffers interpolate them) + w; NULL without */
-    const float *verts; /* world space, 4 floats per vertex: Embree's vertex buffer (pose writes it) */
+    float *tris; /* per triangle, world space: first vertex, e1 = v1 - v0, e2 = v2 - v0 (xyz_ each; pose) */
     float world[16];
     int posed;
     /* What a hit on this draw looks up (rt_geom_lookups): fixed by the material and the
@@ -122,13 +122,10 @@ static unsigned hitn_uint(const struct RTCHitN *h, unsigned n, unsigned field, u
  * algorithm in IEEE single precision. Leaves *t, *u, *v as they were (Embree's) where the
  * determinant is 0 or a result is not finite: a ray Embree reports as a hit is never parallel
  * to its triangle, so that is only a safeguard. */
-static void exact_hit(const rt_geom *g, const scn_primitive *p, unsigned prim, const float org[3],
-                      const float dir[3], float *t, float *u, float *v)
+static void exact_hit(const rt_geom *g, unsigned prim, const float org[3], const float dir[3], float *t, float *u,
+                      float *v)
 {
-    const uint32_t *tri = p->indices + 3 * (size_t)prim;
-    const float *a = g->verts + 4 * tri[0], *b = g->verts + 4 * tri[1], *c = g->verts + 4 * tri[2];
-    const float e1[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
-    const float e2[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+    const float *a = g->tris + 12 * (size_t)prim, *e1 = a + 4, *e2 = a + 8; /* pose's */
     const float pv[3] = {dir[1] * e2[2] - dir[2] * e2[1], dir[2] * e2[0] - dir[0] * e2[2],
                          dir[0] * e2[1] - dir[1] * e2[0]};
     const float det = e1[0] * pv[0] + e1[1] * pv[1] + e1[2] * pv[2];
@@ -144,38 +141,34 @@ static void exact_hit(const rt_geom *g, const scn_primitive *p, unsigned prim, c
         *t = et, *u = eu, *v = ev;
 }
 
-/* exact_hit for up to 4 hits at once (n; the lanes past n repeat hit 0), with SSE: each lane
- * computes exact_hit's products, sums and division in its order (IEEE single precision, like
- * the scalar code), so a hit gets the same bits either way; t, u, v keep Embree's values in the
- * lanes where exact_hit would. geom[j], prim[j]: the hit triangles. */
-static void exact_hit4(const eng_rt *rt, int n, const unsigned *geom, const unsigned *prim,
-                       const float *const *org, const float *const *dir, float t[4], float u[4], float v[4])
+/* exact_hit for the four lanes of a packet Embree answered (rh; its rays SOA as cast), with
+ * SSE: each lane computes exact_hit's products, sums and division in its order (IEEE single
+ * precision, like the scalar code), so a hit gets the same bits either way. Lanes with hit[j]
+ * set get t[j], u[j], v[j] (keeping Embree's where exact_hit would); the others compute on
+ * lane `any`'s triangle (a hit lane) and are ignored. */
+static void exact_hit4(const eng_rt *rt, const struct RTCRayHit4 *rh, const int hit[4], int any, float t[4],
+                       float u[4], float v[4])
 {
-    __m128 va[4], vb[4], vc[4]; /* the triangles' vertices, one per lane, xyz_ */
-    float o[3][4], d[3][4];
+    __m128 va[4], e1[4], e2[4]; /* the triangles' first vertex and edges (pose's), one per lane, xyz_ */
     for (int j = 0; j < 4; j++) {
-        const int k = j < n ? j : 0;
-        const rt_geom *g = &rt->geoms[geom[k]];
-        const uint32_t *tri = rt->scene->primitives[g->primitive].indices + 3 * (size_t)prim[k];
-        va[j] = _mm_loadu_ps(g->verts + 4 * tri[0]);
-        vb[j] = _mm_loadu_ps(g->verts + 4 * tri[1]);
-        vc[j] = _mm_loadu_ps(g->verts + 4 * tri[2]);
-        for (int i = 0; i < 3; i++)
-            o[i][j] = org[k][i], d[i][j] = dir[k][i];
+        const int k = hit[j] ? j : any;
+        const float *r = rt->geoms[rh->hit.geomID[k]].tris + 12 * (size_t)rh->hit.primID[k];
+        va[j] = _mm_load_ps(r);
+        e1[j] = _mm_load_ps(r + 4);
+        e2[j] = _mm_load_ps(r + 8);
     }
     _MM_TRANSPOSE4_PS(va[0], va[1], va[2], va[3]); /* va[0] = the lanes' x, ... */
-    _MM_TRANSPOSE4_PS(vb[0], vb[1], vb[2], vb[3]);
-    _MM_TRANSPOSE4_PS(vc[0], vc[1], vc[2], vc[3]);
-    const __m128 dx = _mm_loadu_ps(d[0]), dy = _mm_loadu_ps(d[1]), dz = _mm_loadu_ps(d[2]);
-    const __m128 e1x = _mm_sub_ps(vb[0], va[0]), e1y = _mm_sub_ps(vb[1], va[1]), e1z = _mm_sub_ps(vb[2], va[2]);
-    const __m128 e2x = _mm_sub_ps(vc[0], va[0]), e2y = _mm_sub_ps(vc[1], va[1]), e2z = _mm_sub_ps(vc[2], va[2]);
+    _MM_TRANSPOSE4_PS(e1[0], e1[1], e1[2], e1[3]);
+    _MM_TRANSPOSE4_PS(e2[0], e2[1], e2[2], e2[3]);
+    const __m128 dx = _mm_load_ps(rh->ray.dir_x), dy = _mm_load_ps(rh->ray.dir_y), dz = _mm_load_ps(rh->ray.dir_z);
+    const __m128 e1x = e1[0], e1y = e1[1], e1z = e1[2], e2x = e2[0], e2y = e2[1], e2z = e2[2];
     const __m128 pvx = _mm_sub_ps(_mm_mul_ps(dy, e2z), _mm_mul_ps(dz, e2y));
     const __m128 pvy = _mm_sub_ps(_mm_mul_ps(dz, e2x), _mm_mul_ps(dx, e2z));
     const __m128 pvz = _mm_sub_ps(_mm_mul_ps(dx, e2y), _mm_mul_ps(dy, e2x));
     const __m128 det = _mm_add_ps(_mm_add_ps(_mm_mul_ps(e1x, pvx), _mm_mul_ps(e1y, pvy)), _mm_mul_ps(e1z, pvz));
     const __m128 inv = _mm_div_ps(_mm_set1_ps(1.0f), det);
-    const __m128 tx = _mm_sub_ps(_mm_loadu_ps(o[0]), va[0]), ty = _mm_sub_ps(_mm_loadu_ps(o[1]), va[1]),
-                 tz = _mm_sub_ps(_mm_loadu_ps(o[2]), va[2]);
+    const __m128 tx = _mm_sub_ps(_mm_load_ps(rh->ray.org_x), va[0]), ty = _mm_sub_ps(_mm_load_ps(rh->ray.org_y), va[1]),
+                 tz = _mm_sub_ps(_mm_load_ps(rh->ray.org_z), va[2]);
     const __m128 qx = _mm_sub_ps(_mm_mul_ps(ty, e1z), _mm_mul_ps(tz, e1y));
     const __m128 qy = _mm_sub_ps(_mm_mul_ps(tz, e1x), _mm_mul_ps(tx, e1z));
     const __m128 qz = _mm_sub_ps(_mm_mul_ps(tx, e1y), _mm_mul_ps(ty, e1x));
@@ -187,8 +180,8 @@ static void exact_hit4(const eng_rt *rt, int n, const unsigned *geom, const unsi
     _mm_storeu_ps(fu, eu);
     _mm_storeu_ps(fv, ev);
     _mm_storeu_ps(ft, et);
-    for (int j = 0; j < n; j++)
-        if (fd[j] != 0.0f && isfinite(fu[j]) && isfinite(fv[j]) && isfinite(ft[j]))
+    for (int j = 0; j < 4; j++)
+        if (hit[j] && fd[j] != 0.0f && isfinite(fu[j]) && isfinite(fv[j]) && isfinite(ft[j]))
             t[j] = ft[j], u[j] = fu[j], v[j] = fv[j];
 }
 
@@ -206,7 +199,7 @@ static void mask_filter(const struct RTCFilterFunctionNArguments *args)
         const float dir[3] = {rayn_float(args->ray, args->N, 4, i), rayn_float(args->ray, args->N, 5, i),
                               rayn_float(args->ray, args->N, 6, i)};
         float t, u = hitn_float(args->hit, args->N, 3, i), v = hitn_float(args->hit, args->N, 4, i);
-        exact_hit(g, p, prim, org, dir, &t, &u, &v);
+        exact_hit(g, prim, org, dir, &t, &u, &v);
         float c[4];
         scn_base_color_at(g->scene, m, p, prim, u, v, c);
         if (m->base_color[3] * c[3] < m->alpha_cutoff)
@@ -243,9 +236,15 @@ static void pose(rt_geom *g, const scn_primitive *p, const eng_draw *d)
     const float *positions = d->positions ? d->positions : p->positions;
     const float *normals = d->normals ? d->normals : p->normals;
     float *v = rtcGetGeometryBufferData(g->geom, RTC_BUFFER_TYPE_VERTEX, 0);
-    g->verts = v;
     for (uint32_t i = 0; i < p->vertex_count; i++)
         m4_transform_point(world, positions + 3 * i, v + 4 * i);
+    for (uint32_t k = 0; k < p->index_count / 3; k++) { /* exact_hit's edges, once a pose */
+        const float *a = v + 4 * p->indices[3 * k], *b = v + 4 * p->indices[3 * k + 1], *c = v + 4 * p->indices[3 * k + 2];
+        float *r = g->tris + 12 * (size_t)k;
+        for (int i = 0; i < 3; i++)
+            r[i] = a[i], r[4 + i] = b[i] - a[i], r[8 + i] = c[i] - a[i];
+        r[3] = r[7] = r[11] = 0.0f;
+    }
     float nm[9];
     m4_normal_matrix(nm, world);
     for (uint32_t i = 0; i < p->vertex_count; i++) {
@@ -299,7 +298,8 @@ void rt_update(eng_rt *rt, const eng_frame_scene *fs)
             g->material = fs->draws[i].material;
             g->normals = malloc((p->vertex_count ? p->vertex_count : 1) * 3 * sizeof(float));
             g->tangents = p->tangents ? malloc((size_t)p->vertex_count * 4 * sizeof(float)) : NULL;
-            if (!g->normals || (p->tangents && !g->tangents)) {
+            g->tris = aligned_alloc(16, (p->index_count / 3 ? p->index_count / 3 : 1) * 12 * sizeof(float));
+            if (!g->normals || (p->tangents && !g->tangents) || !g->tris) {
                 fprintf(stderr, "ispm: out of memory\n");
                 abort();
             }
@@ -514,10 +514,8 @@ static int intersect_in(const eng_rt *rt, RTCScene scene, int lamps, int untextu
     rtcIntersect1(scene, &ctx, &rh);
     rt_answer a = {rh.ray.tfar, rh.hit.u, rh.hit.v, {rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z}, rh.hit.geomID,
                    rh.hit.primID};
-    if (a.geom_id != RTC_INVALID_GEOMETRY_ID && a.geom_id < rt->geom_count) {
-        const rt_geom *g = &rt->geoms[a.geom_id];
-        exact_hit(g, &rt->scene->primitives[g->primitive], a.prim_id, org, dir, &a.t, &a.u, &a.v);
-    }
+    if (a.geom_id != RTC_INVALID_GEOMETRY_ID && a.geom_id < rt->geom_count)
+        exact_hit(&rt->geoms[a.geom_id], a.prim_id, org, dir, &a.t, &a.u, &a.v);
     if (!hit_geometry(rt, lamps, org, dir, tnear, tfar, &a, hit))
         return 0;
     hit_surface(rt, untextured, &a, hit);
@@ -561,25 +559,22 @@ void rt_intersect4_untextured(const eng_rt *rt, int n, const rt_ray *rays, rt_hi
         rh.hit.instID[0][j] = RTC_INVALID_GEOMETRY_ID;
     }
     rtcIntersect4(valid, rt->rtscene, &ctx, &rh);
-    /* Embree's answers; the hits (packed, the misses left out) then through exact_hit4. */
+    /* Embree's answers, the hits' t, u, v then through exact_hit4. */
     rt_answer a[4];
-    int hit_of[4], m = 0;
-    unsigned geom[4], prim[4];
-    const float *org[4], *dir[4];
+    int hit[4] = {0}, any = -1;
     float t[4], u[4], v[4];
     for (int j = 0; j < n; j++) {
         a[j] = (rt_answer){rh.ray.tfar[j], rh.hit.u[j], rh.hit.v[j], {rh.hit.Ng_x[j], rh.hit.Ng_y[j], rh.hit.Ng_z[j]},
                            rh.hit.geomID[j], rh.hit.primID[j]};
-        if (a[j].geom_id == RTC_INVALID_GEOMETRY_ID || a[j].geom_id >= rt->geom_count)
-            continue;
-        hit_of[m] = j, geom[m] = a[j].geom_id, prim[m] = a[j].prim_id, org[m] = rays[j].org, dir[m] = rays[j].dir;
-        t[m] = a[j].t, u[m] = a[j].u, v[m] = a[j].v;
-        m++;
+        hit[j] = a[j].geom_id != RTC_INVALID_GEOMETRY_ID && a[j].geom_id < rt->geom_count;
+        if (hit[j])
+            any = j, t[j] = a[j].t, u[j] = a[j].u, v[j] = a[j].v;
     }
-    if (m)
-        exact_hit4(rt, m, geom, prim, org, dir, t, u, v);
-    for (int k = 0; k < m; k++)
-        a[hit_of[k]].t = t[k], a[hit_of[k]].u = u[k], a[hit_of[k]].v = v[k];
+    if (any >= 0)
+        exact_hit4(rt, &rh, hit, any, t, u, v);
+    for (int j = 0; j < n; j++)
+        if (hit[j])
+            a[j].t = t[j], a[j].u = u[j], a[j].v = v[j];
     for (int j = 0; j < n; j++)
         found[j] = hit_geometry(rt, 1, rays[j].org, rays[j].dir, rays[j].tnear, INFINITY, &a[j], &hits[j]);
     for (int j = 0; j < n; j++)
@@ -601,6 +596,7 @@ void rt_destroy(eng_rt *rt)
             rtcReleaseGeometry(rt->geoms[i].geom);
         free(rt->geoms[i].normals);
         free(rt->geoms[i].tangents);
+        free(rt->geoms[i].tris);
     }
     free(rt->geoms);
     if (rt->rtscene)
