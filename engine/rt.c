@@ -47,7 +47,8 @@ typedef struct rt_geom {
     int32_t material;
     float *normals; /* world space, 3 per vertex, unit (zero where the authored normal is) */
     float *tangents; /* world space xyz (not renormalised, as the G-buffers interpolate them) + w; NULL without */
-    float *tris; /* per triangle, world space: first vertex, e1 = v1 - v0, e2 = v2 - v0 (xyz_ each; pose) */
+    float *tris; /* per triangle, world space: first vertex, e1 = v1 - v0, e2 = v2 - v0 (xyz each; pose), their
+                  * fourth floats the normalised geometric normal (x, y, z) */
     float world[16];
     int posed;
     /* What a hit on this draw looks up (rt_geom_lookups): fixed by the material and the
@@ -229,6 +230,18 @@ static void rt_geom_lookups(rt_geom *g, const scn_scene *scene, const scn_primit
     g->textured = g->mat && rt_material_textured(g->mat);
 }
 
+static inline void normalize_or(float v[3], const float fallback[3])
+{
+    float len = sqrtf(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+    if (len > 0.0f && isfinite(len)) {
+        for (int i = 0; i < 3; i++)
+            v[i] /= len;
+    } else {
+        for (int i = 0; i < 3; i++)
+            v[i] = fallback[i];
+    }
+}
+
 /* Draw d's vertices (the primitive's, or this frame's deformed ones) at its world matrix. */
 static void pose(rt_geom *g, const scn_primitive *p, const eng_draw *d)
 {
@@ -243,7 +256,16 @@ static void pose(rt_geom *g, const scn_primitive *p, const eng_draw *d)
         float *r = g->tris + 12 * (size_t)k;
         for (int i = 0; i < 3; i++)
             r[i] = a[i], r[4 + i] = b[i] - a[i], r[8 + i] = c[i] - a[i];
-        r[3] = r[7] = r[11] = 0.0f;
+        /* In the fourth floats: the geometric normal of every hit on the triangle
+         * (hit_geometry), Embree's Ng normalised. Embree's Ng is cross(e2, e1) with its own
+         * edges e1 = v0 − v1, e2 = v2 − v0 (Möller–Trumbore in its SSE2 kernels, no FMA): the same
+         * products and differences, so the same bits, here once a pose instead of a square
+         * root and three divisions a hit (test_photon packets_match_single_rays checks them
+         * against Embree's Ng on every hit). */
+        const float f1[3] = {a[0] - b[0], a[1] - b[1], a[2] - b[2]}, *f2 = r + 8;
+        float ng[3] = {f2[1] * f1[2] - f2[2] * f1[1], f2[2] * f1[0] - f2[0] * f1[2], f2[0] * f1[1] - f2[1] * f1[0]};
+        normalize_or(ng, (const float[3]){0.0f, 1.0f, 0.0f});
+        r[3] = ng[0], r[7] = ng[1], r[11] = ng[2];
     }
     float nm[9];
     m4_normal_matrix(nm, world);
@@ -386,18 +408,6 @@ int rt_occluded(const eng_rt *rt, const float a[3], const float b[3])
     return ray.tfar < 0.0f; /* Embree sets tfar to -inf on a hit */
 }
 
-static inline void normalize_or(float v[3], const float fallback[3])
-{
-    float len = sqrtf(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
-    if (len > 0.0f && isfinite(len)) {
-        for (int i = 0; i < 3; i++)
-            v[i] /= len;
-    } else {
-        for (int i = 0; i < 3; i++)
-            v[i] = fallback[i];
-    }
-}
-
 int rt_lamp_hit(const eng_rt *rt, const float org[3], const float dir[3], float tmin, float tmax, int skip,
                 float *t)
 {
@@ -464,10 +474,8 @@ static int hit_geometry(const eng_rt *rt, int lamps, const float org[3], const f
     hit->t = a->t;
     for (int i = 0; i < 3; i++)
         hit->position[i] = org[i] + a->t * dir[i];
-    float ng[3] = {a->ng[0], a->ng[1], a->ng[2]};
-    const float up[3] = {0.0f, 1.0f, 0.0f};
-    normalize_or(ng, up);
-    memcpy(hit->geom_normal, ng, sizeof ng);
+    const float *r = rt->geoms[a->geom_id].tris + 12 * (size_t)a->prim_id; /* pose's normalised Ng */
+    hit->geom_normal[0] = r[3], hit->geom_normal[1] = r[7], hit->geom_normal[2] = r[11];
     return 1;
 }
 

@@ -957,6 +957,15 @@ START_TEST(packets_match_single_rays)
             ck_assert_msg(h.t == t && h.bary[0] == u && h.bary[1] == v, "ray %zu: t %.9g u %.9g v %.9g, want %.9g %.9g %.9g",
                           k, h.t, h.bary[0], h.bary[1], t, u, v);
             ck_assert(ph[j].t == h.t && ph[j].bary[0] == h.bary[0] && ph[j].bary[1] == h.bary[1]);
+            /* The geometric normal (pose's, once a triangle): Embree's Ng normalised, bit for bit. */
+            float ng[3] = {one[k].ng[0], one[k].ng[1], one[k].ng[2]};
+            const float ngl = sqrtf(ng[0] * ng[0] + ng[1] * ng[1] + ng[2] * ng[2]);
+            ck_assert(ngl > 0.0f);
+            for (int q = 0; q < 3; q++)
+                ng[q] /= ngl;
+            ck_assert_msg(memcmp(h.geom_normal, ng, sizeof ng) == 0, "ray %zu: Ng %.9g %.9g %.9g, Embree's %.9g %.9g %.9g",
+                          k, h.geom_normal[0], h.geom_normal[1], h.geom_normal[2], ng[0], ng[1], ng[2]);
+            ck_assert_int_eq(memcmp(ph[j].geom_normal, h.geom_normal, sizeof ng), 0);
             ck_assert_int_eq(memcmp(ph[j].position, h.position, sizeof h.position), 0);
             /* The same in double precision (Cramer's rule): t within 4 ulps. */
             double de1[3], de2[3], dtv[3], dp[3], dq[3];
