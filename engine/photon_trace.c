@@ -31,9 +31,11 @@
  * (tracebench and test_photon check it), so the map is the one-by-one trace's.
  *
  * Determinism and the map: a batch's photons belong where the last trace's per-batch counts
- * put them; each path writes its photons straight into its slot there (as many as it stored
- * last time), those beyond it go to the batch's stage, linked path by path. A batch whose paths
- * all fill their slots exactly is in place (a static scene: every batch); any other is gathered
+ * put them; each path writes its photons into its slot (as many as it stored last time) in the
+ * thread's near buffer, a copy of the batch's place in the map that stays in the cache, and
+ * those beyond it go to the batch's stage, linked path by path. A batch whose paths all fill
+ * their slots exactly is in place (a static scene: every batch) and is streamed into the map in
+ * whole cache lines as it ends (stream_photons); any other is gathered
  * in input order into the buffer of the thread that traced it. After the trace, batches that
  * are not where their photons belong are moved and the gathered ones copied, so the map is in
  * input order for any thread count, whichever thread traced a batch and whatever the last trace
@@ -67,14 +69,17 @@ typedef struct pt_buf {
     eng_photon *stage; /* the batch in hand: its paths' photons that have no slot in the map, */
     uint32_t *link;    /* each linked to the next of its path (UINT32_MAX: the last) */
     size_t stage_n, stage_cap;
+    eng_photon *near; /* the batch in hand's slots, in the cache until the batch ends (batch_done) */
+    size_t near_cap;
     int moved; /* a path of the batch in hand stored another count than its slot holds */
     int oom; /* a photon did not fit */
     eng_trace_counts counts; /* the tracer's counts on this thread (integer sums: order-free) */
     char apart[64]; /* the next thread's buffer starts a cache line later: no line shared */
 } pt_buf;
 
-/* A path's photons (count of them): the first `room` in its slot of the map (from index `slot`
- * of its batch's place: as many as it stored in the last trace, where that trace put them),
+/* A path's photons (count of them): the first `room` in its slot (from index `slot` of its
+ * batch's place, in the near buffer until the batch ends: as many as it stored in the last
+ * trace, where that trace put them),
  * the rest until its batch ends in the batch's stage from index `extra` on, each linked to the
  * next (pt_buf.link). A batch traced elsewhere than in place gives its paths no room. */
 typedef struct pt_path {
@@ -113,7 +118,7 @@ typedef struct pt_lane {
     uint32_t n; /* photons stored so far: the first room at slot, the rest in the stage from */
     uint32_t first, last; /* index first on, linked (pt_buf.link) */
     uint32_t room;
-    eng_photon *slot;
+    eng_photon *slot; /* in the thread's near buffer (pt_buf.near) */
 } pt_lane;
 
 /* Event k's random numbers sit at a scattered place in maps of a few MB: ask for them as the
@@ -158,21 +163,33 @@ static int lane_start(pt_lane *l, size_t path, const eng_bounce_photon *bp, cons
     return 1;
 }
 
-/* A photon written into the map past the caches (non-temporal stores): the map, 4.4 MB for
- * cornell-box-perf, is not read again by the trace, and ordinary stores would first read every
- * line they write (tracebench: the trace 1.13x faster, 9 alternated runs over the VM's busy and
- * quiet spells). Visible to other threads after the writer's sfence (photon_trace_with). */
-static void photon_stream(eng_photon *to, const eng_photon *ph)
+/* n photons copied into the map past the caches (non-temporal stores: the map, 4.4 MB for
+ * cornell-box-perf, is not read again by the trace, and an ordinary store first reads the line
+ * it writes). Whole 64-byte lines only: the batch's photons are gathered in its thread's
+ * near buffer (ordinary stores, in the cache) and streamed when the batch ends, so that the
+ * write-combining buffers always fill a line; the two lines a batch shares with its neighbours
+ * are written with ordinary stores. Photons streamed one by one as each path stored them wrote
+ * lines piecemeal, four paths interleaved, which a busy memory system made slow (tracebench, 2
+ * threads, busy spells on the AMD machine of session 18). Visible to other threads after the
+ * writer's sfence (photon_trace_with). */
+static void stream_photons(eng_photon *to, const eng_photon *from, size_t n)
 {
+    unsigned char *d = (unsigned char *)to;
+    const unsigned char *f = (const unsigned char *)from;
+    size_t bytes = n * sizeof *to;
+    if (!bytes)
+        return;
 #if defined(__SSE2__)
-    _Static_assert(sizeof *ph % 4 == 0, "a photon is whole 32-bit words");
-    int w[sizeof *ph / 4];
-    memcpy(w, ph, sizeof w);
-    for (size_t k = 0; k < sizeof w / sizeof w[0]; k++)
-        _mm_stream_si32((int *)to + k, w[k]);
-#else
-    *to = *ph;
+    size_t head = (64 - ((uintptr_t)d & 63)) & 63;
+    if (head < bytes) {
+        memcpy(d, f, head);
+        d += head, f += head, bytes -= head;
+        for (; bytes >= 64; d += 64, f += 64, bytes -= 64)
+            for (int k = 0; k < 64; k += 16)
+                _mm_stream_si128((__m128i *)(d + k), _mm_loadu_si128((const __m128i *)(f + k)));
+    }
 #endif
+    memcpy(d, f, bytes);
 }
 
 /* A photon of l's path beyond its slot, appended to the stage and linked after the path's last
@@ -260,7 +277,7 @@ static int lane_surface(pt_lane *l, rt_hit *h, int found, const eng_frame_scene 
         ph.caustic = (uint16_t)l->delta_only;
         ph.ray_length = h->t;
         if (l->n < l->room) {
-            photon_stream(&l->slot[l->n++], &ph);
+            l->slot[l->n++] = ph;
         } else {
             eng_photon *to = stage_push(buf, l);
             if (!to)
@@ -358,13 +375,14 @@ static void lane_finish(const pt_lane *l, pt_buf *buf, pt_path *rec)
  * the end of the thread's buffer (stat->held = self): each path's from its slot, then from the
  * stage. Returns the batch's photon count. */
 static size_t batch_done(pt_buf *buf, uint32_t self, const pt_path *paths, size_t b0, size_t b1,
-                         const eng_photon *place, eng_trace_batch *stat)
+                         eng_photon *place, eng_trace_batch *stat)
 {
     size_t stored = 0;
     for (size_t i = b0; i < b1; i++)
         stored += paths[i].count;
     buf->stage_n = 0;
-    if (place && !buf->moved) {
+    if (place && !buf->moved) { /* every slot filled: near holds the batch's photons in order */
+        stream_photons(place, buf->near, stored);
         stat->held = PT_IN_MAP;
         return stored;
     }
@@ -387,7 +405,7 @@ static size_t batch_done(pt_buf *buf, uint32_t self, const pt_path *paths, size_
     for (size_t i = b0; i < b1; i++) {
         const uint32_t c = paths[i].count, in_slot = c < paths[i].room ? c : paths[i].room;
         if (in_slot) {
-            memcpy(to, place + paths[i].slot, in_slot * sizeof *to);
+            memcpy(to, buf->near + paths[i].slot, in_slot * sizeof *to);
             to += in_slot;
         }
         uint32_t from = paths[i].extra;
@@ -420,10 +438,22 @@ static void trace_batch(const pt_tracer *tr, const eng_frame_scene *fs, const sc
         if (sum == stat->photons)
             place = map + stat->at;
     }
-    for (size_t i = b0, at = 0; i < b1; i++) {
+    size_t at = 0;
+    for (size_t i = b0; i < b1; i++) {
         paths[i].room = place && i < last_paths ? paths[i].count : 0;
         paths[i].slot = at;
         at += paths[i].room;
+    }
+    if (at > buf->near_cap) {
+        eng_photon *q = realloc(buf->near, at * sizeof *q);
+        if (!q) {
+            buf->oom = 1;
+            stat->photons = 0;
+            stat->rays = 0;
+            return;
+        }
+        buf->near = q;
+        buf->near_cap = at;
     }
     buf->moved = 0;
     uint32_t rays_cast = 0;
@@ -439,7 +469,7 @@ static void trace_batch(const pt_tracer *tr, const eng_frame_scene *fs, const sc
     for (;;) {
         while (active < width && next < b1) {
             pt_lane *l = spare[free_count - 1];
-            if (lane_start(l, next, &in[next], rm, s, place, &paths[next])) {
+            if (lane_start(l, next, &in[next], rm, s, place ? buf->near : NULL, &paths[next])) {
                 act[active++] = l;
                 free_count--;
             } else {
@@ -771,6 +801,7 @@ void photon_map_free(eng_photon_map *m)
         free(m->trace_bufs[t].p);
         free(m->trace_bufs[t].stage);
         free(m->trace_bufs[t].link);
+        free(m->trace_bufs[t].near);
     }
     free(m->trace_bufs);
     free(m->trace_paths);
