@@ -446,8 +446,10 @@ static void trace_batch(const pt_tracer *tr, const eng_frame_scene *fs, const sc
     }
     if (at > buf->near_cap) {
         eng_photon *q = realloc(buf->near, at * sizeof *q);
-        if (!q) {
+        if (!q) { /* the trace fails (photon_trace_with reads buf->oom); the batch holds nothing */
             buf->oom = 1;
+            stat->held = self;
+            stat->at = buf->n;
             stat->photons = 0;
             stat->rays = 0;
             return;
