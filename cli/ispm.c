@@ -5,6 +5,7 @@
 #define _POSIX_C_SOURCE 200809L
 #include "cap.h"
 #include "eng.h"
+#include "ispm_git_rev.h" /* ISPM_GIT_REV, made at build time */
 #include "merge.h"
 #include "rep.h"
 

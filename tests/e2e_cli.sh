@@ -13,6 +13,11 @@ for c in record replay bless check info export merge lineage tracebench; do
   grep -q "usage: ispm $c" "$WORK/help.txt" || fail "$c --help prints no usage"
 done
 "$ISPM" --help > /dev/null || fail "--help"
+# --version (and every manifest's tool.git) names the commit the binary was built from, read at
+# build time (cmake/git_rev.cmake), "-dirty" when tracked files differed from it
+if command -v git > /dev/null && rev=$(git -C "$SRC" rev-parse --short=12 HEAD 2> /dev/null); then
+  "$ISPM" --version | grep -Eq "^ispm [0-9.]+ \($rev(-dirty)?\)$" || fail "--version does not name HEAD $rev: $("$ISPM" --version)"
+fi
 "$ISPM" frobnicate > /dev/null 2>&1; [ $? -eq 2 ] || fail "unknown command must exit 2"
 "$ISPM" record "$SEQ" > /dev/null 2>&1; [ $? -eq 2 ] || fail "record without -o must exit 2"
 
