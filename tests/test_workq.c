@@ -200,10 +200,15 @@ START_TEST(test_error_sticky)
         log_init(&l);
         l.fail_id = 5;
         l.fail_code = 7;
+        /* Jobs after the failing one wait at a closed gate, so that a second worker cannot run
+         * the other 54 while job 5 is still returning its error: the pushes then block on the
+         * full queue until the failure is seen, and the loop cannot end before it (before this,
+         * a busy machine could finish every push first and find no error yet). */
+        l.gate_open = 0;
         cap_wq *q = cap_wq_create(workers, 4, run_job, drop_job, &l);
         int first_fail = -1;
         for (int i = 0; i < 60; i++) {
-            int r = cap_wq_push(q, job(&l, i, 0));
+            int r = cap_wq_push(q, job(&l, i, i > 5));
             ck_assert(r == 0 || r == 7);
             if (r && first_fail < 0)
                 first_fail = i;
@@ -213,6 +218,7 @@ START_TEST(test_error_sticky)
                 wait_started(&l, 6);
         }
         ck_assert_int_eq(cap_wq_error(q), 7);
+        open_gate(&l); /* a job taken before the failure was seen may be waiting there */
         ck_assert_int_eq(cap_wq_finish(q), 7);
         ck_assert_int_eq(cap_wq_push(q, job(&l, 60, 0)), 7);
         cap_wq_destroy(q);
