@@ -2,7 +2,7 @@
  * kd_gather_old (an older kdgather.c compiled beside it) on one synthetic frame, alternating,
  * 7 rounds; prints both medians and their ratio, and whether the images agree bit for bit. */
 #define _POSIX_C_SOURCE 200809L
-#include "eng_internal.h"
+#include "indirect.h"
 #include "indirect.h"
 
 #include <math.h>
@@ -33,15 +33,15 @@ eng_result eng_fail(eng_error *err, eng_result code, const char *fmt, ...)
     fprintf(stderr, "kdgather_speed: %s\n", fmt);
     return code;
 }
-eng_result ind_cpu_target_create(ind_cpu_target *t, int width, int height, int irradiance, eng_error *err)
+eng_result glu_cpu_target_create(glu_cpu_target *t, int width, int height, int irradiance, eng_error *err)
 {
     (void)t, (void)width, (void)height, (void)irradiance, (void)err;
     abort();
 }
-void ind_cpu_target_destroy(ind_cpu_target *t) { (void)t; }
-void ind_cpu_target_upload(ind_cpu_target *t, int index, const float *rgba) { (void)t, (void)index, (void)rgba; }
-void ind_gbuffer_read(const glu_target *gb, ind_gbuffer *out) { (void)gb, (void)out; }
-void ind_gbuffer_free(ind_gbuffer *g) { (void)g; }
+void glu_cpu_target_destroy(glu_cpu_target *t) { (void)t; }
+void glu_cpu_target_upload(glu_cpu_target *t, int index, const float *rgba) { (void)t, (void)index, (void)rgba; }
+void glu_gbuffer_read(const glu_target *gb, glu_gbuffer *out) { (void)gb, (void)out; }
+void glu_gbuffer_free(glu_gbuffer *g) { (void)g; }
 /* The method wrapper's state (indirect.h, since the final gather shares it): never called here. */
 eng_result ind_cpu_state_init(ind_cpu_state *c, const char *method, int width, int height, int irradiance,
                               eng_error *err)

@@ -9,7 +9,7 @@
  *
  * Owns: the GL context, GPU copies of the scene's primitives, the passes, the Embree scene. */
 #define _POSIX_C_SOURCE 200809L /* clock_gettime */
-#include "eng_internal.h"
+#include "eng_frame.h"
 #include "indirect.h"
 #include "bsdf.h"
 #include "boundary.h"
@@ -67,7 +67,7 @@ struct eng_engine {
     /* Emission seen by the eye (only in scenes with an emissive material): per pixel from the
      * G-buffer's material id, uploaded for the composite. */
     int emissive;
-    ind_cpu_target emission;
+    glu_cpu_target emission;
     float *emission_rgba, *emission_rgb;
     /* Reconstruction filters (DESIGN.md step 7), on when any of splat_subsample > 1,
      * temporal, atrous_iterations is set: G-buffers at 1/2^l resolution (gbuffer_lo[l-1]),
@@ -82,10 +82,10 @@ struct eng_engine {
      * read back, and the target the mean is uploaded into. */
     prog_state *prog;
     bnd_pass *bnd; /* the kernel's boundary correction (boundary.h), NULL when off */
-    ind_gbuffer prog_gb;
+    glu_gbuffer prog_gb;
     float *prog_in[2], *prog_mean[2], *prog_count, *prog_radius;
     size_t prog_pixels;
-    ind_cpu_target prog_target;
+    glu_cpu_target prog_target;
     int prog_target_ok;
     float radius_scale; /* this frame's progressive radius scale (1 without) */
     const float *pixel_scale; /* this frame's per-pixel radius scales (progressive_radius "pixel"), or NULL */
@@ -104,40 +104,6 @@ struct eng_engine {
     double readback_ms;
     eng_overlap *overlap; /* overlap.h: the photon stage's worker beside the GL thread */
 };
-
-/* glTF 2.0 §3.9.2: the default material when a primitive names none. */
-scn_material eng_material_of(const scn_scene *scene, int32_t index)
-{
-    if (index >= 0 && (uint32_t)index < scene->material_count)
-        return scene->materials[index];
-    scn_material m;
-    memset(&m, 0, sizeof m);
-    snprintf(m.name, sizeof m.name, "default");
-    m.base_color[0] = m.base_color[1] = m.base_color[2] = m.base_color[3] = 1.0f;
-    m.metallic = 1.0f;
-    m.roughness = 1.0f;
-    m.ior = 1.5f;
-    m.alpha_cutoff = 0.5f;
-    scn_texref *refs[5] = {&m.base_color_tex, &m.metallic_roughness_tex, &m.normal_tex, &m.occlusion_tex,
-                           &m.emissive_tex};
-    for (int i = 0; i < 5; i++) {
-        refs[i]->texture = -1;
-        refs[i]->transform[0] = refs[i]->transform[3] = 1.0f;
-    }
-    return m;
-}
-
-scn_material eng_material_at(const scn_scene *scene, const rt_hit *hit)
-{
-    scn_material m = eng_material_of(scene, hit->material);
-    for (int c = 0; c < 4; c++)
-        m.base_color[c] *= hit->base_tex[c];
-    m.roughness *= hit->roughness_tex;
-    m.metallic *= hit->metallic_tex;
-    for (int c = 0; c < 3; c++)
-        m.emissive[c] *= hit->emissive_tex[c];
-    return m;
-}
 
 static double now_ms(void)
 {
@@ -284,7 +250,7 @@ eng_result eng_create(const eng_desc *desc, eng_engine **out, eng_error *err)
     eng_pin_determinism(e->settings.threads);
     /* Embree's scene and the random maps need no GL: with 2+ threads they are built on the
      * overlap worker while this thread creates the GL context and builds the programs. */
-    e->method = ind_method_of(e->settings.indirect);
+    e->method = ind_method_find(eng_indirect_name(e->settings.indirect));
     e->overlap = ovl_create(e->settings.threads);
     cpu_setup cs = {e, e->method != NULL, ENG_OK, {{0}}};
     ovl_start(e->overlap, cpu_setup_run, &cs);
@@ -321,7 +287,7 @@ eng_result eng_create(const eng_desc *desc, eng_engine **out, eng_error *err)
         }
         if (r == ENG_OK)
             r = e->method->create(w, h, e->filtered, &e->method_state, err);
-        e->tracer = pt_method_of(st->photon_trace);
+        e->tracer = pt_method_find(eng_trace_name(st->photon_trace));
         if (r == ENG_OK)
             r = e->tracer->create(st, &e->tracer_state, err);
         if (r == ENG_OK && st->temporal)
@@ -338,7 +304,7 @@ eng_result eng_create(const eng_desc *desc, eng_engine **out, eng_error *err)
         if (r == ENG_OK && st->progressive) {
             e->prog = prog_create();
             prog_set_per_pixel(e->prog, st->progressive_pixel);
-            r = ind_cpu_target_create(&e->prog_target, w, h, e->filtered, err);
+            r = glu_cpu_target_create(&e->prog_target, w, h, e->filtered, err);
             e->prog_target_ok = r == ENG_OK;
         }
         if (r == ENG_OK && st->boundary == ENG_BOUNDARY_RENORMALIZE && e->method->traced_gather)
@@ -348,7 +314,7 @@ eng_result eng_create(const eng_desc *desc, eng_engine **out, eng_error *err)
         if (r == ENG_OK && st->boundary == ENG_BOUNDARY_RENORMALIZE)
             r = bnd_pass_create(w, h, e->filtered ? 2 : 1, &e->bnd, err);
     }
-    e->spec = spec_scene_has_specular(s) ? spec_method_of(e->settings.specular) : NULL;
+    e->spec = eye_scene_has_specular(s) ? spec_method_find(eng_specular_name(e->settings.specular)) : NULL;
     if (r == ENG_OK && e->spec)
         r = e->spec->create(e->width, e->height, &e->spec_state, err);
     if (r == ENG_OK && tl_scene_has_blend(s))
@@ -361,7 +327,7 @@ eng_result eng_create(const eng_desc *desc, eng_engine **out, eng_error *err)
         size_t n = (size_t)e->width * (size_t)e->height;
         e->emission_rgba = eng_xcalloc(n * 4, sizeof(float));
         e->emission_rgb = eng_xcalloc(n * 3, sizeof(float));
-        r = ind_cpu_target_create(&e->emission, e->width, e->height, 0, err);
+        r = glu_cpu_target_create(&e->emission, e->width, e->height, 0, err);
         if (r != ENG_OK)
             e->emissive = 0;
     }
@@ -406,7 +372,7 @@ void eng_destroy(eng_engine *e)
             e->spec->destroy(e->spec_state);
         pass_translucent_destroy(e->translucent);
         if (e->emissive)
-            ind_cpu_target_destroy(&e->emission);
+            glu_cpu_target_destroy(&e->emission);
         for (int l = 0; l < 3; l++) {
             pass_gbuffer_destroy(e->gbuffer_lo[l]);
             pass_upsample_destroy(e->upsample[l]);
@@ -415,7 +381,7 @@ void eng_destroy(eng_engine *e)
         pass_atrous_destroy(e->atrous);
         pass_resolve_destroy(e->resolve);
         if (e->prog_target_ok)
-            ind_cpu_target_destroy(&e->prog_target);
+            glu_cpu_target_destroy(&e->prog_target);
         pass_composite_destroy(e->composite);
         pass_direct_destroy(e->direct);
         pass_shadow_destroy(e->shadow);
@@ -446,7 +412,7 @@ void eng_destroy(eng_engine *e)
     free(e->aniso);
     prog_destroy(e->prog);
     bnd_pass_destroy(e->bnd);
-    ind_gbuffer_free(&e->prog_gb);
+    glu_gbuffer_free(&e->prog_gb);
     for (int a = 0; a < 2; a++) {
         free(e->prog_in[a]);
         free(e->prog_mean[a]);
@@ -725,26 +691,6 @@ static int any_sized_light(const eng_frame_scene *fs)
 }
 
 #define PHOTON_ROW 1024 /* photons.map is PHOTON_ROW photons wide */
-
-void *eng_xmalloc(size_t size)
-{
-    void *p = malloc(size ? size : 1);
-    if (!p) {
-        fprintf(stderr, "ispm: out of memory\n");
-        abort();
-    }
-    return p;
-}
-
-void *eng_xcalloc(size_t n, size_t size)
-{
-    void *p = calloc(n ? n : 1, size);
-    if (!p) {
-        fprintf(stderr, "ispm: out of memory\n");
-        abort();
-    }
-    return p;
-}
 
 /* "<pass>.light<i>[.face<f>][.<suffix>]" */
 static void light_buffer_name(char *out, size_t size, const char *pass, uint32_t light, int faces, int face,
@@ -1035,7 +981,7 @@ static eng_result run_method(eng_engine *e, int frame, const glu_target *gb, con
     /* Per-pixel progressive radii (progressive.h): this frame's scales for the G-buffer gb. */
     e->pixel_scale = NULL;
     if (e->prog && e->settings.progressive_pixel) {
-        ind_gbuffer_read(gb, &e->prog_gb);
+        glu_gbuffer_read(gb, &e->prog_gb);
         e->pixel_scale = prog_pixel_scales(e->prog, &e->prog_gb);
     }
     eng_rmap_frame rf;
@@ -1100,13 +1046,13 @@ static eng_result progressive_run(eng_engine *e, int frame, const glu_target *gb
         e->prog_radius = eng_xmalloc(n * sizeof(float));
         e->prog_pixels = n;
     }
-    ind_gbuffer_read(gb, &e->prog_gb);
+    glu_gbuffer_read(gb, &e->prog_gb);
     for (int a = 0; a < na; a++)
         glu_read(*sp, a, 0, 4, p4, e->prog_in[a]);
     prog_accumulate(e->prog, &e->prog_gb, na, (const float *const *)e->prog_in, e->prog_mean, e->prog_count,
                     e->prog_radius);
     for (int a = 0; a < na; a++)
-        ind_cpu_target_upload(&e->prog_target, a, e->prog_mean[a]);
+        glu_cpu_target_upload(&e->prog_target, a, e->prog_mean[a]);
     glFinish();
     add_time(e, "progressive", now_ms() - t0);
     *sp = &e->prog_target.target;
@@ -1176,7 +1122,7 @@ static eng_result emission_pass(eng_engine *e, int frame, const glu_target *gb, 
             e->emission_rgba[4 * i + (size_t)c] = e->emission_rgb[3 * i + (size_t)c];
         e->emission_rgba[4 * i + 3] = 1.0f;
     }
-    ind_cpu_target_upload(&e->emission, 0, e->emission_rgba);
+    glu_cpu_target_upload(&e->emission, 0, e->emission_rgba);
     glFinish();
     add_time(e, "emission", now_ms() - t0);
     if (seq_wants(e->seq, "gbuffer.emission") &&
@@ -1607,4 +1553,19 @@ eng_result eng_frame_trace_inputs(eng_engine *e, int frame, eng_trace_inputs *ou
                              2.0f * e->settings.kernel_radius};
     out->settings = ts;
     return ENG_OK;
+}
+
+int eng_gl_backend_known(const char *name)
+{
+    return glctx_backend_known(name);
+}
+
+void eng_pin_determinism(int threads)
+{
+    glctx_pin_determinism(threads);
+}
+
+const char *const *eng_determinism_info(void)
+{
+    return glctx_determinism_info();
 }

@@ -16,6 +16,7 @@
 #define _POSIX_C_SOURCE 200809L
 #include "lineage.h"
 #include "rep_internal.h"
+#include "kernel.h"
 
 #include <cjson/cJSON.h>
 #include <math.h>

@@ -15,7 +15,7 @@
 
 #include <stddef.h>
 
-#include "eng.h"
+#include "eng_core.h"
 
 #ifdef __cplusplus
 extern "C" {

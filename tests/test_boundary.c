@@ -6,7 +6,7 @@
  * sequence key. No GL: CPU functions. */
 #include "boundary.h"
 #include "eng.h"
-#include "eng_internal.h"
+#include "indirect.h"
 #include "gather_kernel.h"
 
 #include <check.h>
@@ -35,7 +35,7 @@ static double world_y(int y) { return 0.5 - (y + 0.5) / GH; }
 
 /* Table top z = 0 (normal +z) for X < EDGE; beyond it a floor at z = −1 (below = 1) or
  * background (below = 0). */
-static void make_gbuffer(ind_gbuffer *g, int below)
+static void make_gbuffer(glu_gbuffer *g, int below)
 {
     g->width = GW;
     g->height = GH;
@@ -76,7 +76,7 @@ static void make_photons(eng_photon_map *m, float **radius, double E)
 
 /* A synthetic case: the G-buffer, photons of flux density E, the view from above at eye, and W. */
 typedef struct fixture {
-    ind_gbuffer g;
+    glu_gbuffer g;
     eng_photon_map m;
     float *radius, vp[16], eye[3], *w;
 } fixture;
@@ -101,7 +101,7 @@ static void teardown(fixture *f)
     free(f->w);
     free(f->radius);
     free(f->m.photons);
-    ind_gbuffer_free(&f->g);
+    glu_gbuffer_free(&f->g);
 }
 
 /* g(x) = 2x² − x⁴: 0, 1 at the ends, 7/16 at one half, the mass of κ within x R. */
@@ -170,7 +170,7 @@ START_TEST(recovers_the_energy_at_the_edge)
     fixture f;
     setup(&f, 1, E);
     weigh(&f, 2, f.w);
-    const ind_gbuffer *g = &f.g;
+    const glu_gbuffer *g = &f.g;
     const eng_photon_map *m = &f.m;
     const float *radius = f.radius;
     float *w = f.w;

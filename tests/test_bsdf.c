@@ -8,7 +8,7 @@
  * strata once per cycle and repeat every K frames. And stratified first bounces within a frame
  * (bsdf_strata): C and GLSL bit-identical, every block covering each stratum once. */
 #include "bsdf.h"
-#include "eng_internal.h"
+#include "trace.h"
 
 #include <check.h>
 #include <math.h>
@@ -107,7 +107,7 @@ static float rel_err(float a, float b)
 START_TEST(glsl_matches_c)
 {
     eng_error err;
-    eng_pin_determinism(2);
+    glctx_pin_determinism(2);
     eng_glctx *ctx = NULL;
     ck_assert_msg(glctx_create(&ctx, &err) == ENG_OK, "%s", err.msg);
     eng_random_maps rm;

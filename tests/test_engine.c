@@ -5,7 +5,8 @@
  * thread count is fixed per process. */
 #include "eng.h"
 #include "bsdf.h"
-#include "eng_internal.h"
+#include "eng_frame.h"
+#include "indirect.h"
 
 #include <check.h>
 #include <math.h>

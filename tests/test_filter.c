@@ -9,7 +9,7 @@
  * Synthetic textures are written and read in GL's row order (row 0 at the bottom): only the
  * engine-level tests look at announced (top row first) buffers. */
 #include "eng.h"
-#include "eng_internal.h"
+#include "passes.h"
 
 #include <check.h>
 #include <math.h>

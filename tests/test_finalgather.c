@@ -8,13 +8,14 @@
  *     photons evaluated at the pixel (eng_photon.caustic, set by the photon trace from the
  *     bounce map's lobe): there the final gather holds what the k-d gather holds, where without
  *     that term it held 0.4 of it;
- *   - emitters add nothing to a gather ray (spec_tracer_gather_ray): they are seen only after
+ *   - emitters add nothing to a gather ray (eye_tracer_gather_ray): they are seen only after
  *     delta lobes, as in the reference renderer;
  *   - determinism: 1 and 3 threads give bit-identical buffers;
  *   - settings: final_gather_rays must be a power of 4, final_gather_radius in (0, 1], and the
  *     boundary correction (a kernel at the pixel) is refused, by the parser and the engine. */
 #include "eng.h"
-#include "eng_internal.h"
+#include "eng_frame.h"
+#include "indirect.h"
 #include "furnace_test_util.h"
 #include "specular.h"
 #include "tile_test_util.h"
@@ -190,7 +191,7 @@ END_TEST
 
 /* ---------------------------------------------------------------- emitters, threads, settings */
 
-/* A ray that meets an emitter first: spec_tracer_ray sees its emission, a gather ray does not. */
+/* A ray that meets an emitter first: eye_tracer_ray sees its emission, a gather ray does not. */
 START_TEST(gather_rays_do_not_see_emitters)
 {
     scene_run r;
@@ -204,9 +205,9 @@ START_TEST(gather_rays_do_not_see_emitters)
         for (int c = 0; c < 3; c++)
             sc->materials[m].emissive[c] = 2.0f;
     eng_error err = {{0}};
-    spec_tracer *t = spec_tracer_create(fs, rt, NULL, NULL, &r.seq.settings, &err);
+    eye_tracer *t = eye_tracer_create(fs, rt, NULL, NULL, &r.seq.settings, &err);
     ck_assert_ptr_nonnull(t);
-    spec_scratch scr = {NULL, 0};
+    eye_scratch scr = {NULL, 0};
     const float org[3] = {fs->camera.eye[0], fs->camera.eye[1], fs->camera.eye[2]};
     /* Toward the middle of the scene's bounds: the box's back wall or a box. */
     float dir[3], len = 0.0f;
@@ -217,12 +218,12 @@ START_TEST(gather_rays_do_not_see_emitters)
     for (int c = 0; c < 3; c++)
         dir[c] /= sqrtf(len);
     float seen[3], gathered[3];
-    spec_tracer_ray(t, org, dir, UINT32_MAX, &scr, seen);
-    spec_tracer_gather_ray(t, org, dir, &scr, gathered);
-    ck_assert_msg(seen[0] >= 2.0f, "spec_tracer_ray: %g", seen[0]);
+    eye_tracer_ray(t, org, dir, UINT32_MAX, &scr, seen);
+    eye_tracer_gather_ray(t, org, dir, &scr, gathered);
+    ck_assert_msg(seen[0] >= 2.0f, "eye_tracer_ray: %g", seen[0]);
     ck_assert_msg(fabsf(seen[0] - gathered[0] - 2.0f) < 1e-5f, "seen %g, gathered %g", seen[0], gathered[0]);
     free(scr.list);
-    spec_tracer_destroy(t);
+    eye_tracer_destroy(t);
     run_close(&r);
 }
 END_TEST

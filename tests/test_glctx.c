@@ -4,7 +4,7 @@
  * functions rendered into a float framebuffer object through OSMesa and through Mesa's EGL
  * (surfaceless and EGL device 0) gives the same bytes under the pinned llvmpipe settings.
  * (EGL missing altogether is tested by tests/e2e_egl.sh, which can hide glvnd's vendors.) */
-#include "eng_internal.h"
+#include "gl.h"
 
 #include <check.h>
 #include <stdio.h>
@@ -15,12 +15,12 @@
 
 START_TEST(backend_names)
 {
-    ck_assert(eng_gl_backend_known("osmesa"));
-    ck_assert(eng_gl_backend_known("egl"));
-    ck_assert(!eng_gl_backend_known("OSMesa"));
-    ck_assert(!eng_gl_backend_known("vulkan"));
-    ck_assert(!eng_gl_backend_known(""));
-    ck_assert(!eng_gl_backend_known(NULL));
+    ck_assert(glctx_backend_known("osmesa"));
+    ck_assert(glctx_backend_known("egl"));
+    ck_assert(!glctx_backend_known("OSMesa"));
+    ck_assert(!glctx_backend_known("vulkan"));
+    ck_assert(!glctx_backend_known(""));
+    ck_assert(!glctx_backend_known(NULL));
 }
 END_TEST
 
@@ -37,7 +37,7 @@ END_TEST
 
 START_TEST(egl_device_out_of_range_is_invalid)
 {
-    eng_pin_determinism(2);
+    glctx_pin_determinism(2);
     eng_glctx *c = NULL;
     eng_error err = {{0}};
     ck_assert_int_eq(glctx_create_on("egl", 1, 999, &c, &err), ENG_ERR_INVALID);
@@ -116,7 +116,7 @@ static void probe(const char *backend, int device, const char *where, float *out
 
 START_TEST(osmesa_and_egl_give_the_same_bits)
 {
-    eng_pin_determinism(2);
+    glctx_pin_determinism(2);
     static float a[S * S * 4], b[S * S * 4], d[S * S * 4];
     char ra[128], rb[128], rd[128];
     probe("osmesa", -1, "offscreen", a, ra);

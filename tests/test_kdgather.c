@@ -3,7 +3,7 @@
  * photon-volume scatter on the Cornell box (ISPM §5: "mathematically identical"; here equal up
  * to float rounding), and bit-identical results for any thread count. */
 #include "eng.h"
-#include "eng_internal.h"
+#include "indirect.h"
 #include "kdtree.h"
 
 #include <check.h>

@@ -361,7 +361,7 @@ START_TEST(embree_method_bit_identical)
     eng_trace_settings ts = {0, 2, 0, 0, {0, 0, 0, 0}, 0.0f};
     eng_photon_map a = {0}, b = {0};
     ck_assert_int_eq(photon_trace(c.rt, &c.fs, &rm, in, N, &ts, &a, NULL, &err), ENG_OK);
-    const pt_method *m = pt_method_of(ENG_TRACE_DEFAULT);
+    const pt_method *m = pt_method_find(eng_trace_name(ENG_TRACE_DEFAULT));
     ck_assert_str_eq(m->name, "embree");
     eng_settings s;
     memset(&s, 0, sizeof s);
@@ -390,7 +390,7 @@ static void run_mi(cornell *c, const eng_random_maps *rm, const eng_bounce_photo
                    int maps, int compare, eng_photon_map *out, eng_trace_stats *st, float centres[][3])
 {
     eng_error err;
-    const pt_method *m = pt_method_of(ENG_TRACE_MULTI_IMAGE);
+    const pt_method *m = pt_method_find(eng_trace_name(ENG_TRACE_MULTI_IMAGE));
     ck_assert_str_eq(m->name, "multi-image");
     eng_settings s = mi_settings(threads, maps, compare);
     void *state = NULL;

@@ -5,7 +5,7 @@
  * any thread count, and frame coherence: paths that never meet a moved object keep their
  * exact photons. */
 #include "bsdf.h"
-#include "eng_internal.h"
+#include "trace.h"
 
 #include <check.h>
 #include <embree3/rtcore.h> /* RTC_INVALID_GEOMETRY_ID */

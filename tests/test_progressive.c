@@ -4,7 +4,7 @@
  * hand-made photon maps, and the bench's bias measures (replay/metrics.c: rep_metric_bias,
  * rep_edge_mask). No GL: these are CPU functions. */
 #include "eng.h"
-#include "eng_internal.h"
+#include "indirect.h"
 #include "indirect.h"
 #include "metrics.h"
 #include "progressive.h"
@@ -30,7 +30,7 @@ static float uni(void)
 }
 
 /* A G-buffer of W×H surface pixels (pixel N−1 is background). */
-static void make_gbuffer(ind_gbuffer *g)
+static void make_gbuffer(glu_gbuffer *g)
 {
     g->width = W;
     g->height = H;
@@ -68,7 +68,7 @@ static void random_frame(float *rgba)
  * float rounding of one division); A is the current frame's; the count is n. */
 START_TEST(running_mean_is_the_arithmetic_mean)
 {
-    ind_gbuffer g;
+    glu_gbuffer g;
     make_gbuffer(&g);
     eng_frame_scene fs;
     eng_light_pose light;
@@ -111,7 +111,7 @@ START_TEST(running_mean_is_the_arithmetic_mean)
                 ck_assert_float_eq(mean[4 * i + c], in[0][4 * i + c]);
     }
     prog_destroy(p);
-    ind_gbuffer_free(&g);
+    glu_gbuffer_free(&g);
 }
 END_TEST
 
@@ -119,7 +119,7 @@ END_TEST
  * attachments (irradiance mode) restart together. A camera or light that moves restarts all. */
 START_TEST(restarts_where_the_gbuffer_changes)
 {
-    ind_gbuffer g;
+    glu_gbuffer g;
     make_gbuffer(&g);
     eng_frame_scene fs;
     eng_light_pose light;
@@ -165,7 +165,7 @@ START_TEST(restarts_where_the_gbuffer_changes)
     ck_assert_float_eq(prog_begin(p, &fs), 1.0f);
     ck_assert_int_eq(prog_frames(p), 1);
     prog_destroy(p);
-    ind_gbuffer_free(&g);
+    glu_gbuffer_free(&g);
 }
 END_TEST
 
@@ -209,7 +209,7 @@ START_TEST(ppm_update_per_pixel)
     ck_assert(fabs(n - 8.0) < 1e-12 && fabs(r2 - 16.0 / 27.0) < 1e-12);
 
     /* Through prog_state: M comes from the method's A channel, per pixel. */
-    ind_gbuffer g;
+    glu_gbuffer g;
     make_gbuffer(&g);
     eng_frame_scene fs;
     eng_light_pose light;
@@ -260,7 +260,7 @@ START_TEST(ppm_update_per_pixel)
     for (int i = 0; i < N; i++)
         ck_assert_float_eq(sc[i], 1.0f);
     prog_destroy(p);
-    ind_gbuffer_free(&g);
+    glu_gbuffer_free(&g);
 }
 END_TEST
 

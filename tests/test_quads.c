@@ -9,7 +9,7 @@
  * bit-identical buffers for 1 and 2 llvmpipe/Embree threads (each count in a process of its
  * own: llvmpipe reads LP_NUM_THREADS once per process). */
 #include "eng.h"
-#include "eng_internal.h"
+#include "indirect.h"
 
 #include <check.h>
 #include <math.h>

@@ -16,7 +16,7 @@
  *     as the engine's G-buffers do;
  *   - determinism: 1 and 2 threads give bit-identical buffers; full = direct + indirect. */
 #include "cap.h"
-#include "eng_internal.h"
+#include "eng_frame.h"
 #include "ref.h"
 #include "furnace_test_util.h"
 

@@ -5,6 +5,7 @@
  * seen in a mirror against its closed form, an emitter seen in a mirror, and bit-identical
  * results for any thread count, and the two settings as the sequence parser reads them. */
 #include "bsdf.h"
+#include "seq.h"
 #include "specular.h"
 
 #include <check.h>
@@ -31,10 +32,10 @@ START_TEST(split_glass_fresnel)
 {
     scn_material glass = material(1.0f, 0.0f, 0.0f, 1.0f);
     const float n[3] = {0.0f, 0.0f, 1.0f};
-    spec_branch b[2];
+    eye_branch b[2];
     /* Normal incidence: R = ((1 − 1.5)/(1 + 1.5))² = 0.04. */
     const float up[3] = {0.0f, 0.0f, 1.0f};
-    ck_assert_int_eq(spec_split(&glass, n, up, 1.0f, b), 2);
+    ck_assert_int_eq(eye_split(&glass, n, up, 1.0f, b), 2);
     ck_assert_float_eq_tol(b[0].weight[0], 0.04f, 1e-6f);
     ck_assert_float_eq_tol(b[1].weight[0], 0.96f, 1e-6f);
     ck_assert_float_eq_tol(b[1].dir[2], -1.0f, 1e-6f);
@@ -44,7 +45,7 @@ START_TEST(split_glass_fresnel)
     for (int k = 1; k < 9; k++) {
         float th = (float)k * 0.17f;
         float wi[3] = {sinf(th), 0.0f, cosf(th)};
-        ck_assert_int_eq(spec_split(&glass, n, wi, 1.0f, b), 2);
+        ck_assert_int_eq(eye_split(&glass, n, wi, 1.0f, b), 2);
         ck_assert_float_eq_tol(b[0].weight[1] + b[1].weight[1], 1.0f, 1e-6f);
         ck_assert_float_eq_tol(b[0].dir[0], -wi[0], 1e-6f);
         ck_assert_float_eq_tol(b[0].dir[2], wi[2], 1e-6f);
@@ -54,7 +55,7 @@ START_TEST(split_glass_fresnel)
     }
     /* A tinted glass tints only the refracted branch. */
     glass.base_color[1] = 0.5f;
-    ck_assert_int_eq(spec_split(&glass, n, up, 1.0f, b), 2);
+    ck_assert_int_eq(eye_split(&glass, n, up, 1.0f, b), 2);
     ck_assert_float_eq_tol(b[0].weight[1], 0.04f, 1e-6f);
     ck_assert_float_eq_tol(b[1].weight[1], 0.48f, 1e-6f);
 }
@@ -64,17 +65,17 @@ START_TEST(split_total_internal_reflection)
 {
     scn_material glass = material(1.0f, 0.0f, 0.0f, 1.0f);
     const float n[3] = {0.0f, 0.0f, 1.0f}; /* outward; the viewer is inside (wi·n < 0) */
-    spec_branch b[2];
+    eye_branch b[2];
     float crit = asinf(1.0f / 1.5f);
     float beyond[3] = {sinf(crit + 0.05f), 0.0f, -cosf(crit + 0.05f)};
-    ck_assert_int_eq(spec_split(&glass, n, beyond, 1.5f, b), 1);
+    ck_assert_int_eq(eye_split(&glass, n, beyond, 1.5f, b), 1);
     for (int c = 0; c < 3; c++)
         ck_assert_float_eq(b[0].weight[c], 1.0f);
     ck_assert_float_eq_tol(b[0].dir[2], beyond[2], 1e-6f); /* mirrored about n: stays inside */
     ck_assert_float_eq_tol(b[0].dir[0], -beyond[0], 1e-6f);
     ck_assert_float_eq(b[0].eta, 1.5f);
     float below[3] = {sinf(crit - 0.05f), 0.0f, -cosf(crit - 0.05f)};
-    ck_assert_int_eq(spec_split(&glass, n, below, 1.5f, b), 2);
+    ck_assert_int_eq(eye_split(&glass, n, below, 1.5f, b), 2);
     ck_assert(b[1].dir[2] > 0.0f); /* leaves into the air */
     ck_assert_float_eq(b[1].eta, 1.0f);
     ck_assert_float_eq_tol(b[0].weight[0] + b[1].weight[0], 1.0f, 1e-6f);
@@ -85,25 +86,25 @@ START_TEST(split_metal_and_opaque)
 {
     const float n[3] = {0.0f, 1.0f, 0.0f};
     const float wi[3] = {0.6f, 0.8f, 0.0f};
-    spec_branch b[2];
+    eye_branch b[2];
     scn_material mirror = material(0.5f, 1.0f, 0.0f, 0.0f);
-    ck_assert(spec_is_specular(&mirror));
-    ck_assert_int_eq(spec_split(&mirror, n, wi, 1.0f, b), 1);
+    ck_assert(eye_is_specular(&mirror));
+    ck_assert_int_eq(eye_split(&mirror, n, wi, 1.0f, b), 1);
     float k = 1.0f - 0.8f, schlick = 0.5f + 0.5f * k * k * k * k * k;
     ck_assert_float_eq_tol(b[0].weight[0], schlick, 1e-6f);
     ck_assert_float_eq_tol(b[0].dir[0], -0.6f, 1e-6f);
     ck_assert_float_eq_tol(b[0].dir[1], 0.8f, 1e-6f);
     /* Half mirror, half diffuse: half the weight. */
     scn_material half = material(0.5f, 0.5f, 0.0f, 0.0f);
-    ck_assert_int_eq(spec_split(&half, n, wi, 1.0f, b), 1);
+    ck_assert_int_eq(eye_split(&half, n, wi, 1.0f, b), 1);
     ck_assert_float_eq_tol(b[0].weight[0], 0.5f * schlick, 1e-6f);
     /* At the threshold and above, and diffuse surfaces: nothing specular. */
     scn_material rough = material(0.5f, 1.0f, BSDF_MIRROR_ROUGHNESS, 0.0f);
     scn_material diffuse = material(0.5f, 0.0f, 0.0f, 0.0f);
-    ck_assert(!spec_is_specular(&rough));
-    ck_assert(!spec_is_specular(&diffuse));
-    ck_assert_int_eq(spec_split(&rough, n, wi, 1.0f, b), 0);
-    ck_assert_int_eq(spec_split(&diffuse, n, wi, 1.0f, b), 0);
+    ck_assert(!eye_is_specular(&rough));
+    ck_assert(!eye_is_specular(&diffuse));
+    ck_assert_int_eq(eye_split(&rough, n, wi, 1.0f, b), 0);
+    ck_assert_int_eq(eye_split(&diffuse, n, wi, 1.0f, b), 0);
 }
 END_TEST
 
@@ -167,14 +168,14 @@ static void two_planes_init(two_planes *t, scn_material floor, scn_material ceil
     rt_update(t->rt, &t->fs);
 }
 
-static spec_tracer *tracer(const two_planes *t, int depth)
+static eye_tracer *tracer(const two_planes *t, int depth)
 {
     eng_settings s;
     memset(&s, 0, sizeof s);
     s.specular_depth = depth;
     eng_settings_defaults(&s);
     eng_error err;
-    spec_tracer *tr = spec_tracer_create(&t->fs, t->rt, NULL, NULL, &s, &err);
+    eye_tracer *tr = eye_tracer_create(&t->fs, t->rt, NULL, NULL, &s, &err);
     ck_assert_ptr_nonnull(tr);
     return tr;
 }
@@ -184,13 +185,13 @@ START_TEST(mirror_shows_lit_ceiling)
     two_planes t;
     const float intensity = 3.0f;
     two_planes_init(&t, material(1.0f, 1.0f, 0.0f, 0.0f), material(0.5f, 0.0f, 1.0f, 0.0f), intensity);
-    spec_tracer *tr = tracer(&t, 4);
-    spec_scratch sc = {NULL, 0};
+    eye_tracer *tr = tracer(&t, 4);
+    eye_scratch sc = {NULL, 0};
     /* The eye at (−0.5, 0.5, 0) sees the mirror at the origin at 45°; the reflected ray meets
      * the ceiling at (1, 1, 0), lit by the light at distance √1.25 and cosine 0.5/√1.25. */
     const float p[3] = {0, 0, 0}, n[3] = {0, 1, 0}, eye[3] = {-0.5f, 0.5f, 0.0f};
     float rad[3], thr[3], depth;
-    spec_tracer_pixel(tr, p, n, &t.mat[0], eye, &sc, rad, &depth, thr);
+    eye_tracer_pixel(tr, p, n, &t.mat[0], eye, &sc, rad, &depth, thr);
     double d2 = 1.25, cosl = 0.5 / sqrt(d2);
     double want = 0.5 / ENG_PI * intensity / d2 * cosl; /* mirror weight 1: F0 = 1 */
     /* The reflected ray starts bsdf_offset_eps above the mirror: ~1e-4 of the distances. */
@@ -198,9 +199,9 @@ START_TEST(mirror_shows_lit_ceiling)
     ck_assert_float_eq(depth, 1.0f);
     ck_assert_float_eq_tol(thr[1], 1.0f, 1e-6f);
     /* A diffuse G-buffer surface gets nothing from this pass. */
-    spec_tracer_pixel(tr, p, n, &t.mat[1], eye, &sc, rad, &depth, thr);
+    eye_tracer_pixel(tr, p, n, &t.mat[1], eye, &sc, rad, &depth, thr);
     ck_assert(rad[0] == 0.0f && depth == 0.0f && thr[0] == 0.0f);
-    spec_tracer_destroy(tr);
+    eye_tracer_destroy(tr);
     free(sc.list);
     rt_destroy(t.rt);
 }
@@ -213,15 +214,15 @@ START_TEST(mirror_shows_emitter)
     ceiling.emissive[0] = 2.0f;
     ceiling.emissive[2] = 0.5f;
     two_planes_init(&t, material(1.0f, 1.0f, 0.0f, 0.0f), ceiling, 0.0f); /* no light: emission only */
-    spec_tracer *tr = tracer(&t, 4);
-    spec_scratch sc = {NULL, 0};
+    eye_tracer *tr = tracer(&t, 4);
+    eye_scratch sc = {NULL, 0};
     const float p[3] = {0, 0, 0}, n[3] = {0, 1, 0}, eye[3] = {-0.5f, 0.5f, 0.0f};
     float rad[3], thr[3], depth;
-    spec_tracer_pixel(tr, p, n, &t.mat[0], eye, &sc, rad, &depth, thr);
+    eye_tracer_pixel(tr, p, n, &t.mat[0], eye, &sc, rad, &depth, thr);
     ck_assert_float_eq_tol(rad[0], 2.0f, 1e-6f);
     ck_assert_float_eq(rad[1], 0.0f);
     ck_assert_float_eq_tol(rad[2], 0.5f, 1e-6f);
-    spec_tracer_destroy(tr);
+    eye_tracer_destroy(tr);
     free(sc.list);
     rt_destroy(t.rt);
 }
@@ -229,22 +230,22 @@ END_TEST
 
 START_TEST(ray_passes_through_its_object)
 {
-    /* spec_tracer_ray, what the envmap's texels are made with: from below the mirror floor
+    /* eye_tracer_ray, what the envmap's texels are made with: from below the mirror floor
      * straight up, passing through the floor (draw 0) to the lit ceiling; without the pass the
      * floor's underside mirrors the ray down into nothing. */
     two_planes t;
     const float intensity = 2.0f;
     two_planes_init(&t, material(1.0f, 1.0f, 0.0f, 0.0f), material(0.5f, 0.0f, 1.0f, 0.0f), intensity);
-    spec_tracer *tr = tracer(&t, 4);
-    spec_scratch sc = {NULL, 0};
+    eye_tracer *tr = tracer(&t, 4);
+    eye_scratch sc = {NULL, 0};
     const float org[3] = {0.0f, -0.5f, 0.0f}, up[3] = {0.0f, 1.0f, 0.0f};
     float rad[3];
-    spec_tracer_ray(tr, org, up, 0, &sc, rad);
+    eye_tracer_ray(tr, org, up, 0, &sc, rad);
     double want = 0.5 / ENG_PI * intensity / 0.25; /* ceiling 0.5 m above the light, cos 1 */
     ck_assert_double_eq_tol(rad[0], want, 1e-3 * want);
-    spec_tracer_ray(tr, org, up, UINT32_MAX, &sc, rad);
+    eye_tracer_ray(tr, org, up, UINT32_MAX, &sc, rad);
     ck_assert_float_eq(rad[0], 0.0f);
-    spec_tracer_destroy(tr);
+    eye_tracer_destroy(tr);
     free(sc.list);
     rt_destroy(t.rt);
 }
@@ -254,16 +255,16 @@ START_TEST(depth_cap_between_mirrors)
 {
     two_planes t;
     two_planes_init(&t, material(1.0f, 1.0f, 0.0f, 0.0f), material(1.0f, 1.0f, 0.0f, 0.0f), 1.0f);
-    spec_scratch sc = {NULL, 0};
+    eye_scratch sc = {NULL, 0};
     const float p[3] = {0, 0, 0}, n[3] = {0, 1, 0}, eye[3] = {-0.05f, 0.5f, 0.0f};
     for (int cap = 1; cap <= 8; cap++) {
-        spec_tracer *tr = tracer(&t, cap);
+        eye_tracer *tr = tracer(&t, cap);
         float rad[3], thr[3], depth;
-        spec_tracer_pixel(tr, p, n, &t.mat[0], eye, &sc, rad, &depth, thr);
+        eye_tracer_pixel(tr, p, n, &t.mat[0], eye, &sc, rad, &depth, thr);
         /* Every bounce lands on a mirror: the path stops at the cap and adds nothing. */
         ck_assert_float_eq(depth, (float)cap);
         ck_assert(rad[0] == 0.0f && thr[0] == 0.0f);
-        spec_tracer_destroy(tr);
+        eye_tracer_destroy(tr);
     }
     free(sc.list);
     rt_destroy(t.rt);
@@ -275,19 +276,19 @@ START_TEST(same_for_any_thread_count)
     two_planes t;
     scn_material glassy = material(0.9f, 0.0f, 0.0f, 0.5f); /* half glass, half diffuse */
     two_planes_init(&t, glassy, material(0.5f, 0.3f, 0.4f, 0.0f), 2.0f);
-    spec_tracer *tr = tracer(&t, 4);
+    eye_tracer *tr = tracer(&t, 4);
     enum { N = 64 };
     float out[2][N * N * 3];
     for (int run = 0; run < 2; run++) {
 #pragma omp parallel num_threads(run ? 3 : 1)
         {
-            spec_scratch sc = {NULL, 0};
+            eye_scratch sc = {NULL, 0};
 #pragma omp for schedule(dynamic, 1)
             for (int i = 0; i < N * N; i++) {
                 float p[3] = {-2.0f + 4.0f * (float)(i % N) / N, 0.0f, -2.0f + 4.0f * (float)(i / N) / N};
                 const float n[3] = {0, 1, 0}, eye[3] = {0.1f, 0.7f, 0.2f};
                 float thr[3], depth;
-                spec_tracer_pixel(tr, p, n, &t.mat[0], eye, &sc, out[run] + 3 * i, &depth, thr);
+                eye_tracer_pixel(tr, p, n, &t.mat[0], eye, &sc, out[run] + 3 * i, &depth, thr);
             }
             free(sc.list);
         }
@@ -297,7 +298,7 @@ START_TEST(same_for_any_thread_count)
     for (int i = 0; i < N * N * 3; i++)
         sum += out[0][i];
     ck_assert(sum > 0.0f); /* the ceiling is seen through the glass half and lit */
-    spec_tracer_destroy(tr);
+    eye_tracer_destroy(tr);
     rt_destroy(t.rt);
 }
 END_TEST
@@ -321,13 +322,13 @@ START_TEST(settings_parsed)
     eng_settings_defaults(&q.settings);
     ck_assert_int_eq(q.settings.specular, ENG_SPECULAR_TRACED);
     ck_assert_int_eq(q.settings.specular_depth, 4);
-    ck_assert_ptr_eq(spec_method_of(q.settings.specular), &spec_traced_method);
+    ck_assert_ptr_eq(spec_method_find(eng_specular_name(q.settings.specular)), &spec_traced_method);
     ck_assert_int_eq(parse_settings("\"specular\": \"envmap\", \"specular_depth\": 16", &q, &err), ENG_OK);
     ck_assert_int_eq(q.settings.specular, ENG_SPECULAR_ENVMAP);
     ck_assert_int_eq(q.settings.specular_depth, 16);
-    ck_assert_ptr_eq(spec_method_of(q.settings.specular), &spec_envmap_method);
+    ck_assert_ptr_eq(spec_method_find(eng_specular_name(q.settings.specular)), &spec_envmap_method);
     ck_assert_int_eq(parse_settings("\"specular\": \"off\"", &q, &err), ENG_OK);
-    ck_assert_ptr_null(spec_method_of(q.settings.specular));
+    ck_assert_ptr_null(spec_method_find(eng_specular_name(q.settings.specular)));
     ck_assert_str_eq(eng_specular_name(q.settings.specular), "off");
     ck_assert_int_eq(parse_settings("\"specular\": \"mirror\"", &q, &err), ENG_ERR_INVALID);
     ck_assert_msg(strstr(err.msg, "/d/seq.json") && strstr(err.msg, "settings.specular"), "%s", err.msg);

@@ -3,7 +3,7 @@
  * checkerboard (exact texel values, in the right place), and a texture seen only through
  * photons, whose colour must bleed onto a white floor. Every glTF is written by the test. */
 #define _POSIX_C_SOURCE 200809L
-#include "eng_internal.h"
+#include "eng_frame.h"
 
 #include <check.h>
 #include <math.h>

@@ -3,7 +3,7 @@
  * compositing on synthetic layers, BLEND geometry invisible to the opaque rays and seen by
  * rt_intersect_blend, a pane's value (half its direct light over what lies behind), and the
  * image bit-identical for 1 and 3 threads. */
-#include "eng_internal.h"
+#include "translucent.h"
 #include "specular.h"
 #include "translucent.h"
 

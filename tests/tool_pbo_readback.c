@@ -10,7 +10,7 @@
  * usage: ispm_test_pbo [SIZE [ITERATIONS [osmesa|egl]]]   (default 160 200 osmesa) */
 #define _POSIX_C_SOURCE 200809L
 
-#include "eng_internal.h"
+#include "gl.h"
 
 #include <stdio.h>
 #include <stdlib.h>

@@ -1,0 +1,175 @@
+/* settings.h — what a sequence's "settings" object sets: the enums of the settings that name
+ * an alternative, their names, and eng_settings with its defaults. */
+#ifndef ISPM_SETTINGS_H
+#define ISPM_SETTINGS_H
+
+
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef enum eng_indirect {
+    ENG_INDIRECT_DEFAULT = 0, /* = ISPM */
+    ENG_INDIRECT_NONE,        /* direct light only */
+    ENG_INDIRECT_ISPM,        /* bounce map + CPU trace + photon volumes (ISPM §3) */
+    ENG_INDIRECT_KDGATHER,    /* the same photon map, gathered per pixel from a k-d tree on the
+                               * CPU (traditional photon mapping, ISPM Appendix A): the baseline */
+    ENG_INDIRECT_QUADS,       /* camera-independent photon quads on the tangent plane (001 §3.3) */
+    ENG_INDIRECT_TILEGATHER,  /* photons binned to screen tiles, each tile evaluating its list
+                               * (002 §6.3); the same estimate as the k-d gather, bit for bit */
+    ENG_INDIRECT_TILEGATHER_GL, /* the same tile lists evaluated in a GL compute shader (002 §6.3
+                                 * as the paper runs it); equal up to llvmpipe's rounding */
+    ENG_INDIRECT_FINALGATHER  /* the photon map looked up one bounce away: final gathering
+                               * (003 Appendix A; Jensen 1996), rays traced with Embree */
+} eng_indirect;
+
+/* What the À-Trous filter keeps of its detail coefficients (002_… §7.3.1). */
+typedef enum eng_atrous_detail {
+    ENG_DETAIL_DEFAULT = 0, /* = clipped */
+    ENG_DETAIL_CLIPPED,     /* clamp(D_i, −γσ_i, γσ_i), Eq. 7.8 */
+    ENG_DETAIL_NONE,        /* scaling coefficients only (Dammertz et al.; 002 Fig. 7.2a) */
+    ENG_DETAIL_ALL          /* every detail kept: reconstructs the input (a test of the transform) */
+} eng_atrous_detail;
+
+typedef enum eng_random_mode {
+    ENG_RANDOM_DEFAULT = 0,   /* = maps */
+    ENG_RANDOM_MAPS,          /* precomputed random maps seeded by scene quantities (ISPM §4.1) */
+    ENG_RANDOM_PER_FRAME,     /* the same maps, seeds salted with the frame index (for comparison) */
+    ENG_RANDOM_STRATIFIED     /* the maps' numbers rotated to one stratum per frame of a cycle of
+                               * stratified_cycle frames (002 §4.2); repeats every cycle */
+} eng_random_mode;
+
+/* How each photon's kernel radius r_xy is chosen (ind_photon_radii, engine/ind_common.c). */
+typedef enum eng_kernel_scaling {
+    ENG_SCALING_DEFAULT = 0,  /* = path-density */
+    ENG_SCALING_PATH_DENSITY, /* kernel_radius · clamp((1000 ρp)^(−1/4), 1/4, 2) (splat_radius) */
+    ENG_SCALING_RAY_LENGTH,   /* 002 Eq. 6.1: the incoming ray's length over a scene-sized l_max */
+    ENG_SCALING_TILE_DENSITY, /* 002 Eq. 6.2: the photon density of the screen tile it lands in */
+    ENG_SCALING_BANDWIDTH,    /* 004 §6: variable bandwidth C = C0/√p, p = cos θ / d² */
+    ENG_SCALING_ANISOTROPIC   /* 002 Eq. 6.3–6.5: path-density's r_xy, the ellipsoid stretched along
+                               * ω_i's projection on the kernel plane by min(1/cos θ, s_max) */
+} eng_kernel_scaling;
+
+/* The kernel's boundary correction (engine/boundary.h). */
+typedef enum eng_boundary {
+    ENG_BOUNDARY_DEFAULT = 0, /* = none */
+    ENG_BOUNDARY_NONE,
+    ENG_BOUNDARY_RENORMALIZE  /* each pixel's estimate over the kernel mass on its surface */
+} eng_boundary;
+/* What the eye sees in and through specular surfaces (mirrors, glass; 003 §3 step 5). */
+typedef enum eng_specular {
+    ENG_SPECULAR_DEFAULT = 0, /* = traced */
+    ENG_SPECULAR_TRACED,      /* eye rays continued on the CPU with Embree (003 §3 option 1) */
+    ENG_SPECULAR_ENVMAP,      /* a cube map per specular object, made at its centre (003 §3 option 3) */
+    ENG_SPECULAR_OFF          /* specular surfaces show only their non-specular lobes */
+} eng_specular;
+
+/* How photon bounces after the bounce map are traced (trace_method.h, one file each). */
+typedef enum eng_photon_trace {
+    ENG_TRACE_DEFAULT = 0,   /* = embree */
+    ENG_TRACE_EMBREE,        /* CPU ray tracing with Embree (003 §3 step 2) */
+    ENG_TRACE_MULTI_IMAGE    /* image space, against cube G-buffers (004 §4–5) */
+} eng_photon_trace;
+
+/* What the multi-image trace does with a ray no map resolves (004 §5.2). */
+typedef enum eng_miss_mode {
+    ENG_MISS_DEFAULT = 0,    /* = embree */
+    ENG_MISS_EMBREE,         /* trace it with Embree instead */
+    ENG_MISS_DROP            /* end the path there (the paper's behaviour) */
+} eng_miss_mode;
+
+/* How capture compresses each EXR part (lossless only: what replay decodes is bit-exact what
+ * was announced whatever the choice; only the file's bytes and size change). */
+typedef enum eng_capture_compression {
+    ENG_COMPRESSION_DEFAULT = 0, /* record's default: none (issue 22 row 1) */
+    ENG_COMPRESSION_NONE,
+    ENG_COMPRESSION_RLE,
+    ENG_COMPRESSION_ZIPS,        /* zlib, one scanline per block */
+    ENG_COMPRESSION_ZIP,         /* zlib, 16 scanlines per block */
+    ENG_COMPRESSION_PIZ          /* wavelet + Huffman */
+} eng_capture_compression;
+const char *eng_compression_name(eng_capture_compression m);
+/* "none", "rle", "zips", "zip", "piz" → *out; 0 if name is none of them. */
+int eng_compression_parse(const char *name, eng_capture_compression *out);
+
+const char *eng_indirect_name(eng_indirect m);
+const char *eng_trace_name(eng_photon_trace m);
+const char *eng_miss_name(eng_miss_mode m);
+const char *eng_specular_name(eng_specular m);
+const char *eng_scaling_name(eng_kernel_scaling m);
+const char *eng_random_name(eng_random_mode m);
+const char *eng_detail_name(eng_atrous_detail m);
+const char *eng_boundary_name(eng_boundary m);
+
+/* Engine settings. A zero-initialised struct means defaults (eng_settings_defaults fills
+ * them in explicitly so the manifest can record the values used). */
+typedef struct eng_settings {
+    int shadow_map_size;  /* texels per side (per cube face for point lights); default 1024 */
+    int pcf_radius;       /* PCF kernel half-width in texels: (2r+1)^2 taps; default 1 */
+    float shadow_bias;    /* world-space offset along the normal before the lookup; default 0.002 */
+    float exposure;       /* display transform: stops applied before sRGB encoding; default 0 */
+    int threads;          /* CPU worker threads (OpenMP, Embree, llvmpipe); 0 = default 2 */
+    /* Indirect light (ISPM). */
+    eng_indirect indirect;
+    int photon_count;         /* bounce-map photons over all lights; default 32768 */
+    int bounces;              /* optional cap on photon-map photons stored per path after the bounce
+                               * map; 0 (default) = no cap: Russian roulette ends paths (003 §4) */
+    float kernel_radius;      /* photon volume radius r_xy in metres at unit path-density scale; default 0.1 */
+    float normal_compression; /* r_z / r_xy of the kernel ellipsoid (ISPM §5.1); default 0.25 */
+    eng_random_mode random;
+    int random_map_size;      /* entries per random table, a power of two; default 65536 */
+    int random_seed;          /* seed of the random tables; default 1 */
+    int stratified_cycle;     /* frames per stratification cycle (random = stratified); default 16 */
+    /* Reconstruction filters (DESIGN.md step 7). With all of them off (the defaults) the
+     * splat writes outgoing radiance directly, as before; with any on, it writes irradiance
+     * (splat.irradiance) that the filters work on and the BSDF is applied last (002 Eq. 7.9). */
+    int splat_subsample;      /* 1 (full resolution), 2, 4 or 8: photon volumes at 1/k resolution,
+                               * joint bilateral upsampling level by level (003 §5.2); default 1 */
+    int temporal;             /* 1: temporal accumulation (002 §7.2, Eq. 7.3–7.4); default 0 */
+    float temporal_alpha;     /* the 0.95 of Eq. 7.4 (history weight); default 0.95 */
+    int temporal_window;      /* > 0: the temporal and progressive state restarts at every frame that
+                               * is a multiple of it (a bounded history: frame shards converge after
+                               * a warm-up of window - 1 frames); 0 (default): never */
+    int atrous_iterations;    /* À-Trous wavelet iterations (002 §7.3, Eq. 7.5), 0 = off; default 0 */
+    eng_atrous_detail atrous_detail; /* default clipped */
+    float atrous_gamma;       /* γ of Eq. 7.7; default 0.05 (002 §8.2's table) */
+    /* Convergence for still views (issue 13). */
+    eng_kernel_scaling kernel_scaling; /* default path-density */
+    int progressive;          /* 1: running mean of the indirect estimate while nothing moves, the
+                               * kernel shrinking as in progressive photon mapping; default 0 */
+    eng_boundary boundary;    /* kernel boundary correction after the method; default none */
+    /* Photon trace method (issue 16). */
+    eng_photon_trace photon_trace; /* default embree */
+    int multi_image_maps;     /* cube maps (centres) of the multi-image trace, 1..8; default 2 */
+    int multi_image_size;     /* texels per cube-map face side, 4..1024; default 64 */
+    eng_miss_mode multi_image_miss; /* rays no map resolves: embree (default) or drop */
+    int multi_image_compare;  /* 1: also trace every multi-image ray with Embree and count the
+                               * hits that agree (the bench's measure); default 0 */
+    /* Specular eye paths (issue 14, specular.h). */
+    eng_specular specular;    /* default traced */
+    int specular_depth;       /* specular surfaces an eye path crosses, 1..16; default 4 */
+    /* Capture (issue 22): EXR compression of the frame files; default zip. */
+    eng_capture_compression capture_compression;
+    /* Issue 13: `"progressive_radius": "pixel"` (1): progressive photon mapping's radius per pixel
+     * (progressive.h; every method but tile-gather-gl); "frame" (0, default): one scale per frame. */
+    int progressive_pixel;
+    /* Issue 13: `"bounce_strata": N` (2, 4, …, 64): the bounce map's first-bounce numbers
+     * stratified within each N×N block of texels (bsdf_strata, bsdf.h); 0 (default) or 1: off. */
+    int bounce_strata;
+    /* Issue 13: `"final_gather_rays": N` (4, 16, 64, …, 4096): gather rays per pixel of the
+     * "final-gather" method (ind_finalgather.c), a correlated multi-jittered set; default 64. */
+    int final_gather_rays;
+    /* `"final_gather_radius"`: the factor (0, 1] on every photon's kernel radius r_xy at the
+     * final gather's lookups, which the gather's rays average, so a small kernel's noise matters
+     * less than its edge bias; default 0.25. */
+    float final_gather_radius;
+} eng_settings;
+
+void eng_settings_defaults(eng_settings *s);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif
