@@ -53,7 +53,7 @@ typedef struct cap_desc {
      * text that is not a JSON object is ENG_ERR_INVALID. Copied by cap_create. */
     const char *renderer;
     const char *renderer_settings;
-    /* Writer threads (issue 22): 0 (the default) writes each frame in frame_end, on the
+    /* Writer threads: 0 (the default) writes each frame in frame_end, on the
      * caller's thread; N > 0 hands ended frames to N threads through a queue of queue_depth
      * frames (0: 2), so that encoding and writing overlap rendering the next frame. At most
      * queue_depth + writers + 1 frames of buffers are held. A writer's failure is sticky as a

@@ -275,7 +275,7 @@ static int frame_file(const char *name)
 /* Overwriting a run, the old frames are set aside rather than removed one by one before the
  * first frame renders: frames/ is renamed to a fresh SET_ASIDE_PREFIX folder (one rename), and
  * a thread removes its files while the new run renders (remove_set_aside). Removing a recorded
- * run's 8 frames of 5 MB took 20-25 ms of `ispm record --force`'s start (issue 22 row 1).
+ * run's 8 frames of 5 MB took 20-25 ms of `ispm record --force`'s start.
  * Only when frames/ holds nothing but frame files (anything else stays where it is, as with
  * clean_frames), at least SET_ASIDE_FILES of them or SET_ASIDE_BYTES, and only run_dir's
  * entries change; the run.json written next is fsynced with its folder, which makes the rename

@@ -7,7 +7,7 @@
  * failing write (ENOSPC, EFBIG, EIO) is kept, so the message says what went wrong instead
  * of the library's generic "write failed"; and the library's error callback is captured
  * instead of printed, so a failure is reported once, through eng_error. The library's many
- * small writes are coalesced in a write-behind buffer (issue 22). Pixels are float32 in and
+ * small writes are coalesced in a write-behind buffer. Pixels are float32 in and
  * float32 out (FLOAT channels, the lossless compression capture_compression names: none by
  * default, ZIP for cap_write_exr), so what is written is bit-exact what was announced, NaN
  * payloads and -0.0 included, and replay's digests match capture's.
@@ -38,7 +38,7 @@
 /* Names longer than this need the EXR "long names" flag (older readers refuse those). */
 #define EXR_SHORT_NAME_MAX 31
 
-/* The library's writes coalesced into runs of this many bytes at most (issue 22): it writes
+/* The library's writes coalesced into runs of this many bytes at most: it writes
  * the header attribute by attribute and each chunk as a few small pieces, over 11,000
  * pwrite calls for one 43-part frame with one-scanline chunks (none, rle, zips). */
 #define SINK_BUFFER (256 * 1024)
@@ -167,7 +167,7 @@ static _Thread_local exr_result_t (*library_compress)(exr_encode_pipeline_t *);
 /* OpenEXR up to 3.4.7 (Debian 12 ships 3.1.5) keeps the zlib output of a ZIP/ZIPS chunk when
  * it is exactly as long as the raw packed pixels, but a reader takes a chunk of that length for
  * uncompressed data and decodes the zlib bytes as pixels: silently wrong values, which replay
- * then reports as a tampered frame (upstream issue #2306, fixed by storing the raw bytes when
+ * then reports as a tampered frame (OpenEXR report 2306 upstream, fixed by storing the raw bytes when
  * compression does not shrink them). This wrapper applies that fix: same size, raw bytes. */
 static exr_result_t zip_safe_compress(exr_encode_pipeline_t *enc)
 {

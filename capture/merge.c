@@ -1,5 +1,5 @@
 /* merge.c — ispm merge: frame shards checked against each other and written as one run
- * (merge.h has the contract; issue 20).
+ * (merge.h has the contract).
  *
  * Everything is decided from the shards' manifests before anything is written: provenance,
  * coverage and the overlap digests. Only then is the run folder prepared (as cap_create does:

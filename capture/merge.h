@@ -1,4 +1,4 @@
-/* merge.h — frame shards merged into one run (ispm merge; issue 20).
+/* merge.h — frame shards merged into one run (ispm merge).
  *
  * A shard (ispm record --frames A-B --warmup W --overlap O, cap_desc.shard) is a complete run
  * of frames A-O..B of a sequence whose temporal state was rebuilt from frame A-W. cap_merge

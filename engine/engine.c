@@ -187,7 +187,7 @@ static void upload_scene(eng_engine *e)
     e->deform = eng_deform_create(s, e->gpu);
 }
 
-/* The part of eng_create that calls no GL (issue 22 item 3): the ray tracer's scene and, for
+/* The part of eng_create that calls no GL: the ray tracer's scene and, for
  * an indirect method, the random maps. It writes only e->rt, e->rmaps and its own fields. */
 typedef struct cpu_setup {
     eng_engine *e;
@@ -1306,7 +1306,7 @@ eng_result eng_render_frame(eng_engine *e, int frame, eng_error *err)
     memcpy(e->stats.camera_eye, e->fs.camera.eye, sizeof e->stats.camera_eye);
 
     /* With 2+ threads the first trace's photon buffers are grown and touched on the overlap
-     * worker while this thread renders the shadow and bounce maps (issue 22 item 3). */
+     * worker while this thread renders the shadow and bounce maps. */
     if (e->method && e->overlap && e->pmap.capacity == 0)
         ovl_start(e->overlap, photon_warm_run, e);
 

@@ -339,10 +339,10 @@ const char *eng_random_name(eng_random_mode m)
  * blocks every frame (replay: a frame's buffers, 6 MB for the CI run per side; record:
  * llvmpipe's binned scene, which a 1-thread splat bins in one piece), and glibc serves each from
  * fresh mmap'd or trimmed-and-regrown memory, so every page is faulted in anew. Measured
- * (session 8, idle): replay of the CI run ~24,000 faults fewer; record of cornell-box-perf,
+ * (idle machine): replay of the CI run ~24,000 faults fewer; record of cornell-box-perf,
  * 1 thread, 66,886 -> 39,708 minor faults, 2.51 -> 2.21 s, the same peak RSS (220 MB).
  *
- * Transparent huge pages (issue 22 rows 1-3): the heap is grown once by HEAP_THP_BYTES of
+ * Transparent huge pages: the heap is grown once by HEAP_THP_BYTES of
  * address space (glibc's M_TOP_PAD for one growth: no page is touched; less than the trim
  * threshold, so that it stays) and that range is madvise(MADV_HUGEPAGE)d, so first touches
  * fault 2 MiB at a time instead of 4 KiB (what glibc's own glibc.malloc.hugetlb=1 tunable

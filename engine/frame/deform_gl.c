@@ -1,4 +1,4 @@
-/* deform_gl.c — skinned and morphed draws for the passes (issue 17): eng_deform.
+/* deform_gl.c — skinned and morphed draws for the passes: eng_deform.
  *
  * A draw whose node has a skin or morph targets (scn_node_deforms) gets its own VAO with
  * three dynamic vertex buffers — this frame's positions (location 0) and normals (1) and the

@@ -64,7 +64,7 @@ typedef struct eng_frame_scene {
     float bounds_min[3], bounds_max[3]; /* world AABB of all geometry this frame */
 } eng_frame_scene;
 
-/* Skinned and morphed draws (deform_gl.c, issue 17): per deformed draw its own vertex
+/* Skinned and morphed draws (deform_gl.c): per deformed draw its own vertex
  * buffers (positions, normals, previous positions) beside the primitive's texcoords, colours
  * and indices. eng_deform_pose runs after the draws are set for the frame: it deforms each
  * on the CPU at t and at tp (scn_deform), points the draw at the result and at its buffers,

@@ -1,4 +1,4 @@
-/* overlap.h — one CPU job run beside the GL thread (issue 22 item 3: two cores for record).
+/* overlap.h — one CPU job run beside the GL thread (two cores for record).
  *
  * llvmpipe runs each draw's vertex processing and binning on the thread that called GL, so in
  * a 2-thread run one core idles while the GL thread renders the eye G-buffer and the direct

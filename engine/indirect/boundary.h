@@ -1,4 +1,4 @@
-/* boundary.h — boundary renormalisation of the photon kernel (issue 13; the `boundary` setting).
+/* boundary.h — boundary renormalisation of the photon kernel (the `boundary` setting).
  *
  * Every method sums Σ Φ κ over the photons whose kernel reaches a pixel; κ integrates to 1 over
  * the photon's tangent plane (003 §5.1 Eq. 2–3; shaders/photon_kernel.glsl). Within one kernel

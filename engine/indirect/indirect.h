@@ -1,4 +1,4 @@
-/* indirect.h — one interface for the indirect-light methods (issue 12): each turns the eye
+/* indirect.h — one interface for the indirect-light methods: each turns the eye
  * G-buffer and the photon map into the photon estimate of Eq. 1 (003_… §5) at every pixel,
  * one file each, chosen by the `indirect` setting:
  *
@@ -72,7 +72,7 @@ typedef struct ind_method {
     void (*destroy)(void *state); /* accepts NULL */
     int per_pixel_radius; /* 1: run honours ind_input.pixel_scale (all but tile-gather-gl) */
     /* Optional, NULL for none: makes room for `photons` map photons, calling no GL; the photon
-     * stage calls it on the overlap worker with 2+ threads (issue 22 item 3). */
+     * stage calls it on the overlap worker with 2+ threads. */
     void (*reserve)(void *state, size_t photons, int threads);
     /* 1: the estimate at a pixel comes from rays traced from it (final-gather), not from photon
      * kernels evaluated there, so the boundary correction (boundary.h) has nothing to correct

@@ -56,7 +56,7 @@ struct pass_splat {
 /* Draws the drawn photons' rectangles (the bound VAO's index buffer, 6 indices each). llvmpipe
  * shades the vertices of a draw and bins its triangles on the calling thread, alone, and
  * rasterises the binned scene on its LP_NUM_THREADS threads only once the scene is flushed
- * (issue 22 item 3; cornell-box-perf, 65,536 photons, 2 threads: one draw ~560 ms a frame, in
+ * (cornell-box-perf, 65,536 photons, 2 threads: one draw ~560 ms a frame, in
  * pieces ~360 ms, measured under chrt on the 2-core machine). With 2 or more threads
  * the photons are therefore drawn SPLAT_CHUNK at a time with a glFlush after each, so that
  * llvmpipe rasterises piece k while this thread bins piece k+1. The pixels are the same: the

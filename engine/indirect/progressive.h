@@ -1,5 +1,5 @@
-/* progressive.h — progressive accumulation of the indirect estimate for still views (issue 13;
- * the `progressive` setting). While nothing moves, each pixel keeps the running (arithmetic)
+/* progressive.h — progressive accumulation of the indirect estimate for still views (the
+ * `progressive` setting). While nothing moves, each pixel keeps the running (arithmetic)
  * mean of the indirect method's per-frame estimates, and the kernel radius shrinks from frame
  * to frame as in progressive photon mapping (Hachisuka et al. 2008, Eq. 8 with α = 2/3:
  * r_{i+1}² = r_i² (i + α)/(i + 1)), so that both the noise (the mean of more photon maps) and

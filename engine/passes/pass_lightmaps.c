@@ -133,7 +133,7 @@ eng_result pass_lightmaps_run(pass_lightmaps *p, const eng_frame_scene *fs, uint
     glUniform3fv(glGetUniformLocation(g, "u_light_scale"), 1, l->radiance_scale);
     glUniform3f(glGetUniformLocation(g, "u_light_params"), l->range, cosf(l->inner_cone), cosf(l->outer_cone));
     glUniform1f(glGetUniformLocation(g, "u_extent"), light_view_extent(l, &lm->views));
-    /* Lights with a size (issue 15): a sphere's radius, or tan of a disc's angular radius. */
+    /* Lights with a size: a sphere's radius, or tan of a disc's angular radius. */
     glUniform1f(glGetUniformLocation(g, "u_radius"), type == 2 ? tanf(l->radius) : l->radius);
     glUniform1ui(glGetUniformLocation(g, "u_salt"), rf->salt);
     glUniform1i(glGetUniformLocation(g, "u_stratified"), rf->stratified);

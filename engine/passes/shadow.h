@@ -1,4 +1,4 @@
-/* shadow.h — one interface for the shadow methods (issue 15), one file each, chosen per
+/* shadow.h — one interface for the shadow methods, one file each, chosen per
  * light by its size (scn_light.radius):
  *
  *   shadow_pcf.c   "pcf"   hard shadows, percentage-closer filtering (shaders/shadow_pcf.glsl);

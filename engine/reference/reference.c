@@ -238,7 +238,7 @@ static float pdf_mix(const scn_material *m, const float ns[3], const float wi[3]
 
 /* ---------------------------------------------------------------- lights */
 
-/* Lights with a size (scn_light.radius; issue 15): the point a shadow ray aims at and the
+/* Lights with a size (scn_light.radius): the point a shadow ray aims at and the
  * direction wl toward it, from two uniform numbers. A sphere of radius R and uniform radiance
  * I/(πR²) seen from p delivers light_at's irradiance I/d² (d to its centre) spread over its
  * disc, so the sample is uniform on the disc through the centre facing p; a directional disc
@@ -454,7 +454,7 @@ static void scatter_normal(const rt_hit *h, const float wi[3], float n[3])
 
 /* ---------------------------------------------------------------- lamps */
 
-/* Lamps (issue 15): the emitters of point and spot lights with a size are opaque spheres
+/* Lamps: the emitters of point and spot lights with a size are opaque spheres
  * that reflect nothing (rt.c's rt_lamp_hit; rt_intersect already stops at them, rt_occluded
  * does not). */
 
@@ -852,7 +852,7 @@ static void camera_ray(const frame_ctx *c, double px, double py, float org[3], f
     frame_camera_ray(c->inv_view_proj, c->fs->camera.eye, c->width, c->height, px, py, org, dir, tnear, tfar);
 }
 
-/* alphaMode BLEND (issue 14; pass_translucent.c): the primary ray meets the translucent
+/* alphaMode BLEND (pass_translucent.c): the primary ray meets the translucent
  * surfaces between tnear and tend (the opaque hit) front to back; at each, the path stops on it
  * with probability alpha (base colour factor × texture alpha) and continues straight through
  * with probability 1 − alpha, so a surface covers alpha of what lies behind it, as the

@@ -1,4 +1,4 @@
-/* deform.c — skinned and morphed meshes on the CPU (issue 17): scn_deform.
+/* deform.c — skinned and morphed meshes on the CPU: scn_deform.
  *
  * glTF 2.0 §3.7.2.2 (morph targets): the morphed attribute is the base plus the weighted sum
  * of the targets' deltas, pos = base + Σ_i w_i · Δpos_i, the same for normals.

@@ -746,7 +746,7 @@ static eng_result load_cameras(loader *L)
 }
 
 /* extras.ispm.radius (point, spot: metres, below 10) or extras.ispm.angular_radius
- * (directional: radians, below π/4); absent or 0 keeps the punctual light (issue 15). */
+ * (directional: radians, below π/4); absent or 0 keeps the punctual light. */
 static eng_result light_size(loader *L, uint32_t i, const gls_light *g, scn_light *d)
 {
     int directional = d->type == SCN_LIGHT_DIRECTIONAL;

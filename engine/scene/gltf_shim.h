@@ -141,7 +141,7 @@ typedef struct gls_light {
     gls_doubles color;
     double intensity, range;           /* tinygltf defaults: 1, 0 */
     double inner_cone, outer_cone;     /* tinygltf defaults: 0, pi/4 */
-    /* extras.ispm.radius / extras.ispm.angular_radius (issue 15: lights with a size);
+    /* extras.ispm.radius / extras.ispm.angular_radius (lights with a size);
      * NOT_A_NUMBER also where extras.ispm is there but not an object. */
     gls_number radius, angular_radius;
 } gls_light;

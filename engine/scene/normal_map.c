@@ -1,4 +1,4 @@
-/* normal_map.c — tangent frames and normal textures on the CPU (issue 17): the loader's
+/* normal_map.c — tangent frames and normal textures on the CPU: the loader's
  * generated tangents (scn_generate_tangents) and the shading normal at a CPU hit
  * (scn_normal_at), with the same arithmetic normal_map.glsl does for the G-buffers.
  *

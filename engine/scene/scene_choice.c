@@ -1,7 +1,7 @@
 /* scene_choice.c — a sequence's scene as the sequence chooses it (seq_load_scene): which of
  * the glTF's scenes, which animations, which lights besides the file's own; and the scene's
  * warnings (scn_warn), among them the one that says a scene has no light at all, so no
- * frame renders black without saying why (issue 17). */
+ * frame renders black without saying why. */
 #include "seq.h"
 
 #include <math.h>

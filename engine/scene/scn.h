@@ -139,7 +139,7 @@ typedef struct scn_light {
     float range;      /* 0 = infinite */
     float inner_cone; /* spot only, radians */
     float outer_cone;
-    /* Size (issue 15; glTF extras.ispm): point and spot lights with radius > 0 are spheres of
+    /* Size (glTF extras.ispm): point and spot lights with radius > 0 are spheres of
      * that radius (metres) with the same radiant intensity, i.e. uniform radiance
      * I/(π·radius²), opaque; directional lights with angular_radius > 0 are discs of that
      * angular radius (radians). 0 = today's punctual light. */

@@ -1,4 +1,4 @@
-/* texture_mip.c — texture sampling on the CPU with mip levels (issue 17): the same levels the
+/* texture_mip.c — texture sampling on the CPU with mip levels: the same levels the
  * GPU samples (engine.c uploads these, not glGenerateMipmap's), the same filters (OpenGL 4.5
  * §8.14), and a level of detail from a ray cone for CPU hits.
  *

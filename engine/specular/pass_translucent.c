@@ -1,4 +1,4 @@
-/* pass_translucent.c — alphaMode BLEND surfaces (translucent.h; issue 14 item 3; 003_… §3
+/* pass_translucent.c — alphaMode BLEND surfaces (translucent.h; 003_… §3
  * step 5: "render translucent surfaces back to front with direct, mirror and refracted
  * illumination only").
  *

@@ -1,5 +1,5 @@
 /* specular.h — one interface for what the eye sees in and through specular surfaces
- * (issue 14; 003_d0bf8e920b03f4e1.txt §3 step 5 and its discussion of the options), one file
+ * (003_d0bf8e920b03f4e1.txt §3 step 5 and its discussion of the options), one file
  * per method, chosen by the `specular` setting:
  *
  *   spec_traced.c   "traced"  eye rays continued on the CPU with Embree (003 §3, option 1)

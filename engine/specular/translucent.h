@@ -1,4 +1,4 @@
-/* translucent.h — alphaMode BLEND surfaces (issue 14 item 3; 003_d0bf8e920b03f4e1.txt §3 step
+/* translucent.h — alphaMode BLEND surfaces (003_d0bf8e920b03f4e1.txt §3 step
  * 5: translucent surfaces are rendered back to front after the opaque passes and receive
  * direct, mirror and refracted light only). pass_translucent.c. */
 #ifndef ISPM_TRANSLUCENT_H

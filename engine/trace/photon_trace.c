@@ -21,7 +21,7 @@
  * while it still carries power is counted in stats->truncated, so a manifest shows whether
  * the limit ever mattered.
  *
- * Streams (issue 22 item 4): the inputs are cut into batches of PT_BATCH; a thread traces
+ * Streams: the inputs are cut into batches of PT_BATCH; a thread traces
  * a consecutive range of batches, keeping PT_LANES paths of its batch in flight (lanes). Each
  * round casts the next ray of every path in flight at once (the tracer's intersect_n: Embree
  * rtcIntersect4 packets, rt.c), then moves each path on; the diffuse BSDF is sampled four hits
@@ -42,7 +42,7 @@
  * left; the statistics are summed sequentially after that. The threads take the batches as
  * they become free (OpenMP guided: long runs of consecutive batches first, single ones last).
  *
- * Speed (issue 22 item 4) also: the random-map entries of an event are prefetched as its ray
+ * Speed also: the random-map entries of an event are prefetched as its ray
  * is set up, the BSDF reads a bsdf_params rather than a copy of the material, and the per-thread
  * buffers, path records and batch figures stay in the map from one trace to the next.
  *
@@ -170,7 +170,7 @@ static int lane_start(pt_lane *l, size_t path, const eng_bounce_photon *bp, cons
  * write-combining buffers always fill a line; the two lines a batch shares with its neighbours
  * are written with ordinary stores. Photons streamed one by one as each path stored them wrote
  * lines piecemeal, four paths interleaved, which a busy memory system made slow (tracebench, 2
- * threads, busy spells on the AMD machine of session 18). Visible to other threads after the
+ * threads, busy spells on an AMD EPYC machine). Visible to other threads after the
  * writer's sfence (photon_trace_with). */
 static void stream_photons(eng_photon *to, const eng_photon *from, size_t n)
 {

@@ -10,12 +10,12 @@
  * return the interpolated shading normal the photon tracer scatters about, and its world
  * tangents where the primitive has them, for the normal texture (scn_normal_at).
  *
- * Lamps (issue 15): the emitter of a point or spot light with a size is an opaque sphere that
+ * Lamps: the emitter of a point or spot light with a size is an opaque sphere that
  * reflects nothing, tested analytically (rt_lamp_hit): a ray that meets one before any
  * surface hits nothing (rt_intersect returns 0: the photon or path is absorbed), except a ray
  * that starts inside it (light vertices and photons leaving their own light's centre).
  *
- * alphaMode BLEND (issue 14, pass_translucent.c): BLEND geometry is not in the scene that
+ * alphaMode BLEND (pass_translucent.c): BLEND geometry is not in the scene that
  * rt_intersect and rt_occluded see (photons, shadow rays and the specular eye paths pass
  * through translucent surfaces as if they were not there); it is in a second Embree scene that
  * only rt_intersect_blend sees.
@@ -26,7 +26,7 @@
  * (exact_hit), because Embree's divide by the triangle's determinant through the processor's
  * approximate reciprocal (RCPPS, refined by one Newton step), whose bits differ between
  * processor models: the same binary on two hosts gave a third of cornell-box-ci's photons
- * positions 1-2 ulps apart (issue 22, session 17). IEEE division and products (no FMA:
+ * positions 1-2 ulps apart. IEEE division and products (no FMA:
  * -ffp-contract=off) give the same bits on every x86-64. */
 #include "trace.h"
 

@@ -153,7 +153,7 @@ typedef struct rt_hit {
 
 /* Fills hit's base_tex, roughness_tex, metallic_tex and emissive_tex from its material's
  * textures on primitive p at (tri, bary) (hit_textures.c). width ≤ 0: level 0 as each
- * sampler's magFilter says (every CPU lookup before issue 17's mips); width > 0: the ray-cone
+ * sampler's magFilter says (no mip levels); width > 0: the ray-cone
  * width over |cos| at the hit (world units), the level chosen from it (scn_texref_at_cone). */
 void rt_hit_textures(const scn_scene *scene, const scn_primitive *p, rt_hit *hit, float width);
 
@@ -239,7 +239,7 @@ void photon_map_free(eng_photon_map *m);
 /* Grows m's per-thread trace buffers (for a trace on `threads` threads) and its photon array
  * towards `photons` photons and touches the new memory, so that a first trace does not take
  * those page faults; the trace's results do not depend on it (out of memory: leaves m as is).
- * The frame loop calls it on the overlap worker while the GL thread renders (issue 22 item 3). */
+ * The frame loop calls it on the overlap worker while the GL thread renders. */
 void photon_map_reserve(eng_photon_map *m, int threads, size_t photons);
 
 /* ---------------------------------------------------------------- Embree scene (rt.c) */

@@ -1,5 +1,5 @@
 /* trace_method.h — one interface for the ways photon bounces after the bounce map find their
- * next surface (issue 16), one file each, chosen by the `photon_trace` setting:
+ * next surface, one file each, chosen by the `photon_trace` setting:
  *
  *   trace_embree.c      "embree"       CPU ray tracing with Embree (003 §3 step 2, rt.c)
  *   trace_multiimage.c  "multi-image"  image space, against cube G-buffers (004 §4–5)

@@ -9,7 +9,7 @@
  * (world matrices of every node), which walks the node order and the animation channels.
  * Sanitizers (ASan, UBSan) turn any memory or undefined-behaviour error into a finding. */
 #define _POSIX_C_SOURCE 200809L
-#include "eng.h"
+#include "scn.h"
 
 #include <stdint.h>
 #include <stdlib.h>

@@ -7,7 +7,7 @@
  * keys and capture patterns within their arrays, a camera by node name, node index or keys), and seq_wants is exercised on a few buffer
  * names so the stored glob patterns are known to be NUL-terminated and usable. */
 #define _POSIX_C_SOURCE 200809L
-#include "eng.h"
+#include "seq.h"
 
 #include <math.h>
 #include <stdint.h>
