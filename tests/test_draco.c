@@ -4,7 +4,7 @@
  * external .bin and from a .glb, and refuses corrupt Draco data, an attribute id the data
  * lacks, an accessor count that disagrees and a missing bufferView, each with one line
  * naming the file and the mesh. */
-#include "eng.h"
+#include "seq.h"
 
 #include <check.h>
 #include <math.h>

@@ -7,7 +7,7 @@
  * accessors).
  * Every glTF is written by the test into its own folder under the build tree. */
 #define _POSIX_C_SOURCE 200809L
-#include "eng.h"
+#include "seq.h"
 
 #include <check.h>
 #include <math.h>

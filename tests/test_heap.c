@@ -3,7 +3,7 @@
  * allocate afterwards (one arena), the call is idempotent, and it is a no-op where the
  * allocator is not glibc's (sanitizers) or the kernel has no transparent huge pages. */
 #define _DEFAULT_SOURCE /* sbrk */
-#include "eng.h"
+#include "eng_core.h"
 
 #include <check.h>
 #include <pthread.h>

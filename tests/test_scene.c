@@ -5,7 +5,7 @@
  * sequence files (valid, and one failure per rule); a corpus of malformed glTF files under
  * tests/data/gltf/, each with the eng_result it must produce; and a byte-mutation pass over a
  * small glTF that must never crash. Tests check result codes, never message text. */
-#include "eng.h"
+#include "seq.h"
 
 #include <check.h>
 #include <math.h>
