@@ -7,7 +7,8 @@
 #define _POSIX_C_SOURCE 200809L
 #include "eng.h"
 #include "lineage.h"
-#include "rep_internal.h"
+#include "rep_run.h"
+#include "rep_util.h"
 
 #include <cjson/cJSON.h>
 #include <getopt.h>

@@ -5,7 +5,7 @@
  * bit-identical to the ray-by-ray one-thread trace. Exit: 0 measured; 1 the trace failed or
  * its map differed; 2 bad arguments or an unreadable sequence or scene. */
 #include "eng.h"
-#include "rep_internal.h"
+#include "rep_util.h"
 #include "tracebench.h"
 
 #include <getopt.h>

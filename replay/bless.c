@@ -26,7 +26,8 @@
  */
 #define _XOPEN_SOURCE 700
 
-#include "rep_internal.h"
+#include "replay_internal.h"
+#include "rep_util.h"
 
 #include "cap.h"
 

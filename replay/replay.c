@@ -17,8 +17,9 @@
  */
 #define _POSIX_C_SOURCE 200809L
 
-#include "rep_internal.h"
-#include "stability_internal.h"
+#include "replay_internal.h"
+#include "rep_stab.h"
+#include "rep_util.h"
 
 #include <fnmatch.h>
 #include <stdio.h>

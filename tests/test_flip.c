@@ -2,7 +2,8 @@
  * uniform images against values computed by hand from the papers' formulas, and the metric's
  * documented behaviour on constructed images (a one-pixel change, a shift, a contrast change). */
 #include "flip.h"
-#include "rep_internal.h"
+#include "rep_compare.h"
+#include "rep_util.h"
 
 #include <check.h>
 #include <math.h>

@@ -12,7 +12,8 @@
 #include <string.h>
 #include <unistd.h>
 
-#include "rep_internal.h"
+#include "rep_run.h"
+#include "rep_util.h"
 #include "view_model.h"
 
 #define GOLDEN ISPM_SOURCE_DIR "/golden/stress-photons-1k"

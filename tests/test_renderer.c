@@ -3,7 +3,7 @@
  * cross-renderer set, or the built-in one where the file has none; the same renderer (or a
  * manifest that names none) keeps the golden's own tolerances; the section is validated as
  * strictly as the rest, and the report says "different renderer". */
-#include "rep_internal.h"
+#include "rep_report.h"
 
 #include <check.h>
 #include <math.h>

@@ -21,7 +21,8 @@
 
 #include "cap.h"
 #include "rep.h"
-#include "rep_internal.h"
+#include "replay_internal.h"
+#include "rep_util.h"
 
 #include <openexr.h>
 

@@ -7,7 +7,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "stability_internal.h"
+#include "rep_stab.h"
 
 #define W 16
 #define H 8

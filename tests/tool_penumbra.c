@@ -21,7 +21,8 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "rep_internal.h"
+#include "rep_run.h"
+#include "rep_util.h"
 
 #define ROWS 16
 

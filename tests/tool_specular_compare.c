@@ -15,7 +15,8 @@
 #include <string.h>
 
 #include "metrics.h"
-#include "rep_internal.h"
+#include "rep_run.h"
+#include "rep_util.h"
 
 /* The RGB (or one named channel) of part `name` of frame 0, as w×h×n floats. */
 static float *read_part(const char *dir, const char *name, const char *channel, int *w, int *h)

@@ -5,10 +5,11 @@
  */
 #include "view_model.h"
 
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
-#include "rep_internal.h"
+#include "rep_compare.h"
 
 int view_flip_render(view_flip_cache *c, int frame, const eng_buffer *a, const eng_buffer *b, uint8_t *out)
 {

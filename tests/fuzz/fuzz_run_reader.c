@@ -20,7 +20,9 @@
  * inside them, so mode 2 mostly tests the shim's guards around them; a long run is still
  * worth it, because ASan intercepts their allocations and memory accesses through ours. */
 #define _POSIX_C_SOURCE 200809L
-#include "rep_internal.h"
+#include "rep_compare.h"
+#include "rep_run.h"
+#include "rep_util.h"
 
 #include <stdint.h>
 #include <stdio.h>

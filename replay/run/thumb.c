@@ -19,7 +19,8 @@
  * REP_THUMB_MAX_SIDE; the heatmap takes the maximum over each box, so a single changed pixel
  * survives the reduction. Everything here is pure computation; files are report_html.c's.
  */
-#include "rep_internal.h"
+#include "rep_run.h"
+#include "rep_util.h"
 
 #include <math.h>
 #include <stdio.h>

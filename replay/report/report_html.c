@@ -19,8 +19,9 @@
  */
 #define _XOPEN_SOURCE 700
 
-#include "rep_internal.h"
-#include "stability_internal.h"
+#include "rep_report.h"
+#include "rep_stab.h"
+#include "rep_util.h"
 
 #include <errno.h>
 #include <limits.h>

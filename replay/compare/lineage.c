@@ -15,7 +15,7 @@
  * bounce) at the texel the pixel projects to through its light's matrices. */
 #define _POSIX_C_SOURCE 200809L
 #include "lineage.h"
-#include "rep_internal.h"
+#include "rep_util.h"
 
 #include <cjson/cJSON.h>
 #include <math.h>
