@@ -1,4 +1,5 @@
-/* rep.h — the replay module's one public header.
+/* rep.h — the replay module's public API: replay, bless, progress. Above the three rooms (run/,
+ * compare/, report/); a program that reads runs itself uses run/rep_run.h.
  *
  * Replay reads a recorded run (RUN/manifest.json + one multi-part EXR per frame, as capture
  * writes it) and, given a golden run, compares every buffer of every frame under per-buffer

@@ -1,4 +1,4 @@
-/* tool_specular_compare.c — test and measurement helper for issue 14: compares the pixels of
+/* tool_specular_compare.c — test and measurement helper for eye-specular surfaces: compares the pixels of
  * specular transmissive surfaces (gbuffer.material transmission > 0: the glass sphere) of a
  * recorded run's BUFFER (default composite.radiance) with a reference run's reference.full,
  * frame 0 of each. Prints one line:

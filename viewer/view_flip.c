@@ -1,5 +1,5 @@
-/* view_flip.c — the viewer's ꟻLIP heat map (issue 19 item 2): how visible the difference of the
- * shown colour buffer against the second run is (replay/flip.h, the same code and ramp as the
+/* view_flip.c — the viewer's ꟻLIP heat map: how visible the difference of the
+ * shown colour buffer against the second run is (replay/compare/flip.h, the same code and ramp as the
  * HTML report's). A map is computed once per frame and buffer and kept, since HDR-ꟻLIP filters
  * the image at several exposures; redraws (hover, zoom) reuse it.
  */

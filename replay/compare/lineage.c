@@ -1,4 +1,4 @@
-/* lineage.c — pixel lineage (lineage.h, issue 19 item 1).
+/* lineage.c — pixel lineage (lineage.h).
  *
  * Shadow tests repeat shaders/shadow_pcf.glsl's shadow_lookup on the CPU with the light's
  * matrices the manifest records per frame (eng_light_record): normal offset of bias + 1.5

@@ -8,6 +8,8 @@
  */
 #define _POSIX_C_SOURCE 200809L
 
+#include "rep_compare.h"
+#include "rep_run.h"
 #include "rep_stab.h"
 
 #include "cap.h"

@@ -19,6 +19,7 @@
  * are kept, so memory holds two frames' worth of eye-sized images per measured pass. Every
  * rep_stab_run owns its buffers and is freed whole by rep_stab_free.
  */
+#include "rep_run.h"
 #include "rep_stab.h"
 #include "rep_util.h"
 

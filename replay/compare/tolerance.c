@@ -26,6 +26,7 @@
  */
 #define _POSIX_C_SOURCE 200809L
 
+#include "flip.h"
 #include "rep_compare.h"
 #include "rep_util.h"
 

@@ -11,6 +11,7 @@
  * Every name and message passes through rep_sb_xml, so a hostile buffer name cannot make the
  * document malformed. No times are written: the output is a pure function of the report.
  */
+#include "rep_compare.h"
 #include "rep_report.h"
 #include "rep_stab.h"
 #include "rep_util.h"

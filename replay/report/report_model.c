@@ -9,8 +9,10 @@
  * The report's entries, strings, stability report, provenance and kept parts are owned by
  * rep_report and freed whole by rep_report_free.
  */
+#include "flip.h"
+#include "rep_compare.h"
 #include "rep_report.h"
-
+#include "rep_run.h"
 #include "rep_stab.h" /* rep_stab_report_free, the stability verdict's count */
 #include "rep_util.h"
 

@@ -6,6 +6,8 @@
  * line. report.json carries the same results per frame and per buffer with every metric and
  * the tolerance applied, for tools. Both are strings; report_write.c writes them to files.
  */
+#include "flip.h"
+#include "rep_compare.h"
 #include "rep_report.h"
 #include "rep_stab.h"
 #include "rep_util.h"

@@ -3,6 +3,7 @@
  * reader never sees half a report, all from the same entries in the same worst-first order.
  */
 #include "rep_report.h"
+#include "rep_run.h"
 #include "rep_util.h"
 
 #include <stdlib.h>

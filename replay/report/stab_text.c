@@ -3,6 +3,7 @@
  * against a reference, the golden's values and the verdict, with the pixel classes of the
  * reprojection test.
  */
+#include "rep_compare.h"
 #include "rep_report.h"
 #include "rep_stab.h"
 #include "rep_util.h"

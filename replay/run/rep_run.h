@@ -67,7 +67,7 @@ typedef struct rep_run {
 eng_result rep_run_open(const char *dir, rep_run **out, eng_error *err);
 void rep_run_close(rep_run *run);
 
-/* Opens a run that may still be recording (live view, issue 19 item 3). With manifest.json it
+/* Opens a run that may still be recording (live view). With manifest.json it
  * is rep_run_open. Without it, a folder holding run.json (written by capture before any frame)
  * is a run in progress: its frames are those whose frames/NNNNNN.exr and frames/NNNNNN.json
  * (the frame's manifest record, written after the EXR) both exist, from frame 0 up to the first

@@ -13,6 +13,7 @@
  */
 #define _POSIX_C_SOURCE 200809L
 
+#include "oiio_shim.h"
 #include "rep_run.h"
 #include "rep_util.h"
 

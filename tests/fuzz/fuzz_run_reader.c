@@ -1,6 +1,6 @@
 /* fuzz_run_reader.c — libFuzzer target for replay's readers of files it did not write: the
- * run manifest (rep_run_open + rep_run_read_frame, replay/run.c), tolerance files
- * (rep_tol_parse, replay/tolerance.c) and frame EXRs (rep_read_parts: the OpenEXR C reader,
+ * run manifest (rep_run_open + rep_run_read_frame, replay/run/run.c), tolerance files
+ * (rep_tol_parse, replay/compare/tolerance.c) and frame EXRs (rep_read_parts: the OpenEXR C reader,
  * exr_read.c, then the OpenImageIO shim for what it leaves). A golden is read by the same code
  * as a run, so this covers goldens too.
  *
