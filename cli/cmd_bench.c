@@ -20,7 +20,9 @@
 #include "eng.h"
 #include "metrics.h"
 #include "plot.h"
-#include "rep_internal.h"
+#include "rep.h"
+#include "rep_run.h"
+#include "rep_util.h"
 
 #include <cjson/cJSON.h>
 #include <getopt.h>

@@ -6,7 +6,8 @@
  * commit whose renderer crashes is judged bad instead of ending the bisection. */
 #define _POSIX_C_SOURCE 200809L
 #include "eng.h"
-#include "rep_internal.h" /* rep_remove_tree */
+#include "rep.h"
+#include "rep_util.h"
 
 #include <errno.h>
 #include <getopt.h>

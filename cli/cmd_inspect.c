@@ -4,7 +4,9 @@
  *   image, with the display mapping of the replay report's thumbnails (PNG) or as float (EXR). */
 #define _POSIX_C_SOURCE 200809L
 #include "eng.h"
-#include "rep_internal.h"
+#include "rep_compare.h"
+#include "rep_run.h"
+#include "rep_util.h"
 
 #include <cjson/cJSON.h>
 #include <getopt.h>

@@ -1,5 +1,5 @@
 /* cmd_lineage.c — `ispm lineage RUN --frame F --pixel X,Y [--json]`: everything that made one
- * pixel of one recorded frame (replay/lineage.h), as text or JSON, and the check that the
+ * pixel of one recorded frame (replay/compare/lineage.h), as text or JSON, and the check that the
  * photons listed add up to the indirect method's own buffer at the pixel: Σ contribution =
  * <prefix>.indirect (or .irradiance) within LIN_PRECISION relative (the sum's order differs
  * from the GPU's blending order and the k-d tree's traversal order), and the number of photons
@@ -7,7 +7,8 @@
 #define _POSIX_C_SOURCE 200809L
 #include "eng.h"
 #include "lineage.h"
-#include "rep_internal.h"
+#include "rep_run.h"
+#include "rep_util.h"
 
 #include <cjson/cJSON.h>
 #include <getopt.h>

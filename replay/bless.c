@@ -10,7 +10,7 @@
  * replay/ report folder inside the run is not part of a golden.
  *
  * Goldens are committed, so their frame files are ZIP whatever the run was recorded with
- * (record writes none by default, issue 22 row 1: no encoding, 70 % larger than zip): a frame file
+ * (record writes none by default: no encoding, 70 % larger than zip): a frame file
  * that is not ZIP throughout is recompressed part by part through OpenEXR (cap_recompress_exr:
  * every attribute and every bit kept), the golden's manifest then says "capture":
  * {"compression": "zip"} (nothing else in it changes), and the new golden is verified before
@@ -26,7 +26,12 @@
  */
 #define _XOPEN_SOURCE 700
 
-#include "rep_internal.h"
+#include "rep.h"
+#include "rep_compare.h"
+#include "rep_report.h"
+#include "rep_run.h"
+#include "rep_util.h"
+#include "replay_internal.h"
 
 #include "cap.h"
 

@@ -1,4 +1,5 @@
-/* rep.h — the replay module's one public header.
+/* rep.h — the replay module's public API: replay, bless, progress. Above the three rooms (run/,
+ * compare/, report/); a program that reads runs itself uses run/rep_run.h.
  *
  * Replay reads a recorded run (RUN/manifest.json + one multi-part EXR per frame, as capture
  * writes it) and, given a golden run, compares every buffer of every frame under per-buffer
@@ -13,26 +14,12 @@
 
 #include <stdio.h>
 
-#include "eng.h"
+#include "eng_core.h"
+#include "rep_compare.h" /* rep_exit, rep_tol_flags */
 
 #ifdef __cplusplus
 extern "C" {
 #endif
-
-/* idiff-style exit codes; when several apply, the largest wins. */
-typedef enum rep_exit { REP_OK = 0, REP_WARN = 1, REP_FAIL = 2, REP_SIZE = 3, REP_UNREADABLE = 4 } rep_exit;
-
-/* idiff-style thresholds given on the command line (ispm replay -fail 0.1 ...): each key whose
- * bit is set replaces the tolerance file's "default" entry, and so every rule that took that
- * key from the default; a key a rule sets itself stays the rule's. */
-enum {
-    REP_FLAG_WARN = 1, REP_FLAG_WARNRELATIVE = 2, REP_FLAG_WARNPERCENT = 4, REP_FLAG_HARDWARN = 8,
-    REP_FLAG_FAIL = 16, REP_FLAG_FAILRELATIVE = 32, REP_FLAG_FAILPERCENT = 64, REP_FLAG_HARDFAIL = 128
-};
-typedef struct rep_tol_flags {
-    unsigned set; /* REP_FLAG_* bits */
-    double warn, warnrelative, warnpercent, hardwarn, fail, failrelative, failpercent, hardfail;
-} rep_tol_flags;
 
 /* Progress of a long command (progress.c): "<label>: frame 3/8  elapsed 2.1 s  left 3.5 s", one
  * refreshed line on a terminal, one line per step otherwise. */
@@ -69,11 +56,6 @@ typedef struct rep_options {
     rep_progress *progress;   /* NULL, or stepped once per frame compared (total set by replay) */
     int no_flip;              /* skip ꟻLIP (flip.h) of the colour buffers (for timing it; reports show none) */
 } rep_options;
-
-/* Parses one idiff-style option name ("fail", "-failpercent", "--hardwarn") and its value into
- * f. Returns 0 when name is not one of the eight, -1 when the value is not a finite number >= 0,
- * 1 when taken. */
-int rep_tol_flag_parse(rep_tol_flags *f, const char *name, const char *value);
 
 /* Returns the idiff-style exit code; on REP_UNREADABLE err names the file and problem. The
  * human summary goes to `summary` (may be NULL). */

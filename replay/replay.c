@@ -17,8 +17,13 @@
  */
 #define _POSIX_C_SOURCE 200809L
 
-#include "rep_internal.h"
-#include "stability_internal.h"
+#include "rep.h"
+#include "rep_compare.h"
+#include "rep_report.h"
+#include "rep_run.h"
+#include "rep_stab.h"
+#include "rep_util.h"
+#include "replay_internal.h"
 
 #include <fnmatch.h>
 #include <stdio.h>

@@ -1,8 +1,9 @@
-/* test_flip.c — Check suite of ꟻLIP / HDR-ꟻLIP (replay/flip.c): identical images give 0,
+/* test_flip.c — Check suite of ꟻLIP / HDR-ꟻLIP (replay/compare/flip.c): identical images give 0,
  * uniform images against values computed by hand from the papers' formulas, and the metric's
  * documented behaviour on constructed images (a one-pixel change, a shift, a contrast change). */
 #include "flip.h"
-#include "rep_internal.h"
+#include "rep_compare.h"
+#include "rep_util.h"
 
 #include <check.h>
 #include <math.h>

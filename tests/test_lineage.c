@@ -1,4 +1,4 @@
-/* test_lineage.c — pixel lineage (replay/lineage.h) on hand-made frames: a photon map of two
+/* test_lineage.c — pixel lineage (replay/compare/lineage.h) on hand-made frames: a photon map of two
  * covering photons of known power (and two that must not count) gives the contributions of ISPM
  * 003 §5 Eq. 1–3 computed by hand, adding up to the splat buffer; a directional light's shadow
  * test lands on the texel the matrices say and turns from lit to shadowed with the stored depth;

@@ -1,5 +1,5 @@
-/* test_live.c — Check suite of live view (issue 19 item 3): the run reader on a run still being
- * recorded (rep_run_open_live, rep_run_refresh in replay/run.c) and the viewer's follow logic
+/* test_live.c — Check suite of live view: the run reader on a run still being
+ * recorded (rep_run_open_live, rep_run_refresh in replay/run/run.c) and the viewer's follow logic
  * (viewer/view_live.c). A recording is imitated file by file from a small golden run, in the
  * order capture writes: run.json first, then per frame the EXR and then its record
  * (frames/NNNNNN.json, the manifest's entry for the frame), manifest.json last. */
@@ -12,7 +12,8 @@
 #include <string.h>
 #include <unistd.h>
 
-#include "rep_internal.h"
+#include "rep_run.h"
+#include "rep_util.h"
 #include "view_model.h"
 
 #define GOLDEN ISPM_SOURCE_DIR "/golden/stress-photons-1k"

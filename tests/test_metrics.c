@@ -1,4 +1,4 @@
-/* test_metrics.c — Check suite of the bench's error metrics (replay/metrics.c) against values
+/* test_metrics.c — Check suite of the bench's error metrics (replay/compare/metrics.c) against values
  * computed by hand, and their refusal of NaN/Inf. */
 #include "metrics.h"
 

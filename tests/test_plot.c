@@ -1,4 +1,4 @@
-/* test_plot.c — Check suite for replay/plot.c (PLplot charts): a chart file has the requested
+/* test_plot.c — Check suite for replay/report/plot.c (PLplot charts): a chart file has the requested
  * size, is drawn (not blank, the series' colours present), log axes skip values <= 0, marked
  * points add markers, stacked bars scale with their values, and bad input fails with an error
  * naming the file and leaves no file behind. */

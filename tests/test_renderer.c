@@ -1,9 +1,9 @@
-/* test_renderer.c — goldens per renderer (replay/renderer.c, tolerance.c's "cross_renderer"):
+/* test_renderer.c — goldens per renderer (replay/report/renderer.c, tolerance.c's "cross_renderer"):
  * a run from another GL renderer than its golden is compared under the golden's separate
  * cross-renderer set, or the built-in one where the file has none; the same renderer (or a
  * manifest that names none) keeps the golden's own tolerances; the section is validated as
  * strictly as the rest, and the report says "different renderer". */
-#include "rep_internal.h"
+#include "rep_report.h"
 
 #include <check.h>
 #include <math.h>

@@ -21,7 +21,8 @@
 
 #include "cap.h"
 #include "rep.h"
-#include "rep_internal.h"
+#include "replay_internal.h"
+#include "rep_util.h"
 
 #include <openexr.h>
 
@@ -1613,8 +1614,7 @@ static int exr_compression_of(const char *path)
     return out;
 }
 
-/* Issue 22: record writes uncompressed (rle in sessions 8-16; this test makes an rle run), goldens
- * stay ZIP. bless recompresses a run's frame files to ZIP
+/* A run may be recorded in any compression (this test makes an rle run); goldens stay ZIP. bless recompresses a run's frame files to ZIP
  * (same pixels and digests, verified), its manifest then says so and nothing else changes; the
  * run is left as it was; a golden blessed from a ZIP run replays bit-exact against the same
  * pixels in rle (re-blessing is "unchanged"); a ZIP run is still copied byte for byte. */

@@ -1,4 +1,4 @@
-/* test_stability.c — the replay module's temporal stability metrics (replay/stability.c) on
+/* test_stability.c — the replay module's temporal stability metrics (replay/compare/stability.c) on
  * synthetic frames with known answers: identical frames give zero flicker, a known change gives
  * known statistics, a disocclusion is masked, reprojection under a known camera motion is exact,
  * and the "stability" tolerance object is parsed strictly and enforced. */
@@ -7,7 +7,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "stability_internal.h"
+#include "rep_stab.h"
 
 #define W 16
 #define H 8

@@ -9,7 +9,8 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "rep_internal.h"
+#include "rep_run.h"
+#include "rep_util.h"
 
 static const char *const FROM[] = {"indirect.radiance", "composite.radiance"};
 static const char *const TO[] = {"reference.indirect", "reference.full"};

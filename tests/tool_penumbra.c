@@ -1,4 +1,4 @@
-/* tool_penumbra.c — the soft-shadow measurements of issue 15 (bench/penumbra.sh,
+/* tool_penumbra.c — the soft-shadow measurements (bench/penumbra.sh,
  * tests/e2e_softshadow.sh): compares frame 0 of an engine run (direct.radiance,
  * gbuffer.position) with frame 0 of a reference run of the same sequence (reference.direct).
  *
@@ -21,7 +21,8 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "rep_internal.h"
+#include "rep_run.h"
+#include "rep_util.h"
 
 #define ROWS 16
 

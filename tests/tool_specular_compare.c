@@ -1,4 +1,4 @@
-/* tool_specular_compare.c — test and measurement helper for issue 14: compares the pixels of
+/* tool_specular_compare.c — test and measurement helper for eye-specular surfaces: compares the pixels of
  * specular transmissive surfaces (gbuffer.material transmission > 0: the glass sphere) of a
  * recorded run's BUFFER (default composite.radiance) with a reference run's reference.full,
  * frame 0 of each. Prints one line:
@@ -15,7 +15,8 @@
 #include <string.h>
 
 #include "metrics.h"
-#include "rep_internal.h"
+#include "rep_run.h"
+#include "rep_util.h"
 
 /* The RGB (or one named channel) of part `name` of frame 0, as w×h×n floats. */
 static float *read_part(const char *dir, const char *name, const char *channel, int *w, int *h)

@@ -1,14 +1,15 @@
-/* view_flip.c — the viewer's ꟻLIP heat map (issue 19 item 2): how visible the difference of the
- * shown colour buffer against the second run is (replay/flip.h, the same code and ramp as the
+/* view_flip.c — the viewer's ꟻLIP heat map: how visible the difference of the
+ * shown colour buffer against the second run is (replay/compare/flip.h, the same code and ramp as the
  * HTML report's). A map is computed once per frame and buffer and kept, since HDR-ꟻLIP filters
  * the image at several exposures; redraws (hover, zoom) reuse it.
  */
 #include "view_model.h"
 
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
-#include "rep_internal.h"
+#include "rep_compare.h"
 
 int view_flip_render(view_flip_cache *c, int frame, const eng_buffer *a, const eng_buffer *b, uint8_t *out)
 {

@@ -1,4 +1,4 @@
-/* view_lineage.c — the viewer's side of pixel lineage (issue 19; replay/lineage.h): which eye
+/* view_lineage.c — the viewer's side of pixel lineage (replay/compare/lineage.h): which eye
  * pixel a probe on the shown buffer stands for, the probe panel's lines with every buffer read at
  * its own coordinate (subsampled levels scaled, light-space buffers at the texel the pixel
  * projects to through the light's matrices) and the shadow verdicts, and the photons that

@@ -300,7 +300,7 @@ void view_flip_cache_free(view_flip_cache *c);
  * lightgbuffer, bounce), photon maps and probes outside the buffer. */
 int view_lineage_eye_pixel(const eng_buffer *shown, int eye_w, int eye_h, int px, int py, int *ex, int *ey);
 
-/* The probe panel's lines for a pixel's lineage (replay/lineage.h): the shadow test per light
+/* The probe panel's lines for a pixel's lineage (replay/compare/lineage.h): the shadow test per light
  * (map, texel, stored against compared value, verdict), the photons that contribute and their
  * sum, then every buffer at its own coordinate. Writes at most max lines; returns how many. */
 #define VIEW_LINEAGE_LINE 256

@@ -17,7 +17,8 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "rep_internal.h"
+#include "rep_run.h"
+#include "rep_util.h"
 
 typedef struct view_entry {
     int frame;          /* -1: empty slot */

@@ -1,6 +1,6 @@
 /* fuzz_run_reader.c — libFuzzer target for replay's readers of files it did not write: the
- * run manifest (rep_run_open + rep_run_read_frame, replay/run.c), tolerance files
- * (rep_tol_parse, replay/tolerance.c) and frame EXRs (rep_read_parts: the OpenEXR C reader,
+ * run manifest (rep_run_open + rep_run_read_frame, replay/run/run.c), tolerance files
+ * (rep_tol_parse, replay/compare/tolerance.c) and frame EXRs (rep_read_parts: the OpenEXR C reader,
  * exr_read.c, then the OpenImageIO shim for what it leaves). A golden is read by the same code
  * as a run, so this covers goldens too.
  *
@@ -20,7 +20,9 @@
  * inside them, so mode 2 mostly tests the shim's guards around them; a long run is still
  * worth it, because ASan intercepts their allocations and memory accesses through ours. */
 #define _POSIX_C_SOURCE 200809L
-#include "rep_internal.h"
+#include "rep_compare.h"
+#include "rep_run.h"
+#include "rep_util.h"
 
 #include <stdint.h>
 #include <stdio.h>

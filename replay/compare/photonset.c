@@ -19,9 +19,11 @@
  * The alignment is bounded (REP_PHOTON_MAX_EDITS path edits): beyond it the maps are called
  * different whole (every path of the smaller map changed, the rest added or removed).
  */
-#include "rep_internal.h"
+#include "rep_compare.h"
+#include "rep_util.h"
 
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 

@@ -1,5 +1,5 @@
 /* exr_read.c — frame files read through OpenEXR's C API (openexr.h, OpenEXRCore), so that a
- * replay whose images are all frame EXRs never loads OpenImageIO (issue 22: its ~260 shared
+ * replay whose images are all frame EXRs never loads OpenImageIO (its ~260 shared
  * libraries cost ~0.8 s of CPU on the first frame read, as much as a whole `idiff` run).
  *
  * The parts it returns are the ones oiio_shim.cpp returns for the same file, or it returns

@@ -1,4 +1,4 @@
-/* lineage.c — pixel lineage (lineage.h, issue 19 item 1).
+/* lineage.c — pixel lineage (lineage.h).
  *
  * Shadow tests repeat shaders/shadow_pcf.glsl's shadow_lookup on the CPU with the light's
  * matrices the manifest records per frame (eng_light_record): normal offset of bias + 1.5
@@ -15,7 +15,7 @@
  * bounce) at the texel the pixel projects to through its light's matrices. */
 #define _POSIX_C_SOURCE 200809L
 #include "lineage.h"
-#include "rep_internal.h"
+#include "rep_util.h"
 #include "kernel.h"
 
 #include <cjson/cJSON.h>

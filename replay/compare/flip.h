@@ -1,4 +1,4 @@
-/* flip.h — the perceptual difference metric ꟻLIP (issue 19 item 2): how visible the difference
+/* flip.h — the perceptual difference metric ꟻLIP: how visible the difference
  * between a test image and a reference image is to a person who flips between them.
  *
  *   LDR-ꟻLIP  Andersson, Nilsson, Akenine-Möller, Oskarsson, Åström, Fairchild, "FLIP: A

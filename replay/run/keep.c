@@ -1,6 +1,6 @@
-/* keep.c — what the walk over a run keeps for report.html (rep_keep, rep_internal.h): the
+/* keep.c — what the walk over a run keeps for report.html (rep_keep, rep_run.h): the
  * decoded buffers its thumbnails show and the ꟻLIP maps of its heat maps, so that the report
- * neither decodes a frame file a second time nor runs ꟻLIP again (issue 22: the report's second
+ * neither decodes a frame file a second time nor runs ꟻLIP again (the report's second
  * decoding of every frame with a card was a third of replay's CPU).
  *
  * The walk moves in, after each frame's comparisons, the run's and the golden's part of every
@@ -11,7 +11,9 @@
  * REP_KEEP_MAX_ITEMS items nothing more is kept, and the report decodes (or computes) what it
  * does not find here. Lookups search the items' frame order.
  */
-#include "rep_internal.h"
+#include "oiio_shim.h"
+#include "rep_run.h"
+#include "rep_util.h"
 
 #include <stdlib.h>
 #include <string.h>

@@ -1,5 +1,5 @@
 /* png_write.c — the report's PNG images written with libpng directly (rep_png_write,
- * rep_internal.h), so that replay's HTML report does not load OpenImageIO (issue 22: its ~260
+ * rep_run.h), so that replay's HTML report does not load OpenImageIO (its ~260
  * shared libraries cost ~0.8 s of CPU, more than the images). The file holds what OpenImageIO
  * 2.4's PNG writer made from the same bytes before (png_shim.cpp; test_replay compares): 8-bit,
  * libpng's adaptive filters (so the same filtered rows), the sRGB chunk with its gAMA and cHRM
@@ -9,7 +9,7 @@
  * RGB only (OpenImageIO would un-premultiply an alpha channel; the report has none). Written to
  * a temporary name and renamed by the caller.
  */
-#include "rep_internal.h"
+#include "rep_run.h"
 
 #include <png.h>
 #include <zlib.h>

@@ -19,8 +19,12 @@
  */
 #define _XOPEN_SOURCE 700
 
-#include "rep_internal.h"
-#include "stability_internal.h"
+#include "flip.h"
+#include "oiio_shim.h"
+#include "rep_compare.h"
+#include "rep_report.h"
+#include "rep_run.h"
+#include "rep_util.h"
 
 #include <errno.h>
 #include <limits.h>

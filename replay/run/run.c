@@ -13,10 +13,13 @@
  */
 #define _POSIX_C_SOURCE 200809L
 
-#include "rep_internal.h"
+#include "oiio_shim.h"
+#include "rep_run.h"
+#include "rep_util.h"
 
 #include <cjson/cJSON.h>
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 

@@ -7,7 +7,10 @@
  * renderer" in the report. */
 #define _POSIX_C_SOURCE 200809L
 
-#include "rep_internal.h"
+#include "rep_compare.h"
+#include "rep_report.h"
+#include "rep_run.h"
+#include "rep_util.h"
 
 #include <string.h>
 

@@ -1,4 +1,4 @@
-/* lineage.h — pixel lineage (issue 19): for one eye pixel of one recorded frame, everything
+/* lineage.h — pixel lineage: for one eye pixel of one recorded frame, everything
  * that made it: the G-buffer sample; per light the shadow-map texel it was tested against
  * (projected with that light's matrices from the manifest's "lights") and the verdict; every
  * photon whose kernel covers the pixel's surface point, with its origin (photons.origin) and
@@ -9,7 +9,7 @@
 #ifndef ISPM_LINEAGE_H
 #define ISPM_LINEAGE_H
 
-#include "eng.h"
+#include "eng_core.h"
 
 #include <stddef.h>
 

@@ -1,6 +1,5 @@
 /* junit.c — report.junit.xml, so that a CI system (Jenkins, GitLab, GitHub test reporters)
- * shows one test case per buffer of every frame, and the escaping that this file and
- * report.html share.
+ * shows one test case per buffer of every frame.
  *
  * The document is the common JUnit dialect: <testsuites> around one <testsuite> for the run,
  * whose counts are those of its test cases. A test case is named after the buffer; its
@@ -12,64 +11,13 @@
  * Every name and message passes through rep_sb_xml, so a hostile buffer name cannot make the
  * document malformed. No times are written: the output is a pure function of the report.
  */
-#include "rep_internal.h"
-#include "stability_internal.h"
+#include "rep_compare.h"
+#include "rep_report.h"
+#include "rep_stab.h"
+#include "rep_util.h"
 
 #include <stdlib.h>
 #include <string.h>
-
-static void fffd(rep_sb *sb)
-{
-    rep_sb_printf(sb, "\xEF\xBF\xBD");
-}
-
-void rep_sb_xml(rep_sb *sb, const char *s)
-{
-    const unsigned char *p = (const unsigned char *)s;
-    while (*p) {
-        unsigned c = *p;
-        if (c < 0x80) {
-            switch (c) {
-            case '&': rep_sb_printf(sb, "&amp;"); break;
-            case '<': rep_sb_printf(sb, "&lt;"); break;
-            case '>': rep_sb_printf(sb, "&gt;"); break;
-            case '"': rep_sb_printf(sb, "&quot;"); break;
-            case '\'': rep_sb_printf(sb, "&#39;"); break;
-            default:
-                if (c < 0x20 && c != '\t' && c != '\n' && c != '\r')
-                    fffd(sb);
-                else
-                    rep_sb_printf(sb, "%c", (char)c);
-            }
-            p++;
-            continue;
-        }
-        /* A multi-byte UTF-8 sequence: copied only when well-formed, shortest, not a surrogate,
-         * at most U+10FFFF and not one of XML's excluded U+FFFE/U+FFFF. */
-        int len = c >= 0xF0 ? 4 : c >= 0xE0 ? 3 : c >= 0xC0 ? 2 : 0;
-        unsigned cp = len == 4 ? c & 0x07 : len == 3 ? c & 0x0F : c & 0x1F;
-        int ok = len > 0;
-        for (int i = 1; ok && i < len; i++) {
-            if ((p[i] & 0xC0) != 0x80)
-                ok = 0;
-            else
-                cp = (cp << 6) | (p[i] & 0x3F);
-        }
-        if (!ok) {
-            fffd(sb);
-            p++;
-            continue;
-        }
-        unsigned min = len == 2 ? 0x80 : len == 3 ? 0x800 : 0x10000;
-        if (cp < min || cp > 0x10FFFF || (cp >= 0xD800 && cp <= 0xDFFF) || cp == 0xFFFE || cp == 0xFFFF) {
-            fffd(sb); /* well-formed bytes, forbidden character: one replacement for the lot */
-            p += len;
-            continue;
-        }
-        rep_sb_printf(sb, "%.*s", len, (const char *)p);
-        p += len;
-    }
-}
 
 static const char *failure_type(const rep_entry *e)
 {

@@ -1,5 +1,6 @@
-/* stability_internal.h — temporal stability metrics (stability.c), shared by replay.c, the
- * report writers and tests/test_stability.c; not part of the public API (rep.h).
+/* rep_stab.h — temporal stability (compare room): the metrics (stability.c), their verdicts
+ * against tolerances.json's "stability" limits and the per-pixel flicker written as a run
+ * (stab_report.c). Used by replay.c, the report's stability sections and tests/test_stability.c.
  *
  * The definitions (docs/stability.md says the same for people):
  *   flicker of one pixel between two images a, b of the same pass:
@@ -13,12 +14,13 @@
  *   statistics: mean and 99th percentile (nearest rank) of f over the pixels, and the count
  *   of pixels where some channel differs in bits.
  */
-#ifndef ISPM_STABILITY_INTERNAL_H
-#define ISPM_STABILITY_INTERNAL_H
+#ifndef ISPM_REP_STAB_H
+#define ISPM_REP_STAB_H
 
 #include <stdint.h>
 
-#include "rep_internal.h"
+#include "rep_compare.h"
+#include "rep_run.h"
 
 /* ε of the relative change, in the buffer's units (radiance: W/m²/sr). Radiance below ε
  * changes count as absolute: the black parts of an image do not make flicker out of noise. */
@@ -172,13 +174,5 @@ eng_result rep_stab_write_frame(const char *run_dir, const rep_frame_info *f, co
 /* The stability run's manifest.json, last: records are the frames' records in order. */
 eng_result rep_stab_write_manifest(const char *run_dir, const char *sequence_name, const rep_stab_run *st,
                                    char **records, int count, eng_error *err);
-
-/* report.txt's stability section; report.json's "stability" object (cJSON *); the HTML
- * section's two charts, written into dir/img (rel: their page-relative names, NULL for a chart not
- * made; caller frees), and the HTML section that shows them. */
-void rep_stab_text(rep_sb *sb, const rep_report *r);
-void *rep_stab_json(const rep_report *r);
-void rep_stab_charts(const rep_report *r, const char *dir, char *rel[2]);
-void rep_stab_html(rep_sb *sb, const rep_report *r, char *const charts[2]);
 
 #endif

@@ -26,11 +26,14 @@
  */
 #define _POSIX_C_SOURCE 200809L
 
-#include "rep_internal.h"
+#include "flip.h"
+#include "rep_compare.h"
+#include "rep_util.h"
 
 #include <cjson/cJSON.h>
 #include <fnmatch.h>
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 

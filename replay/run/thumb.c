@@ -18,8 +18,12 @@
  * difference, so that one changed pixel is found at a glance. Thumbnails are box-downsampled so the longest side is at most
  * REP_THUMB_MAX_SIDE; the heatmap takes the maximum over each box, so a single changed pixel
  * survives the reduction. Everything here is pure computation; files are report_html.c's.
+ * It sits in the run room, below compare and report, because it is not the report's alone:
+ * ꟻLIP takes a buffer's colour kind from rep_thumb_kind_of, and `ispm inspect` and the bench
+ * map buffers to images with it too.
  */
-#include "rep_internal.h"
+#include "rep_run.h"
+#include "rep_util.h"
 
 #include <math.h>
 #include <stdio.h>

@@ -9,7 +9,10 @@
  * is named. Arithmetic is in double over float inputs, in a fixed pixel order, so the metrics
  * themselves are reproducible. Nothing here allocates or owns memory.
  */
-#include "rep_internal.h"
+#include "flip.h"
+#include "rep_compare.h"
+#include "rep_run.h"
+#include "rep_util.h"
 
 #include <math.h>
 #include <stdio.h>

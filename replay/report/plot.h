@@ -7,7 +7,7 @@
 #ifndef ISPM_PLOT_H
 #define ISPM_PLOT_H
 
-#include "eng.h"
+#include "eng_core.h"
 
 #ifdef __cplusplus
 extern "C" {

@@ -1,5 +1,5 @@
 /* metrics.h — error metrics of a rendered image against a reference (the bench's accuracy
- * axis; issue 5). Both images are w×h, `channels` floats per pixel interleaved (RGB in
+ * axis). Both images are w×h, `channels` floats per pixel interleaved (RGB in
  * practice), row-major. Every metric is computed per channel over all pixels and then
  * averaged over the channels, except max_abs, the largest |t − r| anywhere (an average of
  * per-channel maxima would name no pixel).
@@ -18,7 +18,7 @@
 #ifndef ISPM_REP_METRICS_H
 #define ISPM_REP_METRICS_H
 
-#include "eng.h"
+#include "eng_core.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -36,7 +36,7 @@ typedef struct rep_metrics_err {
 eng_result rep_metric_compute(const float *test, const float *ref, int w, int h, int channels, const char *what,
                               rep_metrics_err *out, eng_error *err);
 
-/* Bias measures of an indirect image (issue 13): images RGB (3 floats a pixel), per pixel
+/* Bias measures of an indirect image: images RGB (3 floats a pixel), per pixel
  * the mean of R, G, B ("intensity").
  *
  *   mean_ratio     Σ t / Σ r over all pixels (1 = the right amount of light)

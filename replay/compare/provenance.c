@@ -19,7 +19,8 @@
  */
 #define _POSIX_C_SOURCE 200809L
 
-#include "rep_internal.h"
+#include "rep_compare.h"
+#include "rep_util.h"
 
 #include <cjson/cJSON.h>
 #include <math.h>

@@ -1,252 +1,27 @@
-/* report.c — what replay tells people and machines: report.json, report.txt and the summary.
+/* report_text.c — what replay tells people and machines in text: report.txt, the summary, and
+ * report.json.
  *
  * The text is for a person scanning a CI log: a header saying what was compared, then one line
- * per buffer that is not bit-exact, worst first (size mismatches, then failures, warnings,
- * differences within tolerance; inside each, the largest error first, non-finite and missing
- * buffers counting as infinite), then one verdict line. report.json carries the same results
- * per frame and per buffer with every metric and the tolerance applied, for tools. Both files
- * are written atomically so a reader never sees half a report; report.junit.xml (junit.c) and
- * report.html (report_html.c) are written after them, from the same entries in the same
- * worst-first order. The report's entries are owned
- * by rep_report and freed by rep_report_free.
+ * per buffer that is not bit-exact, worst first (the model's order and lines), then one verdict
+ * line. report.json carries the same results per frame and per buffer with every metric and
+ * the tolerance applied, for tools. Both are strings; report_write.c writes them to files.
  */
-#include "rep_internal.h"
-#include "stability_internal.h"
+#include "flip.h"
+#include "rep_compare.h"
+#include "rep_report.h"
+#include "rep_stab.h"
+#include "rep_util.h"
 
 #include <cjson/cJSON.h>
 #include <math.h>
+#include <stdint.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-
-rep_entry *rep_report_add(rep_report *r, int frame, const char *buffer)
-{
-    if (r->count == r->cap) {
-        r->cap = r->cap ? r->cap * 2 : 64;
-        r->entries = rep_xrealloc(r->entries, r->cap * sizeof *r->entries);
-    }
-    rep_entry *e = &r->entries[r->count++];
-    memset(e, 0, sizeof *e);
-    e->frame = frame;
-    e->buffer = rep_xstrdup(buffer);
-    return e;
-}
-
-void rep_report_free(rep_report *r)
-{
-    for (size_t i = 0; i < r->count; i++) {
-        free(r->entries[i].buffer);
-        free(r->entries[i].tol_match);
-        free(r->entries[i].run_shape);
-        free(r->entries[i].golden_shape);
-    }
-    free(r->entries);
-    free(r->digest_buffer);
-    free(r->tol_path);
-    free(r->run_renderer);
-    free(r->golden_renderer);
-    rep_stab_report_free(r->stab);
-    r->stab = NULL;
-    rep_prov_free(r->prov);
-    r->prov = NULL;
-    rep_keep_free(r->keep);
-    r->keep = NULL;
-    free(r->flags_text);
-    free(r->scope_text);
-    r->flags_text = r->scope_text = NULL;
-    r->entries = NULL;
-    r->digest_buffer = NULL;
-    r->tol_path = NULL;
-    r->run_renderer = r->golden_renderer = NULL;
-    r->count = r->cap = 0;
-}
-
-rep_exit rep_report_exit(const rep_report *r)
-{
-    rep_exit x = REP_OK;
-    for (size_t i = 0; i < r->count; i++) {
-        rep_exit e = REP_OK;
-        switch (r->entries[i].verdict) {
-        case REP_V_SIZE: e = REP_SIZE; break;
-        case REP_V_FAIL: e = REP_FAIL; break;
-        case REP_V_WARN: e = REP_WARN; break;
-        default: break;
-        }
-        if (e > x)
-            x = e;
-    }
-    if (r->stab && r->stab->failed && x < REP_FAIL)
-        x = REP_FAIL;
-    if (r->prov && (r->prov->fail || r->prov->timing_failed) && x < REP_FAIL)
-        x = REP_FAIL;
-    if (r->prov && r->prov->warn && x < REP_WARN)
-        x = REP_WARN;
-    return x;
-}
-
-const char *rep_exit_word(rep_exit x)
-{
-    switch (x) {
-    case REP_OK: return "OK";
-    case REP_WARN: return "WARN";
-    case REP_FAIL: return "FAIL";
-    case REP_SIZE: return "SIZE MISMATCH";
-    case REP_UNREADABLE: return "UNREADABLE";
-    }
-    return "UNREADABLE";
-}
-
-static int rank(const rep_entry *e)
-{
-    switch (e->verdict) {
-    case REP_V_SIZE: return 5;
-    case REP_V_FAIL: return 4;
-    case REP_V_WARN: return 3;
-    case REP_V_WITHIN: return 2;
-    case REP_V_CHECKED: return 1;
-    default: return 0;
-    }
-}
-
-static double severity(const rep_entry *e)
-{
-    if (e->problem != REP_PROB_NONE || (e->m.fail_why & REP_WHY_NONFINITE))
-        return INFINITY;
-    return e->m.max_abs;
-}
-
-static int worst_first(const void *pa, const void *pb)
-{
-    const rep_entry *a = *(const rep_entry *const *)pa, *b = *(const rep_entry *const *)pb;
-    if (rank(a) != rank(b))
-        return rank(b) - rank(a);
-    double sa = severity(a), sb = severity(b);
-    if (sa != sb)
-        return sa < sb ? 1 : -1;
-    if (a->frame != b->frame)
-        return a->frame - b->frame;
-    return a < b ? -1 : a > b; /* entries sit in manifest order: keep it */
-}
-
-int rep_entry_listed(const rep_entry *e)
-{
-    return e->verdict != REP_V_BITEXACT && e->verdict != REP_V_CHECKED;
-}
-
-const rep_entry **rep_report_sorted(const rep_report *r, size_t *n)
-{
-    const rep_entry **order = rep_xcalloc(r->count, sizeof *order);
-    for (size_t i = 0; i < r->count; i++)
-        order[i] = &r->entries[i];
-    qsort(order, r->count, sizeof *order, worst_first);
-    *n = r->count;
-    return order;
-}
-
-/* "3.25%", or where two decimals would round to 0.00% "1/25600 px": a failing pixel is never shown
- * as none. */
-static void share_text(rep_sb *sb, uint64_t count, uint64_t of, double percent, const char *unit)
-{
-    if (count && percent < 0.005)
-        rep_sb_printf(sb, "%llu/%llu %s", (unsigned long long)count, (unsigned long long)of, unit);
-    else
-        rep_sb_printf(sb, "%.2f%%", percent);
-}
 
 static int is_failure(const rep_entry *e)
 {
     return e->verdict == REP_V_FAIL || e->verdict == REP_V_SIZE;
-}
-
-static void why_text(rep_sb *sb, unsigned why, const rep_metrics *m, int fail, const rep_tol *t)
-{
-    if (why & REP_WHY_HARD)
-        rep_sb_printf(sb, "  over %s %g", fail ? "hardfail" : "hardwarn", fail ? t->hardfail : t->hardwarn);
-    if (why & REP_WHY_RMSE)
-        rep_sb_printf(sb, "  rmse over %g", fail ? t->rmse_fail : t->rmse_warn);
-    if (why & REP_WHY_EXACT)
-        rep_sb_printf(sb, "  exact: %llu values differ", (unsigned long long)m->values_differing);
-    if (why & REP_WHY_FLIP)
-        rep_sb_printf(sb, "  FLIP over flip_mean_fail %g / flip_p99_fail %g", t->flip_mean_fail, t->flip_p99_fail);
-}
-
-/* "  FLIP mean 0.0123 p99 0.2 (HDR)" for a colour buffer (flip.h). */
-static void flip_text(rep_sb *sb, const rep_entry *e)
-{
-    if (e->flip_kind != REP_FLIP_NONE)
-        rep_sb_printf(sb, "  FLIP mean %.3g p99 %.3g (%s)", e->flip.mean, e->flip.p99,
-                      e->flip_kind == REP_FLIP_HDR ? "HDR" : "LDR");
-}
-
-void rep_report_line(rep_sb *sb, const rep_report *r, const rep_entry *e)
-{
-    const rep_metrics *m = &e->m;
-    const char *tag = "PASS";
-    if (e->verdict == REP_V_SIZE)
-        tag = "SIZE";
-    else if (e->problem == REP_PROB_MISSING || e->problem == REP_PROB_FRAME_MISSING)
-        tag = "MISS";
-    else if (e->problem == REP_PROB_EXTRA || e->problem == REP_PROB_FRAME_EXTRA)
-        tag = "EXTRA";
-    else if (m->fail_why & REP_WHY_NONFINITE)
-        tag = (m->run_nan || m->golden_nan) ? "NAN" : "INF";
-    else if (e->verdict == REP_V_FAIL)
-        tag = "FAIL";
-    else if (e->verdict == REP_V_WARN)
-        tag = "WARN";
-    rep_sb_printf(sb, "%-5s frame %d  %-22s ", tag, e->frame, e->buffer);
-    switch (e->problem) {
-    case REP_PROB_MISSING: rep_sb_printf(sb, "in golden, missing from run\n"); return;
-    case REP_PROB_EXTRA: rep_sb_printf(sb, "in run, not in golden\n"); return;
-    case REP_PROB_FRAME_MISSING: rep_sb_printf(sb, "frame missing from run\n"); return;
-    case REP_PROB_FRAME_EXTRA: rep_sb_printf(sb, "frame not in golden\n"); return;
-    case REP_PROB_NONE: break;
-    }
-    if (e->verdict == REP_V_SIZE) {
-        rep_sb_printf(sb, "run %s, golden %s\n", e->run_shape ? e->run_shape : "?",
-                      e->golden_shape ? e->golden_shape : "?");
-        return;
-    }
-    if (m->fail_why & REP_WHY_NONFINITE) {
-        if (!r->golden_dir) {
-            rep_sb_printf(sb, "%llu NaN, %llu Inf in run (no golden) first at (%d,%d)\n",
-                          (unsigned long long)m->run_nan, (unsigned long long)m->run_inf, m->nf_x, m->nf_y);
-            return;
-        }
-        rep_sb_printf(sb, "%llu NaN, %llu Inf in run (golden %llu) first at (%d,%d).%s: run %g, golden %g",
-                      (unsigned long long)m->run_nan, (unsigned long long)m->run_inf,
-                      (unsigned long long)(m->golden_nan + m->golden_inf), m->nf_x, m->nf_y, m->nf_channel,
-                      (double)m->nf_run, (double)m->nf_golden);
-        if (m->max_x >= 0)
-            rep_sb_printf(sb, "  max |Δ| %.2e at (%d,%d).%s", m->max_abs, m->max_x, m->max_y, m->max_channel);
-        rep_sb_printf(sb, "\n");
-        return;
-    }
-    if (e->photon_set)
-        rep_sb_printf(sb, "photons %llu → %llu: %llu added, %llu removed, %llu changed, %llu within tolerance%s; max |Δ| %.2e%s%s",
-                      (unsigned long long)e->pd.golden, (unsigned long long)e->pd.run, (unsigned long long)e->pd.added,
-                      (unsigned long long)e->pd.removed, (unsigned long long)e->pd.changed,
-                      (unsigned long long)e->pd.within, e->pd.unaligned ? " (too many edits to align paths)" : "",
-                      m->max_abs, m->max_channel[0] ? " in " : "", m->max_channel);
-    else if (m->max_x >= 0)
-        rep_sb_printf(sb, "max |Δ| %.2e at (%d,%d).%s  rmse %.1e", m->max_abs, m->max_x, m->max_y,
-                      m->max_channel, m->rmse);
-    else
-        rep_sb_printf(sb, "max |Δ| 0 (%llu values differ in bits only)", (unsigned long long)m->values_differing);
-    flip_text(sb, e);
-    if (e->verdict == REP_V_FAIL) {
-        rep_sb_printf(sb, "  over fail ");
-        share_text(sb, m->fail_pixels, m->pixels, m->fail_percent, e->photon_set ? "photons" : "px");
-        rep_sb_printf(sb, " (tol fail %g, %g%%)", e->tol.fail, e->tol.failpercent);
-        why_text(sb, m->fail_why, m, 1, &e->tol);
-    } else if (e->verdict == REP_V_WARN) {
-        rep_sb_printf(sb, "  over warn ");
-        share_text(sb, m->warn_pixels, m->pixels, m->warn_percent, e->photon_set ? "photons" : "px");
-        rep_sb_printf(sb, " (tol warn %g, %g%%)", e->tol.warn, e->tol.warnpercent);
-        why_text(sb, m->warn_why, m, 0, &e->tol);
-    } else {
-        rep_sb_printf(sb, "  within tolerance (tol fail %g, %g%%)", e->tol.fail, e->tol.failpercent);
-    }
-    rep_sb_printf(sb, "\n");
 }
 
 char *rep_report_text(const rep_report *r, int quiet)
@@ -278,12 +53,14 @@ char *rep_report_text(const rep_report *r, int quiet)
     /* provenance first: why the pixels may differ, before how they do */
     if (r->prov && (!quiet || r->prov->fail))
         rep_prov_text(&sb, r->prov);
-    const rep_entry **order = rep_xcalloc(r->count, sizeof *order);
+    /* The model's worst-first order is total (ties broken by manifest position), so the entries
+     * picked from it come in the order they would sort to among themselves. */
+    size_t all;
+    const rep_entry **order = rep_report_sorted(r, &all);
     size_t n = 0;
-    for (size_t i = 0; i < r->count; i++)
-        if (rep_entry_listed(&r->entries[i]) && (!quiet || is_failure(&r->entries[i])))
-            order[n++] = &r->entries[i];
-    qsort(order, n, sizeof *order, worst_first);
+    for (size_t i = 0; i < all; i++)
+        if (rep_entry_listed(order[i]) && (!quiet || is_failure(order[i])))
+            order[n++] = order[i];
     for (size_t i = 0; i < n; i++)
         rep_report_line(&sb, r, order[i]);
     free(order);
@@ -550,60 +327,3 @@ char *rep_report_json(const rep_report *r)
     return out;
 }
 
-/* The name CI shows for the run: the sequence's, else the run folder's last component. */
-static char *suite_name(const rep_report *r, const rep_run *run, const rep_run *golden)
-{
-    if (run && run->sequence_name)
-        return rep_xstrdup(run->sequence_name);
-    if (golden && golden->sequence_name)
-        return rep_xstrdup(golden->sequence_name);
-    const char *d = r->run_dir ? r->run_dir : "run";
-    size_t n = strlen(d);
-    while (n > 1 && d[n - 1] == '/')
-        n--;
-    size_t a = n;
-    while (a > 0 && d[a - 1] != '/')
-        a--;
-    return n > a ? rep_xprintf("%.*s", (int)(n - a), d + a) : rep_xstrdup("run");
-}
-
-eng_result rep_report_write(const rep_report *r, const char *dir, eng_error *err)
-{
-    eng_result res = rep_mkdirs(dir, err);
-    if (res != ENG_OK)
-        return res;
-    char *json = rep_report_json(r);
-    char *txt = rep_report_text(r, 0);
-    char *jp = rep_path_join(dir, "report.json");
-    char *tp = rep_path_join(dir, "report.txt");
-    res = rep_write_atomic(jp, json, strlen(json), err);
-    if (res == ENG_OK)
-        res = rep_write_atomic(tp, txt, strlen(txt), err);
-    free(jp);
-    free(tp);
-    free(json);
-    free(txt);
-    if (res != ENG_OK)
-        return res;
-
-    /* The JUnit and HTML writers want the manifests again (sequence name, frame files for the
-     * thumbnails); an input that cannot be opened only costs them those. */
-    rep_run *run = NULL, *golden = NULL;
-    eng_error ignored;
-    if (r->run_dir && rep_run_open(r->run_dir, &run, &ignored) != ENG_OK)
-        run = NULL;
-    if (r->golden_dir && rep_run_open(r->golden_dir, &golden, &ignored) != ENG_OK)
-        golden = NULL;
-    char *suite = suite_name(r, run, golden);
-    char *xml = rep_report_junit(r, suite);
-    char *xp = rep_path_join(dir, "report.junit.xml");
-    res = rep_write_atomic(xp, xml, strlen(xml), err);
-    if (res == ENG_OK)
-        res = rep_report_html_write(r, run, golden, dir, err);
-    free(xp);
-    free(xml);
-    free(suite);
-    rep_run_close(golden);
-    rep_run_close(run);
-    return res;
-}

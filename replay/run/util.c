@@ -5,12 +5,13 @@
  */
 #define _XOPEN_SOURCE 700
 
-#include "rep_internal.h"
+#include "rep_util.h"
 
 #include <errno.h>
 #include <fcntl.h>
 #include <ftw.h>
 #include <math.h>
+#include <stdarg.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>

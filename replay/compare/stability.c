@@ -9,17 +9,19 @@
  * bit-identical too. The reprojected measure follows the surface under camera motion using the
  * G-buffer's motion vectors and masks disocclusions from the G-buffers alone (no scene is
  * loaded): the history of a pixel is accepted only when the previous frame's G-buffer at the
- * reprojected pixel shows the same surface point (stability_internal.h states the test).
+ * reprojected pixel shows the same surface point (rep_stab.h states the test).
  * Surfaces that moved in the world (animated objects) are not followed: their pixels are
  * counted as "moving" and left out, so the reprojected measure never mistakes a real change
  * of a moving object's lighting for flicker of a static one. The definitions of the flicker
- * and its statistics are in stability_internal.h and docs/stability.md.
+ * and its statistics are in rep_stab.h and docs/stability.md.
  *
  * The run's frames are fed in order (rep_stab_frame); the previous frame's G-buffer and images
  * are kept, so memory holds two frames' worth of eye-sized images per measured pass. Every
  * rep_stab_run owns its buffers and is freed whole by rep_stab_free.
  */
-#include "stability_internal.h"
+#include "rep_run.h"
+#include "rep_stab.h"
+#include "rep_util.h"
 
 #include <math.h>
 #include <stdlib.h>

@@ -22,7 +22,8 @@
  */
 #include "flip.h"
 
-#include "rep_internal.h"
+#include "rep_run.h"
+#include "rep_util.h"
 
 #include <math.h>
 #include <stdlib.h>

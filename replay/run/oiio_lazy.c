@@ -2,7 +2,7 @@
  *
  * OpenImageIO pulls about 240 shared libraries into a process (OpenCV, FFmpeg, OpenVDB, DCMTK,
  * ...); loading and relocating them cost `ispm record` ~0.9 s of serial start-up on the 2-core
- * machine although recording never reads or writes an image through it (issue 22 item 3). The
+ * machine although recording never reads or writes an image through it. The
  * C++ shims (oiio_shim.cpp, png_shim.cpp) are therefore a separate module, libispm_oiio.so,
  * which the first call here dlopens (once, thread-safely: replay decodes on several threads).
  * Where: $ISPM_OIIO_MODULE if set, else the path CMake built it at (ISPM_OIIO_MODULE_PATH). A
