@@ -7,10 +7,13 @@
  * scatter (§5) compute the same estimator, so a pair of points differing only in `indirect`
  * shows the cost of gathering at equal error: their first frames' indirect light is written
  * side by side with the difference, and every method's speed-up against the k-d gather at the
- * same settings is reported. Every file is written atomically and bench.json last, so an
- * OUTDIR without it is an unfinished bench. It owns nothing past the call. */
+ * same settings is reported, each method's time read from the pass its entry in the engine's
+ * registry of indirect methods names (indirect.h). Every file is written atomically and
+ * bench.json last, so an OUTDIR without it is an unfinished bench. It owns nothing past the
+ * call. */
 #define _POSIX_C_SOURCE 200809L /* unlink */
 #include "bench_output.h"
+#include "indirect.h"
 #include "plot.h"
 #include "rep_internal.h"
 
@@ -221,20 +224,13 @@ typedef struct speedup {
     double max_abs, max_rel;      /* first frame's indirect.radiance, max_rel as pair_stats */
 } speedup;
 
-/* The pass an indirect method's time is reported under (engine/indirect.h). */
+/* The pass an indirect method's time is reported under: its entry in the engine's registry of
+ * indirect methods (indirect.h), found by the setting's name; NULL for "none", which has no
+ * method and no pass. */
 static const char *indirect_pass(eng_indirect m)
 {
-    switch (m) {
-    case ENG_INDIRECT_QUADS: return "quads";
-    case ENG_INDIRECT_TILEGATHER:
-    case ENG_INDIRECT_TILEGATHER_GL:
-    case ENG_INDIRECT_KDGATHER: return "gather";
-    case ENG_INDIRECT_FINALGATHER: return "final_gather";
-    case ENG_INDIRECT_NONE: return NULL;
-    case ENG_INDIRECT_ISPM:
-    case ENG_INDIRECT_DEFAULT: break;
-    }
-    return "splat";
+    const ind_method *im = ind_method_find(eng_indirect_name(m));
+    return im ? im->pass : NULL;
 }
 
 static int same_but_indirect(const bench_point *a, const bench_point *b);
@@ -264,7 +260,7 @@ static int find_speedups(const bench_point *pts, int n, const bench_passes *pass
             u->baseline = j;
             u->frame = pts[i].frame_ms > 0.0 ? pts[j].frame_ms / pts[i].frame_ms : 0.0;
             u->pass_ms = pass_of(&pts[i], passes, indirect_pass(mi));
-            u->base_pass_ms = pass_of(&pts[j], passes, "gather");
+            u->base_pass_ms = pass_of(&pts[j], passes, indirect_pass(ENG_INDIRECT_KDGATHER));
             u->pass = u->pass_ms > 0.0 ? u->base_pass_ms / u->pass_ms : 0.0;
             u->max_abs = u->max_rel = 0.0;
             const size_t plane = (size_t)pts[i].seq->width * (size_t)pts[i].seq->height * 3;
