@@ -15,7 +15,7 @@
 #ifndef ISPM_CAP_H
 #define ISPM_CAP_H
 
-#include "eng.h"
+#include "seq.h"
 
 #ifdef __cplusplus
 extern "C" {

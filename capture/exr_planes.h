@@ -1,6 +1,6 @@
 /* exr_planes.h — decoding an EXR part through OpenEXR's C API into caller-laid-out planes,
  * shared by capture's recompression (cap_recompress_exr) and replay's frame reader
- * (replay/exr_read.c), so that one loop drives OpenEXR's decoding pipeline for both. */
+ * (replay/run/exr_read.c), so that one loop drives OpenEXR's decoding pipeline for both. */
 #ifndef CAP_EXR_PLANES_H
 #define CAP_EXR_PLANES_H
 

@@ -22,7 +22,7 @@
 #ifndef ISPM_CAP_MERGE_H
 #define ISPM_CAP_MERGE_H
 
-#include "eng.h"
+#include "seq.h"
 
 #ifdef __cplusplus
 extern "C" {

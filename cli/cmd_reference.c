@@ -1,5 +1,5 @@
 /* cmd_reference.c — `ispm reference`: renders a sequence's frames with the reference renderer
- * (engine/ref.h) into a normal run folder (capture module: frames/NNNNNN.exr, manifest.json
+ * (engine/reference/ref.h) into a normal run folder (capture module: frames/NNNNNN.exr, manifest.json
  * last), so `ispm replay`, `bless` and the viewer read it like any run. The manifest records
  * the renderer and its settings under "renderer". With --frames A-B the run holds B − A + 1
  * frames: run frame i is sequence frame A + i, rendered at t = (A + i) / fps, and the time

@@ -1,6 +1,6 @@
 /* cmd_tracebench.c — `ispm tracebench SEQUENCE`: the photon trace's rays per second against
  * Embree's raw rtcIntersect1 on the same rays in the same process (the
- * measurement is engine/trace_bench.c's). Prints both rates (medians over the repeats, which
+ * measurement is cli/bench/trace_bench.c's). Prints both rates (medians over the repeats, which
  * alternate trace and raw cast), their ratio, and whether every repeat's photon map was
  * bit-identical to the ray-by-ray one-thread trace. Exit: 0 measured; 1 the trace failed or
  * its map differed; 2 bad arguments or an unreadable sequence or scene. */

@@ -1,5 +1,5 @@
 /* test_aniso.c — Check suite of the anisotropic kernel (`"kernel_scaling": "anisotropic"`,
- * 002_… §6.1.2 Eq. 6.3–6.5; engine/gather_kernel.h gk_aniso_of / gk_kappa_aniso, and its GLSL
+ * 002_… §6.1.2 Eq. 6.3–6.5; engine/kernel/gather_kernel.h gk_aniso_of / gk_kappa_aniso, and its GLSL
  * copies in shaders/photon_kernel.glsl and quad_kernel.glsl):
  *  - the kernel integrates to 1 over the photon's plane at every incidence (s_u from 1 to
  *    s_max), and its support is the ellipse of semi-axes s_u·r_xy along û and r_xy across;

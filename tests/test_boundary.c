@@ -1,4 +1,4 @@
-/* test_boundary.c — Check suite of the kernel's boundary correction (engine/boundary.c): the
+/* test_boundary.c — Check suite of the kernel's boundary correction (engine/indirect/boundary.c): the
  * kernel mass g(x), W on a synthetic G-buffer with a known straight edge (convex: a table top
  * ending above a floor; and the background), and the recovered energy: a uniform photon density
  * on the table top gathered with the methods' kernel (gather_kernel.h) is low by the kernel mass

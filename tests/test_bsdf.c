@@ -1,5 +1,5 @@
-/* test_bsdf.c — one BSDF sampling on both processors: engine/bsdf.c (the CPU trace) and its
- * GLSL twin engine/shaders/bsdf_sample.glsl (the bounce map) are fed the same random numbers
+/* test_bsdf.c — one BSDF sampling on both processors: engine/trace/bsdf.c (the CPU trace) and its
+ * GLSL twin engine/gl/shaders/bsdf_sample.glsl (the bounce map) are fed the same random numbers
  * for every material class (diffuse, rough and smooth metal, glass, a glTF mixture of all
  * three) through a probe fragment shader (shaders/bsdf_probe.frag.glsl) on the engine's OSMesa
  * context, and must choose the same lobe and return the same direction, weight, path-density

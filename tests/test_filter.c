@@ -1,4 +1,4 @@
-/* test_filter.c — Check suite of the reconstruction filters (engine/pass_filter.c and the
+/* test_filter.c — Check suite of the reconstruction filters (engine/passes/pass_filter.c and the
  * shaders upsample/temporal/atrous/resolve): each filter on synthetic G-buffers and images with
  * known answers (constant images stay constant, depth and normal edges stop the filters, a
  * step survives variance clipping, the temporal filter is exactly the EMA of Eq. 7.3 and

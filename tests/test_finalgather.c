@@ -1,4 +1,4 @@
-/* test_finalgather.c — Check suite of the final-gather indirect method (engine/ind_finalgather.c;
+/* test_finalgather.c — Check suite of the final-gather indirect method (engine/indirect/ind_finalgather.c;
  * 003_… Appendix A, Jensen 1996):
  *   - the furnace (scenes/furnace: a closed sphere of albedo ρ with a point light at its
  *     centre): the area mean of indirect.radiance equals the energy balance of any closed

@@ -1,5 +1,5 @@
 /* test_gltf_choice.c — Check suite for issue 17's loader and sequence parts
- * (engine/gltf_load.c, gltf_shim.cpp, scene_choice.c, sequence.c): files stay inside the
+ * (engine/scene/gltf_load.c, gltf_shim.cpp, scene_choice.c, sequence.c): files stay inside the
  * scene's folder (every hostile URI gets its own one-line error), what a sequence chooses
  * (lights, scene_index, animations, a camera node by index), the no-light warning, and the
  * tolerated parts of glTF (orthographic cameras, POINTS, primitives without POSITION,

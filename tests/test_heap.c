@@ -1,4 +1,4 @@
-/* test_heap.c — Check suite for the frame heap of engine/core.c (eng_keep_freed_memory): the
+/* test_heap.c — Check suite for the frame heap of engine/core/core.c (eng_keep_freed_memory): the
  * range it advises for transparent huge pages holds what the main thread and other threads
  * allocate afterwards (one arena), the call is idempotent, and it is a no-op where the
  * allocator is not glibc's (sanitizers) or the kernel has no transparent huge pages. */

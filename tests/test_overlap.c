@@ -1,4 +1,4 @@
-/* test_overlap.c — the photon stage's worker (engine/overlap.c): with 2+ threads a job runs on
+/* test_overlap.c — the photon stage's worker (engine/frame/overlap.c): with 2+ threads a job runs on
  * another thread, concurrently with the caller, and ovl_join waits for it; with 1 thread (or a
  * NULL overlap) ovl_start runs the job at once on the caller's thread; many start/join cycles,
  * joining with nothing in flight and destroying with a job pending all work. The frame loop's

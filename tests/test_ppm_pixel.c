@@ -1,5 +1,5 @@
 /* test_ppm_pixel.c — Check suite of progressive photon mapping's per-pixel radius in the engine
- * (`"progressive_radius": "pixel"`, engine/progressive.h; Hachisuka et al. 2008 §4) on a small
+ * (`"progressive_radius": "pixel"`, engine/indirect/progressive.h; Hachisuka et al. 2008 §4) on a small
  * still Cornell box:
  *  - frame 1 evaluates every pixel at scale 1; frame 2 at √α where the k-d gather found photons
  *    in frame 1 (R² = (0 + αM)/(0 + M)) and at 1 where it found none; N = α·M after frame 1;
@@ -9,7 +9,7 @@
  *  - the quads follow the same schedule on their own counts;
  *  - a method without per-pixel radii (the GL tile gather) or "pixel" without "progressive" is
  *    refused.
- * (engine/progressive.c's update itself: test_progressive.c, ppm_update_per_pixel.) */
+ * (engine/indirect/progressive.c's update itself: test_progressive.c, ppm_update_per_pixel.) */
 #define _POSIX_C_SOURCE 200809L
 #include "eng.h"
 

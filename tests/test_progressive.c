@@ -1,6 +1,6 @@
 /* test_progressive.c — Check suite of the convergence features: progressive
- * accumulation (engine/progressive.c: running mean, bit-wise restarts, PPM's radius shrink),
- * the kernel scalings of ind_photon_radii (engine/ind_common.c; 002 Eq. 6.1, 6.2, 004 §6) on
+ * accumulation (engine/indirect/progressive.c: running mean, bit-wise restarts, PPM's radius shrink),
+ * the kernel scalings of ind_photon_radii (engine/indirect/ind_common.c; 002 Eq. 6.1, 6.2, 004 §6) on
  * hand-made photon maps, and the bench's bias measures (replay/compare/metrics.c: rep_metric_bias,
  * rep_edge_mask). No GL: these are CPU functions. */
 #include "eng.h"

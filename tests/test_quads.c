@@ -1,4 +1,4 @@
-/* test_quads.c — Check suite of the photon quads (engine/ind_quads.c, 001_… §3.3): on the
+/* test_quads.c — Check suite of the photon quads (engine/indirect/ind_quads.c, 001_… §3.3): on the
  * Cornell box, the GPU quads against a CPU evaluation of the same flat kernel
  * (shaders/quad_kernel.glsl) at every pixel — in particular with the camera 1.5 cm from a wall
  * and the near plane at 5 mm, where photon volumes may be clipped (003_… §6.3) and quads must

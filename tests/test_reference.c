@@ -1,4 +1,4 @@
-/* test_reference.c — Check suite of the reference renderer (engine/reference.c) against
+/* test_reference.c — Check suite of the reference renderer (engine/reference/reference.c) against
  * closed forms:
  *   - Cornell box: the direct radiance of lit floor pixels is (Kd/π)·I·cosθ/d² (the scene
  *     README's analytic check, with the camera ray built here from the spec's camera, not the

@@ -1,4 +1,4 @@
-/* test_scene.c — Check suite for the scene module (engine/gltf_load.c, scene.c, sequence.c).
+/* test_scene.c — Check suite for the scene module (engine/scene/gltf_load.c, scene.c, sequence.c).
  *
  * Topics: the Cornell box glTF against its OBJ/README spec; evaluation of the animated scene
  * and of a hand-made hierarchy; channel sampling against hand-computed values; flat normals;

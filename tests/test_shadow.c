@@ -1,4 +1,4 @@
-/* test_shadow.c — Check suite for the shadow methods (engine/shadow.h, shadow_pcss.c) and the
+/* test_shadow.c — Check suite for the shadow methods (engine/passes/shadow.h, shadow_pcss.c) and the
  * light sizes of the glTF loader (issue 15).
  *
  * Topics: the penumbra radius of 001 Eq. 5 against hand-computed values (sphere and

@@ -1,5 +1,5 @@
 /* test_translucent.c — Check suite for alphaMode BLEND surfaces (issue 14 item 3;
- * engine/pass_translucent.c, rt.c's BLEND scene): back-to-front ordering and "over"
+ * engine/specular/pass_translucent.c, rt.c's BLEND scene): back-to-front ordering and "over"
  * compositing on synthetic layers, BLEND geometry invisible to the opaque rays and seen by
  * rt_intersect_blend, a pane's value (half its direct light over what lies behind), and the
  * image bit-identical for 1 and 3 threads. */

@@ -6,7 +6,7 @@
  *
  * usage: ispm_test_fake_reference RUN */
 #include "cap.h"
-#include "eng.h"
+#include "eng_core.h"
 #include "oiio_shim.h"
 
 #include <cjson/cJSON.h>

@@ -6,7 +6,7 @@
  *
  * usage: ispm_test_mutate RUN FRAME BUFFER X Y CHANNEL (set|add) VALUE   (VALUE may be nan/inf) */
 #include "cap.h"
-#include "eng.h"
+#include "eng_core.h"
 #include "oiio_shim.h"
 
 #include <cjson/cJSON.h>

@@ -1,4 +1,4 @@
-/* view_live.c — live view (issue 19 item 3): watching a run while it is being recorded.
+/* view_live.c — live view: watching a run while it is being recorded.
  *
  * The run reader decides which frames exist (rep_run_open_live / rep_run_refresh: a frame counts
  * once its EXR and its record have both landed, capture's own rule for --resume); this file only

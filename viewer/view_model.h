@@ -19,7 +19,7 @@
 #include <stddef.h>
 #include <stdint.h>
 
-#include "eng.h"
+#include "eng_core.h"
 #include "lineage.h"
 
 #ifdef __cplusplus

@@ -4,7 +4,7 @@
  * that grabs indirect.radiance, composite.radiance and the G-buffer's position and normal),
  * and the per-pass times of eng_frame_stats give the medians over frames × repeats. The
  * radiance buffers are measured against the reference run's reference.indirect and
- * reference.full (replay/metrics.h), and the indirect light's bias near geometric edges
+ * reference.full (replay/compare/metrics.h), and the indirect light's bias near geometric edges
  * against the same reference. It owns the points' sequences, samples and first-frame images
  * (bench_points_free) and the reference frames (bench_reference_free). */
 #include "bench_run.h"

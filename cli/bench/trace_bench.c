@@ -1,5 +1,5 @@
 /* trace_bench.c — the photon trace's ray rate against Embree's raw rtcIntersect1 rate on the
- * same rays in the same process (tracebench.h, issue 22 item 4). The rays are recorded from a
+ * same rays in the same process (tracebench.h). The rays are recorded from a
  * one-thread trace through a recording tracer (trace_method.h's interface, ray by ray, the
  * reference the engine's trace must match bit for bit); then, alternating, the engine's photon
  * trace of the frame (photon_trace: what eng_render_frame runs for "photon_trace": "embree"; the

@@ -1,5 +1,5 @@
-/* tracebench.h — the photon trace against Embree's raw rate (trace_bench.c; `ispm tracebench`,
- * issue 22 item 4): one frame's photons traced through the engine's photon trace and the very
+/* tracebench.h — the photon trace against Embree's raw rate (trace_bench.c; `ispm tracebench`):
+ * one frame's photons traced through the engine's photon trace and the very
  * same rays (recorded from that trace) cast with nothing but rtcIntersect1, alternating. */
 #ifndef ISPM_TRACEBENCH_H
 #define ISPM_TRACEBENCH_H

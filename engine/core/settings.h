@@ -40,7 +40,7 @@ typedef enum eng_random_mode {
                                * stratified_cycle frames (002 §4.2); repeats every cycle */
 } eng_random_mode;
 
-/* How each photon's kernel radius r_xy is chosen (ind_photon_radii, engine/ind_common.c). */
+/* How each photon's kernel radius r_xy is chosen (ind_photon_radii, engine/indirect/ind_common.c). */
 typedef enum eng_kernel_scaling {
     ENG_SCALING_DEFAULT = 0,  /* = path-density */
     ENG_SCALING_PATH_DENSITY, /* kernel_radius · clamp((1000 ρp)^(−1/4), 1/4, 2) (splat_radius) */
@@ -51,7 +51,7 @@ typedef enum eng_kernel_scaling {
                                * ω_i's projection on the kernel plane by min(1/cos θ, s_max) */
 } eng_kernel_scaling;
 
-/* The kernel's boundary correction (engine/boundary.h). */
+/* The kernel's boundary correction (engine/indirect/boundary.h). */
 typedef enum eng_boundary {
     ENG_BOUNDARY_DEFAULT = 0, /* = none */
     ENG_BOUNDARY_NONE,

@@ -11,7 +11,7 @@
 
 /* ---------------------------------------------------------------- GL helpers (glutil.c) */
 
-/* Compiles and links vertex + fragment shaders from engine/shaders/<name>; the error names
+/* Compiles and links vertex + fragment shaders from engine/gl/shaders/<name>; the error names
  * the shader file and carries the driver's log (flattened to one line). */
 eng_result glu_program(const char *vert_name, const char *frag_name, GLuint *out, eng_error *err);
 /* The same with lines of preprocessor definitions (e.g. "#define X\n") inserted into the

@@ -1,4 +1,4 @@
-/* glsl_sources.h — lookup of the GLSL files under engine/shaders/, embedded at build time by
+/* glsl_sources.h — lookup of the GLSL files under engine/gl/shaders/, embedded at build time by
  * cmake/embed_glsl.cmake. */
 #ifndef ISPM_GLSL_SOURCES_H
 #define ISPM_GLSL_SOURCES_H

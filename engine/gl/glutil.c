@@ -1,6 +1,6 @@
 /* glutil.c — the small pieces every GL pass needs and none should own: column-major 4×4
  * matrix helpers (same layout as GL and glTF), shader programs built from the embedded
- * engine/shaders/ GLSL files, float render targets, and read-back into the announced
+ * engine/gl/shaders/ GLSL files, float render targets, and read-back into the announced
  * buffer layout (top row first, channels interleaved). */
 #include "gl.h"
 #include "glsl_sources.h"
@@ -18,8 +18,8 @@ static eng_result compile(GLenum kind, const char *name, const char *defines, GL
 {
     const char *src = eng_glsl_source(name);
     if (!src)
-        return eng_fail(err, ENG_ERR_GL, "engine/shaders/%s: no such embedded shader", name);
-    /* A line `#pragma ispm_include "NAME"` splices in engine/shaders/NAME (GLSL has no
+        return eng_fail(err, ENG_ERR_GL, "engine/gl/shaders/%s: no such embedded shader", name);
+    /* A line `#pragma ispm_include "NAME"` splices in engine/gl/shaders/NAME (GLSL has no
      * include): the shader is compiled from the strings between the directives and the
      * included files, in order. Included files do not include further. */
     static const char directive[] = "#pragma ispm_include \"";
@@ -31,7 +31,7 @@ static eng_result compile(GLenum kind, const char *name, const char *defines, GL
     if (defines) { /* after the #version line, which must come first */
         const char *eol = strchr(src, '\n');
         if (!eol)
-            return eng_fail(err, ENG_ERR_GL, "engine/shaders/%s: no line after #version", name);
+            return eng_fail(err, ENG_ERR_GL, "engine/gl/shaders/%s: no line after #version", name);
         parts[nparts] = src;
         lens[nparts++] = (GLint)(eol + 1 - src);
         parts[nparts] = defines;
@@ -40,17 +40,17 @@ static eng_result compile(GLenum kind, const char *name, const char *defines, GL
     }
     for (const char *at; (at = strstr(rest, directive));) {
         if (nparts == 2 * MAX_INCLUDES)
-            return eng_fail(err, ENG_ERR_GL, "engine/shaders/%s: more than %d ispm_include lines", name, MAX_INCLUDES);
+            return eng_fail(err, ENG_ERR_GL, "engine/gl/shaders/%s: more than %d ispm_include lines", name, MAX_INCLUDES);
         const char *name_start = at + sizeof directive - 1;
         const char *name_end = strchr(name_start, '"');
         char lib_name[64];
         if (!name_end || (size_t)(name_end - name_start) >= sizeof lib_name)
-            return eng_fail(err, ENG_ERR_GL, "engine/shaders/%s: malformed ispm_include", name);
+            return eng_fail(err, ENG_ERR_GL, "engine/gl/shaders/%s: malformed ispm_include", name);
         memcpy(lib_name, name_start, (size_t)(name_end - name_start));
         lib_name[name_end - name_start] = 0;
         const char *lib = eng_glsl_source(lib_name);
         if (!lib)
-            return eng_fail(err, ENG_ERR_GL, "engine/shaders/%s: includes %s, which is not embedded", name, lib_name);
+            return eng_fail(err, ENG_ERR_GL, "engine/gl/shaders/%s: includes %s, which is not embedded", name, lib_name);
         parts[nparts] = rest;
         lens[nparts++] = (GLint)(at - rest);
         parts[nparts] = lib;
@@ -69,7 +69,7 @@ static eng_result compile(GLenum kind, const char *name, const char *defines, GL
         char log[768];
         glGetShaderInfoLog(sh, sizeof log, NULL, log);
         glDeleteShader(sh);
-        return eng_fail(err, ENG_ERR_GL, "engine/shaders/%s: compile failed: %s", name, log);
+        return eng_fail(err, ENG_ERR_GL, "engine/gl/shaders/%s: compile failed: %s", name, log);
     }
     *out = sh;
     return ENG_OK;
@@ -104,7 +104,7 @@ eng_result glu_program_defines(const char *vert_name, const char *frag_name, con
         char log[768];
         glGetProgramInfoLog(prog, sizeof log, NULL, log);
         glDeleteProgram(prog);
-        return eng_fail(err, ENG_ERR_GL, "engine/shaders/%s + %s: link failed: %s", vert_name, frag_name, log);
+        return eng_fail(err, ENG_ERR_GL, "engine/gl/shaders/%s + %s: link failed: %s", vert_name, frag_name, log);
     }
     *out = prog;
     return ENG_OK;
@@ -126,7 +126,7 @@ eng_result glu_compute_program(const char *name, GLuint *out, eng_error *err)
         char log[768];
         glGetProgramInfoLog(prog, sizeof log, NULL, log);
         glDeleteProgram(prog);
-        return eng_fail(err, ENG_ERR_GL, "engine/shaders/%s: link failed: %s", name, log);
+        return eng_fail(err, ENG_ERR_GL, "engine/gl/shaders/%s: link failed: %s", name, log);
     }
     *out = prog;
     return ENG_OK;

@@ -1,4 +1,4 @@
-/* fuzz_sequence.c — libFuzzer target for the sequence parser (seq_parse, engine/sequence.c).
+/* fuzz_sequence.c — libFuzzer target for the sequence parser (seq_parse, engine/scene/sequence.c).
  *
  * Each input is parsed as the bytes of "/nonexistent/fuzz.json"; the parser only resolves the
  * scene path, it never opens it, so the target reads no file. On every input the contract is
