@@ -1307,7 +1307,7 @@ START_TEST(test_compression)
         ck_assert_int_eq(m, CAP_COMPRESSION_NONE + i);
         ck_assert_str_eq(cap_compression_name(m), names[i]);
     }
-    ck_assert_str_eq(cap_compression_name(CAP_COMPRESSION_DEFAULT), "none"); /* record's default (issue 22) */
+    ck_assert_str_eq(cap_compression_name(CAP_COMPRESSION_DEFAULT), "none"); /* record's default */
     m = CAP_COMPRESSION_RLE;
     ck_assert(!cap_compression_parse("b44", &m)); /* lossy for floats: refused */
     ck_assert(!cap_compression_parse("ZIP", &m));
