@@ -128,6 +128,21 @@ eng_result cap_write_exr(const char *path, const eng_buffer *const *bufs, int co
  * stability run, which is renamed into place whole): the same bytes, without waiting on the disk. */
 eng_result cap_write_exr_unsynced(const char *path, const eng_buffer *const *bufs, int count, eng_error *err);
 
+/* How capture compresses each EXR part (lossless only: what replay decodes is bit-exact what
+ * was announced whatever the choice; only the file's bytes and size change). A sequence names
+ * it in settings.capture_compression, which the engine passes on as text. */
+typedef enum cap_compression {
+    CAP_COMPRESSION_DEFAULT = 0, /* record's default: none */
+    CAP_COMPRESSION_NONE,
+    CAP_COMPRESSION_RLE,
+    CAP_COMPRESSION_ZIPS,        /* zlib, one scanline per block */
+    CAP_COMPRESSION_ZIP,         /* zlib, 16 scanlines per block */
+    CAP_COMPRESSION_PIZ          /* wavelet + Huffman */
+} cap_compression;
+const char *cap_compression_name(cap_compression m);
+/* "none", "rle", "zips", "zip", "piz" → *out; 0 if name is none of them. */
+int cap_compression_parse(const char *name, cap_compression *out);
+
 /* The EXR file src written again as dst with every part compressed with m (lossless: none,
  * rle, zips, zip, piz; DEFAULT is none): the same parts in the same order, every attribute
  * copied (ispm:frame, ispm:time, windows, channels and their types), the pixels decoded and
@@ -138,7 +153,7 @@ eng_result cap_write_exr_unsynced(const char *path, const eng_buffer *const *buf
  * ENG_ERR_IO). When every part of src already has that compression nothing is written and
  * *rewritten is 0 (copy the file instead); else *rewritten is 1 on success. Tiled, deep or subsampled parts are ENG_ERR_INVALID; an
  * unreadable src or a failed write ENG_ERR_IO; the message names the file. */
-eng_result cap_recompress_exr(const char *src, const char *dst, eng_capture_compression m, int *rewritten,
+eng_result cap_recompress_exr(const char *src, const char *dst, cap_compression m, int *rewritten,
                               eng_error *err);
 
 #ifdef __cplusplus

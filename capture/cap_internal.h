@@ -9,7 +9,7 @@
 typedef struct cap_exr_meta {
     int frame;
     double time;
-    eng_capture_compression compression; /* 0 (default): ZIP */
+    cap_compression compression; /* 0 (default): none */
 } cap_exr_meta;
 
 /* cap_write_exr with metadata (meta may be NULL). */

@@ -112,7 +112,7 @@ struct cap_capture {
     double cur_time;
     int pending_count, pending_cap;
     cap_pending *pending;
-    eng_capture_compression compression;
+    cap_compression compression;
     cap_wq *wq;        /* the writers, or NULL: frames are written in on_frame_end */
     pthread_t remover; /* removes set-aside frames folders (remover_on: started, not joined) */
     int remover_on;
@@ -550,7 +550,11 @@ eng_result cap_create(const cap_desc *desc, cap_capture **out, eng_error *err)
     c->status = ENG_OK;
     eng_settings st = desc->sequence->settings;
     eng_settings_defaults(&st);
-    c->compression = st.capture_compression;
+    if (!cap_compression_parse(st.capture_compression, &c->compression)) { /* seq_parse checked it */
+        cap_destroy(c);
+        return eng_fail(err, ENG_ERR_INVALID, "%s: capture_compression \"%.*s\" is not a compression capture knows",
+                        desc->sequence->path, (int)sizeof st.capture_compression, st.capture_compression);
+    }
     r = resume ? resume_run(c, err) : write_runinfo(c, err);
     if (r != ENG_OK) {
         cap_destroy(c);
@@ -855,6 +859,25 @@ eng_listener cap_listener(cap_capture *c)
     return l;
 }
 
+/* ---------------------------------------------------------------- compression names */
+
+static const char *const COMPRESSION_NAMES[] = {"none", "none", "rle", "zips", "zip", "piz"};
+
+const char *cap_compression_name(cap_compression m)
+{
+    return (unsigned)m < sizeof COMPRESSION_NAMES / sizeof COMPRESSION_NAMES[0] ? COMPRESSION_NAMES[m] : "unknown";
+}
+
+int cap_compression_parse(const char *name, cap_compression *out)
+{
+    for (int m = CAP_COMPRESSION_NONE; name && m <= CAP_COMPRESSION_PIZ; m++)
+        if (strcmp(name, COMPRESSION_NAMES[m]) == 0) {
+            *out = (cap_compression)m;
+            return 1;
+        }
+    return 0;
+}
+
 /* ---------------------------------------------------------------- manifest */
 
 /* cJSON reports allocation failure as NULL; like every other allocation here, it ends the
@@ -1091,53 +1114,32 @@ static cJSON *manifest_json(const cap_capture *c)
     eng_settings s = seq->settings;
     eng_settings_defaults(&s);
     cJSON *st = jok(cJSON_CreateObject());
-    jadd(st, "shadow_map_size", cJSON_CreateNumber(s.shadow_map_size));
-    jadd(st, "pcf_radius", cJSON_CreateNumber(s.pcf_radius));
-    jadd(st, "shadow_bias", jfloat(s.shadow_bias));
-    jadd(st, "exposure", jfloat(s.exposure));
-    jadd(st, "threads", cJSON_CreateNumber(s.threads));
-    jadd(st, "indirect", jstr(eng_indirect_name(s.indirect)));
-    jadd(st, "photon_count", cJSON_CreateNumber(s.photon_count));
-    jadd(st, "bounces", cJSON_CreateNumber(s.bounces));
-    jadd(st, "kernel_radius", jfloat(s.kernel_radius));
-    jadd(st, "normal_compression", jfloat(s.normal_compression));
-    jadd(st, "random", jstr(eng_random_name(s.random)));
-    jadd(st, "random_map_size", cJSON_CreateNumber(s.random_map_size));
-    jadd(st, "random_seed", cJSON_CreateNumber(s.random_seed));
-    jadd(st, "stratified_cycle", cJSON_CreateNumber(s.stratified_cycle));
-    jadd(st, "splat_subsample", cJSON_CreateNumber(s.splat_subsample));
-    jadd(st, "temporal", cJSON_CreateBool(s.temporal));
-    jadd(st, "temporal_alpha", jfloat(s.temporal_alpha));
-    if (s.temporal_window > 0) /* only when set: runs without keep their manifests */
-        jadd(st, "temporal_window", cJSON_CreateNumber(s.temporal_window));
-    jadd(st, "atrous_iterations", cJSON_CreateNumber(s.atrous_iterations));
-    jadd(st, "atrous_detail", jstr(eng_detail_name(s.atrous_detail)));
-    jadd(st, "atrous_gamma", jfloat(s.atrous_gamma));
-    jadd(st, "kernel_scaling", jstr(eng_scaling_name(s.kernel_scaling)));
-    jadd(st, "progressive", cJSON_CreateBool(s.progressive));
-    if (s.progressive_pixel) /* only when set: runs without keep their manifests */
-        jadd(st, "progressive_radius", jstr("pixel"));
-    if (s.bounce_strata > 1) /* only when set: runs without keep their manifests */
-        jadd(st, "bounce_strata", cJSON_CreateNumber(s.bounce_strata));
-    if (s.indirect == ENG_INDIRECT_FINALGATHER) { /* only for the method that reads them */
-        jadd(st, "final_gather_rays", cJSON_CreateNumber(s.final_gather_rays));
-        jadd(st, "final_gather_radius", cJSON_CreateNumber(s.final_gather_radius));
+    int count = 0;
+    const eng_setting *table = eng_settings_table(&count);
+    for (int i = 0; i < count; i++) {
+        const eng_setting *d = &table[i];
+        if (!d->recorded(&s))
+            continue;
+        switch (d->type) {
+        case ENG_SETTING_INT: jadd(st, d->key, cJSON_CreateNumber(d->get(&s))); break;
+        case ENG_SETTING_FLOAT:
+            jadd(st, d->key, d->exact ? cJSON_CreateNumber(d->get(&s)) : jfloat((float)d->get(&s)));
+            break;
+        case ENG_SETTING_BOOL: jadd(st, d->key, cJSON_CreateBool(d->get(&s) != 0.0)); break;
+        case ENG_SETTING_ENUM: jadd(st, d->key, jstr(eng_setting_value_name(d, (int)d->get(&s)))); break;
+        case ENG_SETTING_NAME: {
+            char text[64];
+            eng_setting_format(d, &s, text, sizeof text);
+            jadd(st, d->key, jstr(text));
+            break;
+        }
+        }
     }
-    jadd(st, "boundary", jstr(eng_boundary_name(s.boundary)));
-    jadd(st, "photon_trace", jstr(eng_trace_name(s.photon_trace)));
-    if (s.photon_trace == ENG_TRACE_MULTI_IMAGE) {
-        jadd(st, "multi_image_maps", cJSON_CreateNumber(s.multi_image_maps));
-        jadd(st, "multi_image_size", cJSON_CreateNumber(s.multi_image_size));
-        jadd(st, "multi_image_miss", jstr(eng_miss_name(s.multi_image_miss)));
-        jadd(st, "multi_image_compare", cJSON_CreateBool(s.multi_image_compare));
-    }
-    jadd(st, "specular", jstr(eng_specular_name(s.specular)));
-    jadd(st, "specular_depth", cJSON_CreateNumber(s.specular_depth));
     jadd(root, "settings", st);
     /* How the frame files are encoded: not a setting of the pictures (provenance does not
      * compare it), since every lossless choice decodes to the same bits. */
     cJSON *cp = jok(cJSON_CreateObject());
-    jadd(cp, "compression", jstr(eng_compression_name(s.capture_compression)));
+    jadd(cp, "compression", jstr(cap_compression_name(c->compression)));
     jadd(root, "capture", cp);
 
     cJSON *det = jok(cJSON_CreateObject());

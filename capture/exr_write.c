@@ -297,15 +297,15 @@ static exr_result_t write_buffer_pixels(exr_context_t ctxt, int part, const eng_
     return write_part_pixels(ctxt, part, 0, b->height, planes, (int)nc);
 }
 
-static exr_compression_t exr_type(eng_capture_compression m)
+static exr_compression_t exr_type(cap_compression m)
 {
     switch (m) {
-    case ENG_COMPRESSION_NONE:
-    case ENG_COMPRESSION_DEFAULT: return EXR_COMPRESSION_NONE;
-    case ENG_COMPRESSION_ZIPS: return EXR_COMPRESSION_ZIPS;
-    case ENG_COMPRESSION_ZIP: return EXR_COMPRESSION_ZIP;
-    case ENG_COMPRESSION_PIZ: return EXR_COMPRESSION_PIZ;
-    case ENG_COMPRESSION_RLE: break;
+    case CAP_COMPRESSION_NONE:
+    case CAP_COMPRESSION_DEFAULT: return EXR_COMPRESSION_NONE;
+    case CAP_COMPRESSION_ZIPS: return EXR_COMPRESSION_ZIPS;
+    case CAP_COMPRESSION_ZIP: return EXR_COMPRESSION_ZIP;
+    case CAP_COMPRESSION_PIZ: return EXR_COMPRESSION_PIZ;
+    case CAP_COMPRESSION_RLE: break;
     }
     return EXR_COMPRESSION_RLE;
 }
@@ -669,7 +669,7 @@ static eng_result check_recode(const char *tmp, void *arg, eng_error *err)
     return res;
 }
 
-eng_result cap_recompress_exr(const char *src, const char *dst, eng_capture_compression m, int *rewritten,
+eng_result cap_recompress_exr(const char *src, const char *dst, cap_compression m, int *rewritten,
                               eng_error *err)
 {
     if (rewritten)

@@ -20,6 +20,7 @@ enum { EXIT_OK = 0, EXIT_RUNTIME = 1, EXIT_INPUT = 2 };
 
 int cmd_reference(int argc, char **argv, const char *command_line); /* cmd_reference.c */
 int cmd_merge(int argc, char **argv, const char *command_line);     /* cmd_merge.c */
+int cmd_settings(int argc, char **argv);                            /* cmd_settings.c */
 
 static void usage(FILE *f)
 {
@@ -40,6 +41,7 @@ static void usage(FILE *f)
             "  bench CONFIG -o OUTDIR     speed vs accuracy of engine settings against a reference run\n"
             "  merge SHARD... -o RUN      frame shards (record --frames) checked and merged into one run\n"
             "  tracebench SEQUENCE        photon-trace rays/s against raw Embree rtcIntersect1 on the same rays\n"
+            "  settings [--markdown]      every key of a sequence's \"settings\": type, default, range, meaning\n"
             "\n"
             "Run 'ispm <command> --help' for a command's options and exit codes.\n");
 }
@@ -679,6 +681,8 @@ int main(int argc, char **argv)
         return cmd_lineage(argc, argv);
     if (!strcmp(cmd, "tracebench"))
         return cmd_tracebench(argc, argv);
+    if (!strcmp(cmd, "settings"))
+        return cmd_settings(argc, argv);
     fprintf(stderr, "ispm: unknown command '%s'\n", cmd);
     usage(stderr);
     return EXIT_INPUT;

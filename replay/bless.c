@@ -126,7 +126,7 @@ static eng_result build_tmp(const rep_run *run, const char *golden, const char *
         int rewritten = 0;
         r = make_parent(dst, err);
         if (r == ENG_OK)
-            r = cap_recompress_exr(run->frames[i].path, dst, ENG_COMPRESSION_ZIP, &rewritten, err);
+            r = cap_recompress_exr(run->frames[i].path, dst, CAP_COMPRESSION_ZIP, &rewritten, err);
         if (r == ENG_OK && !rewritten)
             r = rep_copy_file(run->frames[i].path, dst, err);
         recompressed |= rewritten;

@@ -1221,11 +1221,13 @@ START_TEST(test_bad_buffers_rejected)
 END_TEST
 
 /* Records `frames` fake frames into run with the given writers and compression. */
-static void record_fake(const char *run, int frames, int writers, eng_capture_compression comp)
+static void record_fake(const char *run, int frames, int writers, cap_compression comp)
 {
     seq_sequence seq;
     make_seq(&seq, frames, 24, 20);
-    seq.settings.capture_compression = comp;
+    if (comp != CAP_COMPRESSION_DEFAULT)
+        snprintf(seq.settings.capture_compression, sizeof seq.settings.capture_compression, "%s",
+                 cap_compression_name(comp));
     scn_scene scene;
     make_scene(&scene);
     static const char *const det[] = {"LP_NUM_THREADS", "2", NULL};
@@ -1286,10 +1288,10 @@ START_TEST(test_writers_same_bytes)
     char dir[256], ref[300], run[300];
     make_tmpdir(dir);
     snprintf(ref, sizeof ref, "%s/sync", dir);
-    record_fake(ref, 5, 0, ENG_COMPRESSION_DEFAULT);
+    record_fake(ref, 5, 0, CAP_COMPRESSION_DEFAULT);
     for (int writers = 1; writers <= 3; writers += 2) {
         snprintf(run, sizeof run, "%s/w%d", dir, writers);
-        record_fake(run, 5, writers, ENG_COMPRESSION_DEFAULT);
+        record_fake(run, 5, writers, CAP_COMPRESSION_DEFAULT);
         assert_same_files(ref, run, 5);
     }
     rm_rf(dir);
@@ -1298,20 +1300,30 @@ END_TEST
 
 START_TEST(test_compression)
 {
-    eng_capture_compression m = ENG_COMPRESSION_DEFAULT;
+    cap_compression m = CAP_COMPRESSION_DEFAULT;
     const char *names[] = {"none", "rle", "zips", "zip", "piz"};
     for (int i = 0; i < 5; i++) {
-        ck_assert(eng_compression_parse(names[i], &m));
-        ck_assert_int_eq(m, ENG_COMPRESSION_NONE + i);
-        ck_assert_str_eq(eng_compression_name(m), names[i]);
+        ck_assert(cap_compression_parse(names[i], &m));
+        ck_assert_int_eq(m, CAP_COMPRESSION_NONE + i);
+        ck_assert_str_eq(cap_compression_name(m), names[i]);
     }
-    ck_assert_str_eq(eng_compression_name(ENG_COMPRESSION_DEFAULT), "none"); /* record's default (issue 22) */
-    m = ENG_COMPRESSION_RLE;
-    ck_assert(!eng_compression_parse("b44", &m)); /* lossy for floats: refused */
-    ck_assert(!eng_compression_parse("ZIP", &m));
-    ck_assert(!eng_compression_parse("", &m));
-    ck_assert(!eng_compression_parse(NULL, &m));
-    ck_assert_int_eq(m, ENG_COMPRESSION_RLE);
+    ck_assert_str_eq(cap_compression_name(CAP_COMPRESSION_DEFAULT), "none"); /* record's default */
+    m = CAP_COMPRESSION_RLE;
+    ck_assert(!cap_compression_parse("b44", &m)); /* lossy for floats: refused */
+    ck_assert(!cap_compression_parse("ZIP", &m));
+    ck_assert(!cap_compression_parse("", &m));
+    ck_assert(!cap_compression_parse(NULL, &m));
+    ck_assert_int_eq(m, CAP_COMPRESSION_RLE);
+
+    /* The sequence accepts exactly the names capture knows (settings.def lists them). */
+    const eng_setting *d = eng_setting_find("capture_compression");
+    ck_assert_ptr_nonnull(d);
+    ck_assert_int_eq(d->name_count, 5);
+    for (int i = 0; i < d->name_count; i++) {
+        ck_assert(cap_compression_parse(d->names[i].name, &m));
+        ck_assert_str_eq(d->names[i].name, names[i]);
+    }
+    ck_assert_str_eq(d->def_name, cap_compression_name(CAP_COMPRESSION_DEFAULT));
 
     const char *fmt = "{\"scene\": \"x.gltf\", \"frames\": 1, \"fps\": 1, \"resolution\": [4, 4], "
                       "\"camera\": {\"node\": \"C\"}, \"settings\": {\"capture_compression\": %s}}";
@@ -1335,7 +1347,7 @@ START_TEST(test_compression)
     char *digests[5];
     for (int i = 0; i < 5; i++) {
         snprintf(run, sizeof run, "%s/%s", dir, names[i]);
-        record_fake(run, 1, 1, (eng_capture_compression)(ENG_COMPRESSION_NONE + i));
+        record_fake(run, 1, 1, (cap_compression)(CAP_COMPRESSION_NONE + i));
         snprintf(path, sizeof path, "%s/frames/000000.exr", run);
         struct stat st;
         ck_assert_int_eq(stat(path, &st), 0);
@@ -1372,7 +1384,7 @@ START_TEST(test_recompress)
     char dir[256], run[300], src[400], zip[400], back[400], again[400];
     make_tmpdir(dir);
     snprintf(run, sizeof run, "%s/run", dir);
-    record_fake(run, 2, 1, ENG_COMPRESSION_RLE);
+    record_fake(run, 2, 1, CAP_COMPRESSION_RLE);
     snprintf(src, sizeof src, "%s/frames/000001.exr", run);
     snprintf(zip, sizeof zip, "%s/zip.exr", dir);
     snprintf(back, sizeof back, "%s/back.exr", dir);
@@ -1383,7 +1395,7 @@ START_TEST(test_recompress)
 
     eng_error err = {{0}};
     int rewritten = -1;
-    ck_assert_msg(cap_recompress_exr(src, zip, ENG_COMPRESSION_ZIP, &rewritten, &err) == ENG_OK, "%s", err.msg);
+    ck_assert_msg(cap_recompress_exr(src, zip, CAP_COMPRESSION_ZIP, &rewritten, &err) == ENG_OK, "%s", err.msg);
     ck_assert_int_eq(rewritten, 1);
     ck_assert_int_eq(count_suffix(dir, ".tmp"), 0);
     rd_part *a = NULL, *z = NULL;
@@ -1411,11 +1423,11 @@ START_TEST(test_recompress)
     ck_assert_int_lt(sz.st_size, sr.st_size);
 
     /* Already zip: nothing written. */
-    ck_assert_int_eq(cap_recompress_exr(zip, again, ENG_COMPRESSION_ZIP, &rewritten, &err), ENG_OK);
+    ck_assert_int_eq(cap_recompress_exr(zip, again, CAP_COMPRESSION_ZIP, &rewritten, &err), ENG_OK);
     ck_assert_int_eq(rewritten, 0);
     ck_assert_int_ne(stat(again, &sz), 0);
     /* Back to rle: the very bytes capture wrote (every attribute carried over as it was). */
-    ck_assert_msg(cap_recompress_exr(zip, back, ENG_COMPRESSION_RLE, &rewritten, &err) == ENG_OK, "%s", err.msg);
+    ck_assert_msg(cap_recompress_exr(zip, back, CAP_COMPRESSION_RLE, &rewritten, &err) == ENG_OK, "%s", err.msg);
     ck_assert_int_eq(rewritten, 1);
     size_t l1 = 0, l2 = 0;
     char *x = slurp(run, "frames/000001.exr", &l1), *y = slurp(dir, "back.exr", &l2);
@@ -1426,18 +1438,18 @@ START_TEST(test_recompress)
     /* A missing or non-EXR source: an I/O error naming it; the target left alone. */
     char missing[400];
     snprintf(missing, sizeof missing, "%s/missing.exr", dir);
-    ck_assert_int_eq(cap_recompress_exr(missing, again, ENG_COMPRESSION_ZIP, &rewritten, &err), ENG_ERR_IO);
+    ck_assert_int_eq(cap_recompress_exr(missing, again, CAP_COMPRESSION_ZIP, &rewritten, &err), ENG_ERR_IO);
     ck_assert_msg(strstr(err.msg, missing), "%s", err.msg);
     char manifest[400];
     snprintf(manifest, sizeof manifest, "%s/manifest.json", run);
-    ck_assert_int_eq(cap_recompress_exr(manifest, again, ENG_COMPRESSION_ZIP, &rewritten, &err), ENG_ERR_IO);
+    ck_assert_int_eq(cap_recompress_exr(manifest, again, CAP_COMPRESSION_ZIP, &rewritten, &err), ENG_ERR_IO);
     ck_assert_msg(strstr(err.msg, manifest), "%s", err.msg);
     ck_assert_int_eq(rewritten, 0);
     ck_assert_int_ne(stat(again, &sz), 0);
     /* An unwritable target: the write's error, no temp file left. */
     char nodir[400];
     snprintf(nodir, sizeof nodir, "%s/no/such/dir.exr", dir);
-    ck_assert_int_eq(cap_recompress_exr(src, nodir, ENG_COMPRESSION_ZIP, &rewritten, &err), ENG_ERR_IO);
+    ck_assert_int_eq(cap_recompress_exr(src, nodir, CAP_COMPRESSION_ZIP, &rewritten, &err), ENG_ERR_IO);
     ck_assert_msg(strstr(err.msg, "no/such/dir.exr"), "%s", err.msg);
     ck_assert_int_eq(count_suffix(dir, ".tmp"), 0);
     rm_rf(dir);

@@ -1632,7 +1632,7 @@ START_TEST(e2e_bless_recompresses_to_zip)
         snprintf(file, sizeof file, "frames/%06d.exr", i);
         char *p = rep_path_join(run, file);
         int rewritten = 0;
-        ck_assert_msg(cap_recompress_exr(p, p, ENG_COMPRESSION_RLE, &rewritten, &err) == ENG_OK, "%s", err.msg);
+        ck_assert_msg(cap_recompress_exr(p, p, CAP_COMPRESSION_RLE, &rewritten, &err) == ENG_OK, "%s", err.msg);
         ck_assert_int_eq(rewritten, 1);
         ck_assert_int_eq(exr_compression_of(p), EXR_COMPRESSION_RLE);
         free(p);

@@ -36,7 +36,7 @@ int main(int argc, char **argv)
     printf("%-5s %12s %12s %12s %12s %12s\n", "comp", "KiB/frame", "enc cpu ms", "enc wall ms", "dec cpu ms",
            "dec wall ms");
     int bad = 0;
-    for (int m = ENG_COMPRESSION_NONE; m <= ENG_COMPRESSION_PIZ; m++) {
+    for (int m = CAP_COMPRESSION_NONE; m <= CAP_COMPRESSION_PIZ; m++) {
         double kib = 0, ec = 0, ew = 0, dc = 0, dw = 0;
         int frames = 0;
         for (int f = 0;; f++) {
@@ -59,7 +59,7 @@ int main(int argc, char **argv)
                 bufs[i] = &views[i];
             }
             double tc[100], tw[100], uc[100], uw[100];
-            cap_exr_meta meta = {f, f / 8.0, (eng_capture_compression)m};
+            cap_exr_meta meta = {f, f / 8.0, (cap_compression)m};
             for (int r = 0; r < reps; r++) {
                 double c0 = tool_ms(CLOCK_THREAD_CPUTIME_ID), w0 = tool_ms(CLOCK_MONOTONIC);
                 if (cap__write_exr(tmp, bufs, n, &meta, &err) != ENG_OK) {
@@ -85,7 +85,7 @@ int main(int argc, char **argv)
                     eng_buffer_digest(&vb, b);
                     if (nb != n || strcmp(a, b) != 0) {
                         fprintf(stderr, "ispm_test_capture_cost: %s: part %s decodes differently with %s\n", path,
-                                parts[i].name, eng_compression_name((eng_capture_compression)m));
+                                parts[i].name, cap_compression_name((cap_compression)m));
                         bad = 1;
                     }
                 }
@@ -106,7 +106,7 @@ int main(int argc, char **argv)
             fprintf(stderr, "ispm_test_capture_cost: %s/frames/000000.exr: no frame\n", argv[1]);
             return 2;
         }
-        printf("%-5s %12.0f %12.1f %12.1f %12.1f %12.1f\n", eng_compression_name((eng_capture_compression)m),
+        printf("%-5s %12.0f %12.1f %12.1f %12.1f %12.1f\n", cap_compression_name((cap_compression)m),
                kib / frames, ec / frames, ew / frames, dc / frames, dw / frames);
     }
     remove(tmp);

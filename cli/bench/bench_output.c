@@ -27,71 +27,15 @@
 
 /* ---------------------------------------------------------------- settings as text */
 
-static const char *const SETTING_KEYS[] = {
-    "indirect", "photon_count", "bounces", "kernel_radius", "normal_compression", "splat_subsample", "temporal",
-    "temporal_alpha", "atrous_iterations", "atrous_detail", "atrous_gamma", "random", "random_map_size",
-    "random_seed", "stratified_cycle", "shadow_map_size", "pcf_radius", "shadow_bias", "exposure", "threads",
-    "kernel_scaling", "progressive", "boundary", "specular", "specular_depth", "photon_trace", "multi_image_maps",
-    "multi_image_size", "multi_image_miss", "multi_image_compare", "progressive_radius", "bounce_strata", "final_gather_rays", "final_gather_radius", NULL};
-
-/* The value the engine uses for a settings key, as text; 0 for a key it does not know. */
+/* The value the engine uses for a settings key, as text (the settings table formats it); 0 for
+ * a key it does not know. */
 static int setting_text(const eng_settings *s, const char *key, char *out, size_t size)
 {
-#define INT_KEY(k)                                                                                                     \
-    if (!strcmp(key, #k))                                                                                              \
-        return snprintf(out, size, "%d", s->k), 1;
-#define FLT_KEY(k)                                                                                                     \
-    if (!strcmp(key, #k))                                                                                              \
-        return snprintf(out, size, "%g", (double)s->k), 1;
-    if (!strcmp(key, "indirect"))
-        return snprintf(out, size, "%s", eng_indirect_name(s->indirect)), 1;
-    if (!strcmp(key, "random"))
-        return snprintf(out, size, "%s", eng_random_name(s->random)), 1;
-    if (!strcmp(key, "atrous_detail"))
-        return snprintf(out, size, "%s", eng_detail_name(s->atrous_detail)), 1;
-    if (!strcmp(key, "temporal"))
-        return snprintf(out, size, "%s", s->temporal ? "true" : "false"), 1;
-    if (!strcmp(key, "kernel_scaling"))
-        return snprintf(out, size, "%s", eng_scaling_name(s->kernel_scaling)), 1;
-    if (!strcmp(key, "progressive"))
-        return snprintf(out, size, "%s", s->progressive ? "true" : "false"), 1;
-    if (!strcmp(key, "progressive_radius"))
-        return snprintf(out, size, "%s", s->progressive_pixel ? "pixel" : "frame"), 1;
-    if (!strcmp(key, "boundary"))
-        return snprintf(out, size, "%s", eng_boundary_name(s->boundary)), 1;
-    if (!strcmp(key, "photon_trace"))
-        return snprintf(out, size, "%s", eng_trace_name(s->photon_trace)), 1;
-    if (!strcmp(key, "multi_image_miss"))
-        return snprintf(out, size, "%s", eng_miss_name(s->multi_image_miss)), 1;
-    if (!strcmp(key, "multi_image_compare"))
-        return snprintf(out, size, "%s", s->multi_image_compare ? "true" : "false"), 1;
-    INT_KEY(multi_image_maps)
-    INT_KEY(multi_image_size)
-    if (!strcmp(key, "specular"))
-        return snprintf(out, size, "%s", eng_specular_name(s->specular)), 1;
-    INT_KEY(specular_depth)
-    INT_KEY(photon_count)
-    INT_KEY(bounces)
-    INT_KEY(splat_subsample)
-    INT_KEY(atrous_iterations)
-    INT_KEY(random_map_size)
-    INT_KEY(random_seed)
-    INT_KEY(stratified_cycle)
-    INT_KEY(bounce_strata)
-    INT_KEY(final_gather_rays)
-    INT_KEY(shadow_map_size)
-    INT_KEY(pcf_radius)
-    INT_KEY(threads)
-    FLT_KEY(kernel_radius)
-    FLT_KEY(final_gather_radius)
-    FLT_KEY(normal_compression)
-    FLT_KEY(temporal_alpha)
-    FLT_KEY(atrous_gamma)
-    FLT_KEY(shadow_bias)
-    FLT_KEY(exposure)
-#undef INT_KEY
-#undef FLT_KEY
-    return 0;
+    const eng_setting *d = eng_setting_find(key);
+    if (!d)
+        return 0;
+    eng_setting_format(d, s, out, size);
+    return 1;
 }
 
 /* ---------------------------------------------------------------- outputs */
@@ -376,12 +320,15 @@ static char *make_json(const bench_config *c, const char *command_line, const be
 /* Points i (scatter) and j (gather) with every other setting equal. */
 static int same_but_indirect(const bench_point *a, const bench_point *b)
 {
-    for (const char *const *k = SETTING_KEYS; *k; k++) {
-        if (!strcmp(*k, "indirect") || !strcmp(*k, "threads"))
+    int count = 0;
+    const eng_setting *table = eng_settings_table(&count);
+    for (int i = 0; i < count; i++) {
+        const char *k = table[i].key;
+        if (!strcmp(k, "indirect") || !strcmp(k, "threads"))
             continue;
         char va[64], vb[64];
-        setting_text(&a->seq->settings, *k, va, sizeof va);
-        setting_text(&b->seq->settings, *k, vb, sizeof vb);
+        setting_text(&a->seq->settings, k, va, sizeof va);
+        setting_text(&b->seq->settings, k, vb, sizeof vb);
         if (strcmp(va, vb))
             return 0;
     }

@@ -1,9 +1,10 @@
 /* settings.h — what a sequence's "settings" object sets: the enums of the settings that name
- * an alternative, their names, and eng_settings with its defaults. */
+ * an alternative, their names, eng_settings with its defaults, and settings.def's table at run
+ * time. */
 #ifndef ISPM_SETTINGS_H
 #define ISPM_SETTINGS_H
 
-
+#include <stddef.h>
 
 #ifdef __cplusplus
 extern "C" {
@@ -79,20 +80,6 @@ typedef enum eng_miss_mode {
     ENG_MISS_DROP            /* end the path there (the paper's behaviour) */
 } eng_miss_mode;
 
-/* How capture compresses each EXR part (lossless only: what replay decodes is bit-exact what
- * was announced whatever the choice; only the file's bytes and size change). */
-typedef enum eng_capture_compression {
-    ENG_COMPRESSION_DEFAULT = 0, /* record's default: none (issue 22 row 1) */
-    ENG_COMPRESSION_NONE,
-    ENG_COMPRESSION_RLE,
-    ENG_COMPRESSION_ZIPS,        /* zlib, one scanline per block */
-    ENG_COMPRESSION_ZIP,         /* zlib, 16 scanlines per block */
-    ENG_COMPRESSION_PIZ          /* wavelet + Huffman */
-} eng_capture_compression;
-const char *eng_compression_name(eng_capture_compression m);
-/* "none", "rle", "zips", "zip", "piz" → *out; 0 if name is none of them. */
-int eng_compression_parse(const char *name, eng_capture_compression *out);
-
 const char *eng_indirect_name(eng_indirect m);
 const char *eng_trace_name(eng_photon_trace m);
 const char *eng_miss_name(eng_miss_mode m);
@@ -149,8 +136,9 @@ typedef struct eng_settings {
     /* Specular eye paths (issue 14, specular.h). */
     eng_specular specular;    /* default traced */
     int specular_depth;       /* specular surfaces an eye path crosses, 1..16; default 4 */
-    /* Capture (issue 22): EXR compression of the frame files; default zip. */
-    eng_capture_compression capture_compression;
+    /* The frame files' EXR compression by name, one of settings.def's list; the engine passes it
+     * on to capture, which knows what the names mean (cap_compression_parse). Default "none". */
+    char capture_compression[8];
     /* Issue 13: `"progressive_radius": "pixel"` (1): progressive photon mapping's radius per pixel
      * (progressive.h; every method but tile-gather-gl); "frame" (0, default): one scale per frame. */
     int progressive_pixel;
@@ -166,7 +154,60 @@ typedef struct eng_settings {
     float final_gather_radius;
 } eng_settings;
 
+/* Fills every field still 0 (or "") with its default from settings.def. */
 void eng_settings_defaults(eng_settings *s);
+
+/* One line of settings.def at run time: what the parser, the manifest writer, the bench and
+ * `ispm settings` read. Columns as settings.def describes them. */
+typedef enum eng_setting_type {
+    ENG_SETTING_INT,
+    ENG_SETTING_FLOAT,
+    ENG_SETTING_BOOL,
+    ENG_SETTING_ENUM, /* a name that selects an enum value */
+    ENG_SETTING_NAME  /* a name kept as text */
+} eng_setting_type;
+
+typedef enum eng_setting_ends {
+    ENG_ENDS_CLOSED,  /* lo..hi */
+    ENG_ENDS_OPEN_LO, /* (lo, hi] */
+    ENG_ENDS_OPEN,    /* (lo, hi) */
+    ENG_ENDS_POSITIVE /* (lo, hi], and the value's float not 0 */
+} eng_setting_ends;
+
+typedef struct eng_setting_name {
+    const char *name;
+    int value;
+} eng_setting_name;
+
+typedef struct eng_setting {
+    const char *key;
+    eng_setting_type type;
+    const char *type_name; /* "int", "float", "bool", "enum", "name" */
+    double def;            /* INT, FLOAT, BOOL, ENUM: the default value */
+    const char *def_name;  /* ENUM, NAME: the default's name; NULL otherwise */
+    double lo, hi;         /* INT, FLOAT */
+    eng_setting_ends ends; /* FLOAT */
+    int step;              /* INT: 2 or 4: a power of it; 1: any */
+    const char *step_text; /* INT: what a value of the wrong step "is not" */
+    int exact;             /* FLOAT: the manifest records the exact double, not the shortest decimal */
+    const eng_setting_name *names; /* ENUM, NAME, in message order */
+    int name_count;
+    const char *note;      /* follows the range or the names in messages */
+    const char *meaning;
+    double (*get)(const eng_settings *s);              /* INT, FLOAT, BOOL, ENUM */
+    void (*set)(eng_settings *s, double v);            /* INT, FLOAT, BOOL, ENUM */
+    char *(*text)(eng_settings *s, size_t *size);      /* NAME: the field and its size */
+    int (*recorded)(const eng_settings *s);            /* the manifest's "settings" holds it */
+} eng_setting;
+
+/* settings.def's lines in order; *count gets their number. */
+const eng_setting *eng_settings_table(int *count);
+/* The line of a key; NULL if there is none. */
+const eng_setting *eng_setting_find(const char *key);
+/* The name of an ENUM setting's value (0: the default's); "unknown" if it has none. */
+const char *eng_setting_value_name(const eng_setting *d, int value);
+/* The value s holds for d as text: %d, %g, true/false or the name (the bench's columns). */
+void eng_setting_format(const eng_setting *d, const eng_settings *s, char *out, size_t size);
 
 #ifdef __cplusplus
 }

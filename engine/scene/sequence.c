@@ -14,8 +14,8 @@
  *               {"keys": [{"time", "position", "target"}, ...], "up", "yfov_deg", "znear", "zfar"}
  *               (up to SEQ_MAX_CAMKEYS keys, times strictly increasing; defaults up (0,1,0),
  *               40°, 0.05, 100)
- *   settings    optional; shadow_map_size 16..8192, pcf_radius 1..8, shadow_bias > 0,
- *               exposure (stops, finite), threads 1..64; absent ones get eng_settings_defaults
+ *   settings    optional; the keys of engine/core/settings.def (docs/settings.md), each
+ *               checked as its line says; absent ones get eng_settings_defaults
  *   capture     optional; 1..SEQ_MAX_CAPTURE fnmatch globs of buffer names; absent means all
  *   scene_index optional; which of the glTF's scenes is played (default: its default scene)
  *   animations  optional; [name or index, ...] of the glTF animations played (default: all)
@@ -150,262 +150,109 @@ static eng_result get_vec3(parser *P, const cJSON *item, const char *where, floa
     return ENG_OK;
 }
 
+/* One setting's value, checked as its settings.def line says. The messages name the key as
+ * "settings.<key>" and the range or the names as the table gives them. */
+static eng_result parse_setting(parser *P, const eng_setting *d, const cJSON *it, eng_settings *s)
+{
+    char v[80], where[96];
+    eng_result r;
+    snprintf(where, sizeof where, "settings.%s", d->key);
+    switch (d->type) {
+    case ENG_SETTING_INT: {
+        int n = 0;
+        if ((r = get_int(P, it, where, (int)d->lo, (int)d->hi, &n)))
+            return r;
+        if (d->step > 1) {
+            int f = n;
+            while (f > 1 && f % d->step == 0)
+                f /= d->step;
+            if (f != 1)
+                return bad(P, "%s: %s is not %s", where, show(it, v, sizeof v), d->step_text);
+        }
+        d->set(s, n);
+        return ENG_OK;
+    }
+    case ENG_SETTING_FLOAT: {
+        double x = 0.0;
+        if ((r = get_number(P, it, where, &x)))
+            return r;
+        switch (d->ends) {
+        case ENG_ENDS_CLOSED:
+            if (!(x >= d->lo && x <= d->hi))
+                return bad(P, "%s: %s is out of range %g..%g%s", where, show(it, v, sizeof v), d->lo, d->hi, d->note);
+            break;
+        case ENG_ENDS_OPEN_LO:
+            if (!(x > d->lo && x <= d->hi))
+                return bad(P, "%s: %s is out of range (%g, %g]%s", where, show(it, v, sizeof v), d->lo, d->hi,
+                           d->note);
+            break;
+        case ENG_ENDS_OPEN:
+            if (!(x > d->lo && x < d->hi))
+                return bad(P, "%s: %s is out of range (%g, %g)%s", where, show(it, v, sizeof v), d->lo, d->hi,
+                           d->note);
+            break;
+        case ENG_ENDS_POSITIVE:
+            if (!(x > d->lo) || x > d->hi || (float)x == 0.0f)
+                return bad(P, "%s: %s must be positive (0 would mean the default)", where, show(it, v, sizeof v));
+            break;
+        }
+        d->set(s, x);
+        return ENG_OK;
+    }
+    case ENG_SETTING_BOOL:
+        if (!cJSON_IsBool(it))
+            return bad(P, "%s: expected true or false, got %s", where, show(it, v, sizeof v));
+        d->set(s, cJSON_IsTrue(it) ? 1 : 0);
+        return ENG_OK;
+    case ENG_SETTING_ENUM:
+    case ENG_SETTING_NAME:
+        for (int i = 0; cJSON_IsString(it) && i < d->name_count; i++)
+            if (!strcmp(it->valuestring, d->names[i].name)) {
+                if (d->type == ENG_SETTING_ENUM) {
+                    d->set(s, d->names[i].value);
+                } else {
+                    size_t n = 0;
+                    char *t = d->text(s, &n);
+                    snprintf(t, n, "%s", d->names[i].name);
+                }
+                return ENG_OK;
+            }
+        {
+            char list[400];
+            size_t at = 0;
+            list[0] = 0;
+            for (int i = 0; i < d->name_count && at < sizeof list; i++)
+                at += (size_t)snprintf(list + at, sizeof list - at, "%s\"%s\"", i ? ", " : "", d->names[i].name);
+            return bad(P, "%s: %s is not one of %s%s", where, show(it, v, sizeof v), list, d->note);
+        }
+    }
+    return ENG_OK;
+}
+
+/* Every key of settings.def, then the checks across keys that no one line can state. */
 static eng_result parse_settings(parser *P, const cJSON *obj, eng_settings *s)
 {
-    static const char *const keys[] = {"shadow_map_size", "pcf_radius", "shadow_bias", "exposure", "threads",
-                                       "indirect", "photon_count", "bounces", "kernel_radius",
-                                       "normal_compression", "random", "random_map_size", "random_seed",
-                                       "stratified_cycle",
-                                       "splat_subsample", "temporal", "temporal_alpha", "atrous_iterations",
-                                       "atrous_detail", "atrous_gamma", "kernel_scaling", "progressive", "boundary",
-                                       "specular", "specular_depth",
-                                       "photon_trace", "multi_image_maps", "multi_image_size",
-                                       "multi_image_miss", "multi_image_compare", "capture_compression", "temporal_window",
-                                       "progressive_radius", "bounce_strata", "final_gather_rays",
-                                       "final_gather_radius", NULL};
+    int count = 0;
+    const eng_setting *table = eng_settings_table(&count);
+    const char *keys[128];
+    if (count >= (int)(sizeof keys / sizeof keys[0])) { /* a programmer error: settings.def outgrew keys */
+        fprintf(stderr, "ispm: %d settings, room for %d\n", count, (int)(sizeof keys / sizeof keys[0]) - 1);
+        abort();
+    }
+    for (int i = 0; i < count; i++)
+        keys[i] = table[i].key;
+    keys[count] = NULL;
     char v[80];
     eng_result r;
     if (!cJSON_IsObject(obj))
         return bad(P, "settings: expected an object, got %s", show(obj, v, sizeof v));
     if ((r = check_keys(P, obj, "settings", keys)))
         return r;
-    const cJSON *it;
-    if ((it = cJSON_GetObjectItemCaseSensitive(obj, "shadow_map_size")) &&
-        (r = get_int(P, it, "settings.shadow_map_size", 16, 8192, &s->shadow_map_size)))
-        return r;
-    if ((it = cJSON_GetObjectItemCaseSensitive(obj, "pcf_radius")) &&
-        (r = get_int(P, it, "settings.pcf_radius", 1, 8, &s->pcf_radius)))
-        return r;
-    if ((it = cJSON_GetObjectItemCaseSensitive(obj, "threads")) &&
-        (r = get_int(P, it, "settings.threads", 1, 64, &s->threads)))
-        return r;
-    double d = 0.0;
-    if ((it = cJSON_GetObjectItemCaseSensitive(obj, "shadow_bias"))) {
-        if ((r = get_number(P, it, "settings.shadow_bias", &d)))
+    for (int i = 0; i < count; i++) {
+        const cJSON *it = cJSON_GetObjectItemCaseSensitive(obj, table[i].key);
+        if (it && (r = parse_setting(P, &table[i], it, s)))
             return r;
-        if (!(d > 0.0) || d > 1.0e6 || (float)d == 0.0f)
-            return bad(P, "settings.shadow_bias: %s must be positive (0 would mean the default)",
-                       show(it, v, sizeof v));
-        s->shadow_bias = (float)d;
     }
-    if ((it = cJSON_GetObjectItemCaseSensitive(obj, "exposure"))) {
-        if ((r = get_number(P, it, "settings.exposure", &d)))
-            return r;
-        if (fabs(d) > 100.0)
-            return bad(P, "settings.exposure: %s is out of range -100..100 stops", show(it, v, sizeof v));
-        s->exposure = (float)d;
-    }
-    if ((it = cJSON_GetObjectItemCaseSensitive(obj, "indirect"))) {
-        if (cJSON_IsString(it) && !strcmp(it->valuestring, "none"))
-            s->indirect = ENG_INDIRECT_NONE;
-        else if (cJSON_IsString(it) && !strcmp(it->valuestring, "ispm"))
-            s->indirect = ENG_INDIRECT_ISPM;
-        else if (cJSON_IsString(it) && !strcmp(it->valuestring, "kd-gather"))
-            s->indirect = ENG_INDIRECT_KDGATHER;
-        else if (cJSON_IsString(it) && !strcmp(it->valuestring, "quads"))
-            s->indirect = ENG_INDIRECT_QUADS;
-        else if (cJSON_IsString(it) && !strcmp(it->valuestring, "tile-gather"))
-            s->indirect = ENG_INDIRECT_TILEGATHER;
-        else if (cJSON_IsString(it) && !strcmp(it->valuestring, "tile-gather-gl"))
-            s->indirect = ENG_INDIRECT_TILEGATHER_GL;
-        else if (cJSON_IsString(it) && !strcmp(it->valuestring, "final-gather"))
-            s->indirect = ENG_INDIRECT_FINALGATHER;
-        else
-            return bad(P, "settings.indirect: %s is not one of \"ispm\", \"quads\", \"tile-gather\", "
-                          "\"tile-gather-gl\", \"kd-gather\", \"final-gather\", \"none\"",
-                       show(it, v, sizeof v));
-    }
-    if ((it = cJSON_GetObjectItemCaseSensitive(obj, "random"))) {
-        if (cJSON_IsString(it) && !strcmp(it->valuestring, "maps"))
-            s->random = ENG_RANDOM_MAPS;
-        else if (cJSON_IsString(it) && !strcmp(it->valuestring, "per-frame"))
-            s->random = ENG_RANDOM_PER_FRAME;
-        else if (cJSON_IsString(it) && !strcmp(it->valuestring, "stratified"))
-            s->random = ENG_RANDOM_STRATIFIED;
-        else
-            return bad(P, "settings.random: %s is not one of \"maps\", \"per-frame\", \"stratified\"",
-                       show(it, v, sizeof v));
-    }
-    if ((it = cJSON_GetObjectItemCaseSensitive(obj, "photon_count")) &&
-        (r = get_int(P, it, "settings.photon_count", 6, 1 << 22, &s->photon_count)))
-        return r;
-    if ((it = cJSON_GetObjectItemCaseSensitive(obj, "bounces")) &&
-        (r = get_int(P, it, "settings.bounces", 0, ENG_PHOTON_MAX_HITS, &s->bounces)))
-        return r;
-    if ((it = cJSON_GetObjectItemCaseSensitive(obj, "stratified_cycle")) &&
-        (r = get_int(P, it, "settings.stratified_cycle", 1, 4096, &s->stratified_cycle)))
-        return r;
-    if ((it = cJSON_GetObjectItemCaseSensitive(obj, "bounce_strata"))) {
-        if ((r = get_int(P, it, "settings.bounce_strata", 1, 64, &s->bounce_strata)))
-            return r;
-        if (s->bounce_strata & (s->bounce_strata - 1))
-            return bad(P, "settings.bounce_strata: %s is not a power of two (1, 2, 4, …, 64)", show(it, v, sizeof v));
-    }
-    if ((it = cJSON_GetObjectItemCaseSensitive(obj, "final_gather_rays"))) {
-        if ((r = get_int(P, it, "settings.final_gather_rays", 4, 4096, &s->final_gather_rays)))
-            return r;
-        int f = s->final_gather_rays;
-        while (f % 4 == 0)
-            f /= 4;
-        if (f != 1)
-            return bad(P, "settings.final_gather_rays: %s is not a power of 4 (4, 16, 64, …, 4096)",
-                       show(it, v, sizeof v));
-    }
-    if ((it = cJSON_GetObjectItemCaseSensitive(obj, "final_gather_radius"))) {
-        if ((r = get_number(P, it, "settings.final_gather_radius", &d)))
-            return r;
-        if (!(d > 0.0 && d <= 1.0))
-            return bad(P, "settings.final_gather_radius: %s is out of range (0, 1]", show(it, v, sizeof v));
-        s->final_gather_radius = (float)d;
-    }
-    if ((it = cJSON_GetObjectItemCaseSensitive(obj, "random_seed")) &&
-        (r = get_int(P, it, "settings.random_seed", 1, 2147483647, &s->random_seed)))
-        return r;
-    if ((it = cJSON_GetObjectItemCaseSensitive(obj, "random_map_size"))) {
-        if ((r = get_int(P, it, "settings.random_map_size", 1024, 1 << 22, &s->random_map_size)))
-            return r;
-        if (s->random_map_size & (s->random_map_size - 1))
-            return bad(P, "settings.random_map_size: %s is not a power of two", show(it, v, sizeof v));
-    }
-    if ((it = cJSON_GetObjectItemCaseSensitive(obj, "kernel_radius"))) {
-        if ((r = get_number(P, it, "settings.kernel_radius", &d)))
-            return r;
-        if (!(d >= 1e-4 && d <= 100.0))
-            return bad(P, "settings.kernel_radius: %s is out of range 0.0001..100 m", show(it, v, sizeof v));
-        s->kernel_radius = (float)d;
-    }
-    if ((it = cJSON_GetObjectItemCaseSensitive(obj, "normal_compression"))) {
-        if ((r = get_number(P, it, "settings.normal_compression", &d)))
-            return r;
-        if (!(d >= 0.01 && d <= 1.0))
-            return bad(P, "settings.normal_compression: %s is out of range 0.01..1 (r_z / r_xy)",
-                       show(it, v, sizeof v));
-        s->normal_compression = (float)d;
-    }
-    if ((it = cJSON_GetObjectItemCaseSensitive(obj, "splat_subsample"))) {
-        if ((r = get_int(P, it, "settings.splat_subsample", 1, 8, &s->splat_subsample)))
-            return r;
-        if (s->splat_subsample & (s->splat_subsample - 1))
-            return bad(P, "settings.splat_subsample: %s is not 1, 2, 4 or 8", show(it, v, sizeof v));
-    }
-    if ((it = cJSON_GetObjectItemCaseSensitive(obj, "temporal"))) {
-        if (!cJSON_IsBool(it))
-            return bad(P, "settings.temporal: expected true or false, got %s", show(it, v, sizeof v));
-        s->temporal = cJSON_IsTrue(it) ? 1 : 0;
-    }
-    if ((it = cJSON_GetObjectItemCaseSensitive(obj, "temporal_alpha"))) {
-        if ((r = get_number(P, it, "settings.temporal_alpha", &d)))
-            return r;
-        if (!(d > 0.0 && d < 1.0))
-            return bad(P, "settings.temporal_alpha: %s is out of range (0, 1)", show(it, v, sizeof v));
-        s->temporal_alpha = (float)d;
-    }
-    if ((it = cJSON_GetObjectItemCaseSensitive(obj, "temporal_window")) &&
-        (r = get_int(P, it, "settings.temporal_window", 0, 1000000, &s->temporal_window)))
-        return r;
-    if ((it = cJSON_GetObjectItemCaseSensitive(obj, "atrous_iterations")) &&
-        (r = get_int(P, it, "settings.atrous_iterations", 0, 8, &s->atrous_iterations)))
-        return r;
-    if ((it = cJSON_GetObjectItemCaseSensitive(obj, "atrous_detail"))) {
-        if (cJSON_IsString(it) && !strcmp(it->valuestring, "clipped"))
-            s->atrous_detail = ENG_DETAIL_CLIPPED;
-        else if (cJSON_IsString(it) && !strcmp(it->valuestring, "none"))
-            s->atrous_detail = ENG_DETAIL_NONE;
-        else if (cJSON_IsString(it) && !strcmp(it->valuestring, "all"))
-            s->atrous_detail = ENG_DETAIL_ALL;
-        else
-            return bad(P, "settings.atrous_detail: %s is not one of \"clipped\", \"none\", \"all\"",
-                       show(it, v, sizeof v));
-    }
-    if ((it = cJSON_GetObjectItemCaseSensitive(obj, "atrous_gamma"))) {
-        if ((r = get_number(P, it, "settings.atrous_gamma", &d)))
-            return r;
-        if (!(d > 0.0 && d <= 1000.0))
-            return bad(P, "settings.atrous_gamma: %s is out of range (0, 1000] (γ of 002 Eq. 7.7; "
-                          "use \"atrous_detail\": \"none\" for scaling coefficients only)", show(it, v, sizeof v));
-        s->atrous_gamma = (float)d;
-    }
-    if ((it = cJSON_GetObjectItemCaseSensitive(obj, "kernel_scaling"))) {
-        static const eng_kernel_scaling modes[] = {ENG_SCALING_PATH_DENSITY, ENG_SCALING_RAY_LENGTH,
-                                                   ENG_SCALING_TILE_DENSITY, ENG_SCALING_BANDWIDTH,
-                                                   ENG_SCALING_ANISOTROPIC};
-        int found = 0;
-        for (int i = 0; i < 5 && !found; i++)
-            if (cJSON_IsString(it) && !strcmp(it->valuestring, eng_scaling_name(modes[i]))) {
-                s->kernel_scaling = modes[i];
-                found = 1;
-            }
-        if (!found)
-            return bad(P, "settings.kernel_scaling: %s is not one of \"path-density\", \"ray-length\", "
-                          "\"tile-density\", \"bandwidth\", \"anisotropic\"", show(it, v, sizeof v));
-    }
-    if ((it = cJSON_GetObjectItemCaseSensitive(obj, "progressive"))) {
-        if (!cJSON_IsBool(it))
-            return bad(P, "settings.progressive: expected true or false, got %s", show(it, v, sizeof v));
-        s->progressive = cJSON_IsTrue(it) ? 1 : 0;
-    }
-    if ((it = cJSON_GetObjectItemCaseSensitive(obj, "progressive_radius"))) {
-        if (cJSON_IsString(it) && !strcmp(it->valuestring, "frame"))
-            s->progressive_pixel = 0;
-        else if (cJSON_IsString(it) && !strcmp(it->valuestring, "pixel"))
-            s->progressive_pixel = 1;
-        else
-            return bad(P, "settings.progressive_radius: %s is not one of \"frame\", \"pixel\"", show(it, v, sizeof v));
-    }
-    if ((it = cJSON_GetObjectItemCaseSensitive(obj, "boundary"))) {
-        if (cJSON_IsString(it) && !strcmp(it->valuestring, "none"))
-            s->boundary = ENG_BOUNDARY_NONE;
-        else if (cJSON_IsString(it) && !strcmp(it->valuestring, "renormalize"))
-            s->boundary = ENG_BOUNDARY_RENORMALIZE;
-        else
-            return bad(P, "settings.boundary: %s is not one of \"none\", \"renormalize\"", show(it, v, sizeof v));
-    }
-    if ((it = cJSON_GetObjectItemCaseSensitive(obj, "photon_trace"))) {
-        if (cJSON_IsString(it) && !strcmp(it->valuestring, "embree"))
-            s->photon_trace = ENG_TRACE_EMBREE;
-        else if (cJSON_IsString(it) && !strcmp(it->valuestring, "multi-image"))
-            s->photon_trace = ENG_TRACE_MULTI_IMAGE;
-        else
-            return bad(P, "settings.photon_trace: %s is not one of \"embree\", \"multi-image\"",
-                       show(it, v, sizeof v));
-    }
-    if ((it = cJSON_GetObjectItemCaseSensitive(obj, "multi_image_maps")) &&
-        (r = get_int(P, it, "settings.multi_image_maps", 1, ENG_MAX_TRACE_MAPS, &s->multi_image_maps)))
-        return r;
-    if ((it = cJSON_GetObjectItemCaseSensitive(obj, "multi_image_size")) &&
-        (r = get_int(P, it, "settings.multi_image_size", 4, 1024, &s->multi_image_size)))
-        return r;
-    if ((it = cJSON_GetObjectItemCaseSensitive(obj, "multi_image_miss"))) {
-        if (cJSON_IsString(it) && !strcmp(it->valuestring, "embree"))
-            s->multi_image_miss = ENG_MISS_EMBREE;
-        else if (cJSON_IsString(it) && !strcmp(it->valuestring, "drop"))
-            s->multi_image_miss = ENG_MISS_DROP;
-        else
-            return bad(P, "settings.multi_image_miss: %s is not one of \"embree\", \"drop\"", show(it, v, sizeof v));
-    }
-    if ((it = cJSON_GetObjectItemCaseSensitive(obj, "multi_image_compare"))) {
-        if (!cJSON_IsBool(it))
-            return bad(P, "settings.multi_image_compare: expected true or false, got %s", show(it, v, sizeof v));
-        s->multi_image_compare = cJSON_IsTrue(it) ? 1 : 0;
-    }
-    if ((it = cJSON_GetObjectItemCaseSensitive(obj, "specular"))) {
-        if (cJSON_IsString(it) && !strcmp(it->valuestring, "traced"))
-            s->specular = ENG_SPECULAR_TRACED;
-        else if (cJSON_IsString(it) && !strcmp(it->valuestring, "envmap"))
-            s->specular = ENG_SPECULAR_ENVMAP;
-        else if (cJSON_IsString(it) && !strcmp(it->valuestring, "off"))
-            s->specular = ENG_SPECULAR_OFF;
-        else
-            return bad(P, "settings.specular: %s is not one of \"traced\", \"envmap\", \"off\"",
-                       show(it, v, sizeof v));
-    }
-    if ((it = cJSON_GetObjectItemCaseSensitive(obj, "specular_depth")) &&
-        (r = get_int(P, it, "settings.specular_depth", 1, 16, &s->specular_depth)))
-        return r;
-    if ((it = cJSON_GetObjectItemCaseSensitive(obj, "capture_compression")) &&
-        !(cJSON_IsString(it) && eng_compression_parse(it->valuestring, &s->capture_compression)))
-        return bad(P, "settings.capture_compression: %s is not one of \"none\", \"rle\", \"zips\", \"zip\", \"piz\" "
-                   "(lossless only)", show(it, v, sizeof v));
     /* Per-pixel progressive radii: only where the method evaluates a pixel-dependent kernel
      * (ind_method.per_pixel_radius; the engine checks the same). */
     if (s->progressive_pixel &&
