@@ -2,10 +2,14 @@
  * at t = i / fps: animate the scene (and the previous frame's pose, for motion vectors),
  * update the Embree scene, then per light the shadow map, the eye G-buffer, direct light,
  * (indirect, specular and emission where on), the translucent (alphaMode BLEND) layer where the
- * scene has one, and the composite, which lays that layer over the opaque sum. After each pass it reads the pass's targets back and announces them
- * as named buffers to the listeners (capture is one); it never touches files. Per-pass wall
- * time is measured with glFinish at pass boundaries and reported in eng_frame_stats; the
- * read-back for announcing is timed separately as "readback" so pass times stay honest.
+ * scene has one, and the composite, which lays that layer over the opaque sum. After each pass
+ * it reads the pass's targets back and announces them as named buffers to the listeners
+ * (capture is one) by walking the pass's output table (passes.h: name, attachment, components,
+ * channels; announce_outputs); buffers made on the CPU (photons.*, progressive.*, specular.*,
+ * boundary.weight, gbuffer.emission, translucent.radiance, the methods' extras) are announced by
+ * the code that makes them. It never touches files. Per-pass wall time is measured with
+ * glFinish at pass boundaries and reported in eng_frame_stats; the read-back for announcing is
+ * timed separately as "readback" so pass times stay honest.
  *
  * Owns: the GL context, GPU copies of the scene's primitives, the passes, the Embree scene. */
 #define _POSIX_C_SOURCE 200809L /* clock_gettime */
@@ -607,6 +611,37 @@ static int read_and_announce(eng_engine *e, int frame, const char *name, const g
     return announce(e, frame, name, t->width, t->height, nch, channels, e->scratch);
 }
 
+#define OUT_NAME 96 /* room for any output's name (pass_output_name) */
+
+/* Assembles table entry o (a PASS_OUT_CPU one, named `name`) on the CPU and announces it
+ * unless the sequence does not capture it; called whether or not it is captured, since some
+ * assemble what later passes use. Returns non-zero if a listener aborted. */
+typedef int (*cpu_output_fn)(eng_engine *e, int frame, const pass_output *o, const char *name, void *user);
+
+/* Announces the outputs of a pass's table (passes.h) in table order: each read back from
+ * target t (layer at->face; at NULL: layer 0, no placeholders) unless the sequence does not
+ * capture it, optional entries only when `optional` is set, CPU entries through cpu (skipped
+ * when NULL). Returns non-zero if a listener aborted, the buffer's name in name[OUT_NAME]. */
+static int announce_outputs(eng_engine *e, int frame, const pass_output *table, const glu_target *t,
+                            const pass_output_at *at, int optional, cpu_output_fn cpu, void *user, char *name)
+{
+    for (const pass_output *o = table; o->name; o++) {
+        if (o->optional && !optional)
+            continue;
+        if (pass_output_name(o, at, name, OUT_NAME) != 0) {
+            fprintf(stderr, "ispm: output table entry %s does not expand\n", o->name);
+            abort();
+        }
+        int aborted = o->attachment == PASS_OUT_CPU
+                          ? cpu && cpu(e, frame, o, name, user)
+                          : read_and_announce(e, frame, name, t, o->attachment, at ? at->face : 0,
+                                              pass_output_channels(o), o->pick, o->channels);
+        if (aborted)
+            return 1;
+    }
+    return 0;
+}
+
 static void add_time(eng_engine *e, const char *pass, double ms)
 {
     eng_frame_stats *st = &e->stats;
@@ -621,12 +656,7 @@ static void add_time(eng_engine *e, const char *pass, double ms)
     }
 }
 
-static const char *const CH_XYZ[] = {"X", "Y", "Z"};
 static const char *const CH_RGB[] = {"R", "G", "B"};
-static const char *const CH_Z[] = {"Z"};
-static const char *const CH_XY[] = {"X", "Y"};
-static const char *const CH_MATERIAL[] = {"roughness", "metallic", "transmission", "ior", "id"};
-static const char *const CH_BOUNCE[] = {"R", "G", "B", "X", "Y", "Z", "density", "ior"};
 static const char *const CH_PHOTON[] = {"position.X", "position.Y", "position.Z", "direction.X", "direction.Y",
                                         "direction.Z", "power.R", "power.G", "power.B", "normal.X",
                                         "normal.Y", "normal.Z", "density", "bounce"};
@@ -653,7 +683,7 @@ static void record_light(eng_engine *e, uint32_t l, const shadow_map *sm)
 }
 
 /* Runs light l's shadow method after its shadow map (shadow.h), timed as the method's pass,
- * and announces the map it returns per face as shadow.light<l>[.face<f>].<buffer>. */
+ * and announces the map it returns per face through the method's output table. */
 static eng_result shadow_method_pass(eng_engine *e, int frame, uint32_t l, const shadow_map *sm,
                                      const glu_target **out, eng_error *err)
 {
@@ -667,17 +697,42 @@ static eng_result shadow_method_pass(eng_engine *e, int frame, uint32_t l, const
         add_time(e, method->pass, now_ms() - t0);
     if (failed)
         return eng_fail(err, ENG_ERR_GL, "frame %d: cannot allocate the %s map of light %u", frame, method->name, l);
-    for (int f = 0; *out && f < sm->faces; f++) {
-        char name[64];
-        if (sm->faces > 1)
-            snprintf(name, sizeof name, "shadow.light%u.face%d.%s", l, f, method->buffer);
-        else
-            snprintf(name, sizeof name, "shadow.light%u.%s", l, method->buffer);
-        static const int p0[] = {0};
-        if (read_and_announce(e, frame, name, *out, 0, f, 1, p0, CH_Z))
+    for (int f = 0; *out && method->outputs && f < sm->faces; f++) {
+        char name[OUT_NAME];
+        pass_output_at at = {l, sm->faces, f, 0, NULL};
+        if (announce_outputs(e, frame, method->outputs, *out, &at, 0, NULL, NULL, name))
             return eng_fail(err, ENG_ERR_ABORTED, "frame %d: capture failed at %s", frame, name);
     }
     return ENG_OK;
+}
+
+/* gbuffer.material (a cpu_output_fn; user: the eye G-buffer): five channels from two
+ * attachments, the material parameters (3) and the id (4.y). */
+static int material_assemble(eng_engine *e, int frame, const pass_output *o, const char *name, void *user)
+{
+    const glu_target *gb = user;
+    if (e->silent || !seq_wants(e->seq, name))
+        return 0;
+    static const int mat_pick[] = {0, 1, 2, 3};
+    size_t npix = (size_t)gb->width * (size_t)gb->height;
+    scratch_reserve(e, npix * 6);
+    float *mat = e->scratch;
+    float *id = e->scratch + npix * 5;
+    double r0 = now_ms();
+    glu_read(gb, 4, 0, 1, (const int[]){1}, id);
+    float *params = malloc(npix * 4 * sizeof(float));
+    if (!params) {
+        fprintf(stderr, "ispm: out of memory\n");
+        abort();
+    }
+    glu_read(gb, 3, 0, 4, mat_pick, params);
+    for (size_t i = 0; i < npix; i++) {
+        memcpy(mat + i * 5, params + i * 4, 4 * sizeof(float));
+        mat[i * 5 + 4] = id[i];
+    }
+    free(params);
+    e->readback_ms += now_ms() - r0;
+    return announce(e, frame, name, gb->width, gb->height, pass_output_channels(o), o->channels, mat);
 }
 
 /* Whether a light of this frame has a size (direct.penumbra is announced only then, so that
@@ -691,17 +746,6 @@ static int any_sized_light(const eng_frame_scene *fs)
 }
 
 #define PHOTON_ROW 1024 /* photons.map is PHOTON_ROW photons wide */
-
-/* "<pass>.light<i>[.face<f>][.<suffix>]" */
-static void light_buffer_name(char *out, size_t size, const char *pass, uint32_t light, int faces, int face,
-                              const char *suffix)
-{
-    int n = snprintf(out, size, "%s.light%u", pass, light);
-    if (faces > 1)
-        n += snprintf(out + n, size - (size_t)n, ".face%d", face);
-    if (suffix)
-        snprintf(out + n, size - (size_t)n, ".%s", suffix);
-}
 
 /* The power a light sends into the scene, per channel averaged: what its share of the
  * photon budget follows (ISPM §4.2: bounce map size ∝ Φ_L / Φ_T). */
@@ -718,6 +762,61 @@ static double light_power(const eng_light_pose *l, const eng_frame_scene *fs)
         half += ext * ext;
     }
     return c * 4.0 * half; /* E × area of the box's face, (2·half)² */
+}
+
+/* One face of a light's maps while light_passes walks pass_lightmaps_outputs: the bounce
+ * target's readback buffers. */
+typedef struct bounce_face {
+    const light_maps *lm;
+    uint32_t light;
+    int face, size;
+    size_t npix;
+    float *pos, *pw, *dir, *lobe, *bounce;
+} bounce_face;
+
+/* bounce.light<i>[.face<f>] (a cpu_output_fn): reads the face's light G-buffer positions and
+ * bounce target back, gathers its surviving photons into e->bounce for the CPU trace, and
+ * announces the bounce map. */
+static int bounce_assemble(eng_engine *e, int frame, const pass_output *o, const char *name, void *user)
+{
+    bounce_face *bf = user;
+    static const int p4[] = {0, 1, 2, 3};
+    const light_maps *lm = bf->lm;
+    const uint32_t l = bf->light;
+    const int f = bf->face, size = bf->size;
+    const size_t npix = bf->npix;
+    float *pos = bf->pos, *pw = bf->pw, *dir = bf->dir, *lobe = bf->lobe, *bounce = bf->bounce;
+    double r0 = now_ms();
+    glu_read(&lm->gbuffer, 0, f, 4, p4, pos);
+    glu_read(&lm->bounce, 0, f, 4, p4, pw);
+    glu_read(&lm->bounce, 1, f, 4, p4, dir);
+    glu_read(&lm->bounce, 2, f, 1, p4, lobe);
+    e->readback_ms += now_ms() - r0;
+    for (size_t i = 0; i < npix; i++) {
+        memcpy(bounce + 8 * i, pw + 4 * i, 3 * sizeof(float));
+        memcpy(bounce + 8 * i + 3, dir + 4 * i, 3 * sizeof(float));
+        bounce[8 * i + 6] = pw[4 * i + 3];
+        bounce[8 * i + 7] = dir[4 * i + 3];
+        if (pos[4 * i + 3] == 0.0f || (pw[4 * i] <= 0.0f && pw[4 * i + 1] <= 0.0f && pw[4 * i + 2] <= 0.0f))
+            continue;
+        if (e->bounce_origin) {
+            float *org = e->bounce_origin + 4 * e->bounce_count;
+            org[0] = (float)l;
+            org[1] = (float)f;
+            org[2] = (float)(i % (size_t)size);
+            org[3] = (float)(i / (size_t)size);
+        }
+        eng_bounce_photon *b = &e->bounce[e->bounce_count++];
+        memcpy(b->position, pos + 4 * i, 3 * sizeof(float));
+        memcpy(b->direction, dir + 4 * i, 3 * sizeof(float));
+        memcpy(b->power, pw + 4 * i, 3 * sizeof(float));
+        b->path_density = pw[4 * i + 3];
+        b->ior = dir[4 * i + 3];
+        b->delta = lobe[i] >= (float)BSDF_LOBE_MIRROR;
+    }
+    if (seq_wants(e->seq, name))
+        return announce(e, frame, name, size, size, pass_output_channels(o), o->channels, bounce);
+    return 0;
 }
 
 /* Light G-buffers and bounce maps of every light (ISPM §3 1b–c), announced; the surviving
@@ -761,61 +860,28 @@ static eng_result light_passes(eng_engine *e, int frame, const eng_rmap_frame *r
             return r;
         int faces = lm->views.faces;
         size_t npix = (size_t)size * (size_t)size;
-        float *pos = eng_xmalloc(npix * 4 * sizeof(float));
-        float *pw = eng_xmalloc(npix * 4 * sizeof(float));
-        float *dir = eng_xmalloc(npix * 4 * sizeof(float));
-        float *lobe = eng_xmalloc(npix * sizeof(float));
-        float *bounce = eng_xmalloc(npix * 8 * sizeof(float));
-        static const int p4[] = {0, 1, 2, 3};
-        static const int p3[] = {0, 1, 2};
+        bounce_face bf = {.lm = lm,
+                          .light = l,
+                          .size = size,
+                          .npix = npix,
+                          .pos = eng_xmalloc(npix * 4 * sizeof(float)),
+                          .pw = eng_xmalloc(npix * 4 * sizeof(float)),
+                          .dir = eng_xmalloc(npix * 4 * sizeof(float)),
+                          .lobe = eng_xmalloc(npix * sizeof(float)),
+                          .bounce = eng_xmalloc(npix * 8 * sizeof(float))};
         int aborted = 0;
         for (int f = 0; f < faces && !aborted; f++) {
-            char name[96];
-            light_buffer_name(name, sizeof name, "lightgbuffer", l, faces, f, "position");
-            aborted = read_and_announce(e, frame, name, &lm->gbuffer, 0, f, 3, p3, CH_XYZ);
-            light_buffer_name(name, sizeof name, "lightgbuffer", l, faces, f, "normal");
-            aborted = aborted || read_and_announce(e, frame, name, &lm->gbuffer, 1, f, 3, p3, CH_XYZ);
-            light_buffer_name(name, sizeof name, "lightgbuffer", l, faces, f, "albedo");
-            aborted = aborted || read_and_announce(e, frame, name, &lm->gbuffer, 2, f, 3, p3, CH_RGB);
-            if (aborted)
-                break;
-            double r0 = now_ms();
-            glu_read(&lm->gbuffer, 0, f, 4, p4, pos);
-            glu_read(&lm->bounce, 0, f, 4, p4, pw);
-            glu_read(&lm->bounce, 1, f, 4, p4, dir);
-            glu_read(&lm->bounce, 2, f, 1, p4, lobe);
-            e->readback_ms += now_ms() - r0;
-            for (size_t i = 0; i < npix; i++) {
-                memcpy(bounce + 8 * i, pw + 4 * i, 3 * sizeof(float));
-                memcpy(bounce + 8 * i + 3, dir + 4 * i, 3 * sizeof(float));
-                bounce[8 * i + 6] = pw[4 * i + 3];
-                bounce[8 * i + 7] = dir[4 * i + 3];
-                if (pos[4 * i + 3] == 0.0f || (pw[4 * i] <= 0.0f && pw[4 * i + 1] <= 0.0f && pw[4 * i + 2] <= 0.0f))
-                    continue;
-                if (e->bounce_origin) {
-                    float *o = e->bounce_origin + 4 * e->bounce_count;
-                    o[0] = (float)l;
-                    o[1] = (float)f;
-                    o[2] = (float)(i % (size_t)size);
-                    o[3] = (float)(i / (size_t)size);
-                }
-                eng_bounce_photon *b = &e->bounce[e->bounce_count++];
-                memcpy(b->position, pos + 4 * i, 3 * sizeof(float));
-                memcpy(b->direction, dir + 4 * i, 3 * sizeof(float));
-                memcpy(b->power, pw + 4 * i, 3 * sizeof(float));
-                b->path_density = pw[4 * i + 3];
-                b->ior = dir[4 * i + 3];
-                b->delta = lobe[i] >= (float)BSDF_LOBE_MIRROR;
-            }
-            light_buffer_name(name, sizeof name, "bounce", l, faces, f, NULL);
-            if (seq_wants(e->seq, name))
-                aborted = announce(e, frame, name, size, size, 8, CH_BOUNCE, bounce);
+            char name[OUT_NAME];
+            pass_output_at at = {l, faces, f, 0, NULL};
+            bf.face = f;
+            aborted = announce_outputs(e, frame, pass_lightmaps_outputs, &lm->gbuffer, &at, 0, bounce_assemble, &bf,
+                                       name);
         }
-        free(pos);
-        free(pw);
-        free(dir);
-        free(lobe);
-        free(bounce);
+        free(bf.pos);
+        free(bf.pw);
+        free(bf.dir);
+        free(bf.lobe);
+        free(bf.bounce);
         if (aborted)
             return eng_fail(err, ENG_ERR_ABORTED, "frame %d: capture failed in the light passes", frame);
     }
@@ -1138,10 +1204,10 @@ static eng_result emission_pass(eng_engine *e, int frame, const glu_target *gb, 
  * the texture of indirect.radiance. */
 static eng_result filtered_indirect(eng_engine *e, int frame, const glu_target *gb, GLuint *tex, eng_error *err)
 {
-    static const int p012[] = {0, 1, 2}, p3[] = {3}, p2[] = {0};
     const eng_settings *s = &e->settings;
     const glu_target *lvl[4] = {gb, NULL, NULL, NULL};
-    char name[64];
+    char name[OUT_NAME];
+    pass_output_at at = {0, 1, 0, 0, e->method->prefix};
     int aborted = 0;
     double t0 = now_ms();
     for (int l = 1; l <= e->levels; l++)
@@ -1150,12 +1216,8 @@ static eng_result filtered_indirect(eng_engine *e, int frame, const glu_target *
     if (e->levels)
         add_time(e, "gbuffer_lo", now_ms() - t0);
     for (int l = 1; l <= e->levels && !aborted; l++) {
-        snprintf(name, sizeof name, "gbuffer.level%d.position", l);
-        aborted = read_and_announce(e, frame, name, lvl[l], 0, 0, 3, p012, CH_XYZ);
-        snprintf(name, sizeof name, "gbuffer.level%d.normal", l);
-        aborted = aborted || read_and_announce(e, frame, name, lvl[l], 1, 0, 3, p012, CH_XYZ);
-        snprintf(name, sizeof name, "gbuffer.level%d.depth", l);
-        aborted = aborted || read_and_announce(e, frame, name, lvl[l], 4, 0, 1, p2, CH_Z);
+        at.level = l;
+        aborted = announce_outputs(e, frame, pass_gbuffer_level_outputs, lvl[l], &at, 0, NULL, NULL, name);
     }
     const glu_target *sp = NULL;
     if (aborted)
@@ -1163,13 +1225,7 @@ static eng_result filtered_indirect(eng_engine *e, int frame, const glu_target *
     eng_result r = run_method(e, frame, lvl[e->levels], &sp, err);
     if (r != ENG_OK)
         return r;
-    const char *pre = e->method->prefix;
-    snprintf(name, sizeof name, "%s.irradiance", pre);
-    aborted = read_and_announce(e, frame, name, sp, 0, 0, 3, p012, CH_RGB);
-    snprintf(name, sizeof name, "%s.count", pre);
-    aborted = aborted || read_and_announce(e, frame, name, sp, 0, 0, 1, p3, CH_Y);
-    snprintf(name, sizeof name, "%s.glossy", pre);
-    aborted = aborted || read_and_announce(e, frame, name, sp, 1, 0, 3, p012, CH_RGB);
+    aborted = announce_outputs(e, frame, ind_irradiance_outputs, sp, &at, 0, NULL, NULL, name);
     if (!aborted && (r = boundary_run(e, frame, lvl[e->levels], &sp, err)) != ENG_OK)
         return r;
     if (!aborted && e->prog && (r = progressive_run(e, frame, lvl[e->levels], &sp, err)) != ENG_OK)
@@ -1180,8 +1236,8 @@ static eng_result filtered_indirect(eng_engine *e, int frame, const glu_target *
         const glu_target *up = pass_upsample_run(e->upsample[l], lvl[l + 1], irradiance, glossy, lvl[l]);
         glFinish();
         add_time(e, "upsample", now_ms() - t0);
-        snprintf(name, sizeof name, "upsample.level%d", l);
-        aborted = read_and_announce(e, frame, name, up, 0, 0, 3, p012, CH_RGB);
+        at.level = l;
+        aborted = announce_outputs(e, frame, pass_upsample_outputs, up, &at, 0, NULL, NULL, name);
         irradiance = up->color[0];
         glossy = up->color[1];
     }
@@ -1190,9 +1246,7 @@ static eng_result filtered_indirect(eng_engine *e, int frame, const glu_target *
         const glu_target *tt = pass_temporal_run(e->temporal, gb, irradiance, s->temporal_alpha);
         glFinish();
         add_time(e, "temporal", now_ms() - t0);
-        aborted = read_and_announce(e, frame, "temporal.history", tt, 1, 0, 3, p012, CH_RGB) ||
-                  read_and_announce(e, frame, "temporal.alpha", tt, 0, 0, 1, p3, CH_Y) ||
-                  read_and_announce(e, frame, "temporal.result", tt, 0, 0, 3, p012, CH_RGB);
+        aborted = announce_outputs(e, frame, pass_temporal_outputs, tt, NULL, 0, NULL, NULL, name);
         irradiance = tt->color[0];
     }
     if (e->atrous && !aborted) {
@@ -1202,12 +1256,11 @@ static eng_result filtered_indirect(eng_engine *e, int frame, const glu_target *
         add_time(e, "atrous", now_ms() - t0);
         int n = s->atrous_iterations;
         for (int i = 0; i < n && !aborted; i++) {
-            snprintf(name, sizeof name, "atrous.scale%d", i + 1);
-            aborted = read_and_announce(e, frame, name, &lv[i], 0, 0, 3, p012, CH_RGB);
-            snprintf(name, sizeof name, "atrous.detail%d", i);
-            aborted = aborted || read_and_announce(e, frame, name, &lv[i], 1, 0, 3, p012, CH_RGB);
+            at.level = i;
+            aborted = announce_outputs(e, frame, pass_atrous_outputs, &lv[i], &at, 0, NULL, NULL, name);
         }
-        aborted = aborted || read_and_announce(e, frame, "atrous.result", &lv[n - 1], 3, 0, 3, p012, CH_RGB);
+        aborted = aborted || announce_outputs(e, frame, pass_atrous_result_outputs, &lv[n - 1], NULL, 0, NULL, NULL,
+                                              name);
         irradiance = lv[n - 1].color[3];
     }
     if (aborted)
@@ -1216,7 +1269,7 @@ static eng_result filtered_indirect(eng_engine *e, int frame, const glu_target *
     const glu_target *rs = pass_resolve_run(e->resolve, gb, irradiance, glossy);
     glFinish();
     add_time(e, "resolve", now_ms() - t0);
-    if (read_and_announce(e, frame, "indirect.radiance", rs, 0, 0, 3, p012, CH_RGB))
+    if (announce_outputs(e, frame, pass_resolve_outputs, rs, NULL, 0, NULL, NULL, name))
         return eng_fail(err, ENG_ERR_ABORTED, "frame %d: capture failed at indirect.radiance", frame);
     *tex = rs->color[0];
     return ENG_OK;
@@ -1297,7 +1350,6 @@ eng_result eng_render_frame(eng_engine *e, int frame, eng_error *err)
         if (e->listeners[i].frame_begin && e->listeners[i].frame_begin(e->listeners[i].user, frame, t) != 0)
             return eng_fail(err, ENG_ERR_ABORTED, "frame %d: a listener refused the frame", frame);
 
-    const int p0[] = {0}, p01[] = {2, 3}, p012[] = {0, 1, 2};
     double t0 = now_ms();
     pose_frame(e, frame);
     rt_update(e->rt, &e->fs);
@@ -1322,12 +1374,9 @@ eng_result eng_render_frame(eng_engine *e, int frame, eng_error *err)
             return eng_fail(err, ENG_ERR_GL, "frame %d: cannot allocate the shadow map of light %u", frame, l);
         record_light(e, l, maps[l]);
         for (int f = 0; f < maps[l]->faces; f++) {
-            char name[64];
-            if (maps[l]->faces > 1)
-                snprintf(name, sizeof name, "shadow.light%u.face%d", l, f);
-            else
-                snprintf(name, sizeof name, "shadow.light%u", l);
-            if (read_and_announce(e, frame, name, &maps[l]->target, 0, f, 1, p0, CH_Z))
+            char name[OUT_NAME];
+            pass_output_at at = {l, maps[l]->faces, f, 0, NULL};
+            if (announce_outputs(e, frame, pass_shadow_outputs, &maps[l]->target, &at, 0, NULL, NULL, name))
                 return eng_fail(err, ENG_ERR_ABORTED, "frame %d: capture failed at %s", frame, name);
         }
         eng_result r = shadow_method_pass(e, frame, l, maps[l], &shadow_extra[l], err);
@@ -1381,45 +1430,13 @@ eng_result eng_render_frame(eng_engine *e, int frame, eng_error *err)
     }
 
     /* Eye G-buffer, announced. */
-    {
-        const int mat_pick[] = {0, 1, 2, 3};
-        int abort_at = 0;
-        abort_at = abort_at || read_and_announce(e, frame, "gbuffer.position", gb, 0, 0, 3, p012, CH_XYZ);
-        abort_at = abort_at || read_and_announce(e, frame, "gbuffer.normal", gb, 1, 0, 3, p012, CH_XYZ);
-        abort_at = abort_at || read_and_announce(e, frame, "gbuffer.albedo", gb, 2, 0, 3, p012, CH_RGB);
-        if (!abort_at && !e->silent && seq_wants(e->seq, "gbuffer.material")) {
-            /* Five channels from two targets: material parameters and the id. */
-            size_t npix = (size_t)gb->width * (size_t)gb->height;
-            scratch_reserve(e, npix * 6);
-            float *mat = e->scratch;
-            float *id = e->scratch + npix * 5;
-            double r0 = now_ms();
-            glu_read(gb, 4, 0, 1, (const int[]){1}, id);
-            float *params = malloc(npix * 4 * sizeof(float));
-            if (!params) {
-                fprintf(stderr, "ispm: out of memory\n");
-                abort();
-            }
-            glu_read(gb, 3, 0, 4, mat_pick, params);
-            for (size_t i = 0; i < npix; i++) {
-                memcpy(mat + i * 5, params + i * 4, 4 * sizeof(float));
-                mat[i * 5 + 4] = id[i];
-            }
-            free(params);
-            e->readback_ms += now_ms() - r0;
-            abort_at = announce(e, frame, "gbuffer.material", gb->width, gb->height, 5, CH_MATERIAL, mat);
-        }
-        abort_at = abort_at || read_and_announce(e, frame, "gbuffer.depth", gb, 4, 0, 1, p0, CH_Z);
-        abort_at = abort_at || read_and_announce(e, frame, "gbuffer.motion", gb, 4, 0, 2, p01, CH_XY);
-        if (abort_at)
-            return eng_fail(err, ENG_ERR_ABORTED, "frame %d: capture failed in the gbuffer pass", frame);
-    }
+    char name[OUT_NAME];
+    if (announce_outputs(e, frame, pass_gbuffer_outputs, gb, NULL, 0, material_assemble, (void *)gb, name))
+        return eng_fail(err, ENG_ERR_ABORTED, "frame %d: capture failed in the gbuffer pass", frame);
 
     /* Direct light, announced. */
-    if (read_and_announce(e, frame, "direct.radiance", direct, 0, 0, 3, p012, CH_RGB))
-        return eng_fail(err, ENG_ERR_ABORTED, "frame %d: capture failed at direct.radiance", frame);
-    if (any_sized_light(&e->fs) && read_and_announce(e, frame, "direct.penumbra", direct, 1, 0, 1, p0, CH_Y))
-        return eng_fail(err, ENG_ERR_ABORTED, "frame %d: capture failed at direct.penumbra", frame);
+    if (announce_outputs(e, frame, pass_direct_outputs, direct, NULL, any_sized_light(&e->fs), NULL, NULL, name))
+        return eng_fail(err, ENG_ERR_ABORTED, "frame %d: capture failed at %s", frame, name);
 
     /* Indirect light: the photon estimate of the `indirect` method (ISPM §3 step 4), at full
      * resolution, or reconstructed by the filters. */
@@ -1434,12 +1451,8 @@ eng_result eng_render_frame(eng_engine *e, int frame, eng_error *err)
         if (r != ENG_OK)
             return r;
         indirect_tex = sp->color[0];
-        const int p3[] = {3};
-        char name[64];
-        snprintf(name, sizeof name, "%s.indirect", e->method->prefix);
-        int aborted = read_and_announce(e, frame, name, sp, 0, 0, 3, p012, CH_RGB);
-        snprintf(name, sizeof name, "%s.count", e->method->prefix);
-        aborted = aborted || read_and_announce(e, frame, name, sp, 0, 0, 1, p3, CH_Y);
+        pass_output_at at = {0, 1, 0, 0, e->method->prefix};
+        int aborted = announce_outputs(e, frame, ind_radiance_outputs, sp, &at, 0, NULL, NULL, name);
         if (!aborted && (r = boundary_run(e, frame, gb, &sp, err)) != ENG_OK)
             return r;
         indirect_tex = sp->color[0];
@@ -1449,7 +1462,9 @@ eng_result eng_render_frame(eng_engine *e, int frame, eng_error *err)
                 return r;
             indirect_tex = sp->color[0];
         }
-        aborted = aborted || read_and_announce(e, frame, "indirect.radiance", sp, 0, 0, 3, p012, CH_RGB);
+        /* Without the filters the method's (or boundary or progressive) target has the
+         * resolve's layout: indirect.radiance in attachment 0. */
+        aborted = aborted || announce_outputs(e, frame, pass_resolve_outputs, sp, NULL, 0, NULL, NULL, name);
         if (aborted)
             return eng_fail(err, ENG_ERR_ABORTED, "frame %d: capture failed in the %s pass", frame, e->method->pass);
     }
@@ -1485,8 +1500,7 @@ eng_result eng_render_frame(eng_engine *e, int frame, eng_error *err)
                            translucent_tex, &e->settings);
     glFinish();
     add_time(e, "composite", now_ms() - t0);
-    if (read_and_announce(e, frame, "composite.radiance", comp, 0, 0, 3, p012, CH_RGB) ||
-        read_and_announce(e, frame, "final.display", comp, 1, 0, 3, p012, CH_RGB))
+    if (announce_outputs(e, frame, pass_composite_outputs, comp, NULL, 0, NULL, NULL, name))
         return eng_fail(err, ENG_ERR_ABORTED, "frame %d: capture failed in the composite pass", frame);
 
     GLenum gle = glGetError();

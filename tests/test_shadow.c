@@ -132,11 +132,11 @@ START_TEST(method_of_light)
     memset(&l, 0, sizeof l);
     ck_assert_int_eq(shadow_method_index(&l), 0);
     ck_assert_str_eq(shadow_methods[0]->name, "pcf");
-    ck_assert_ptr_null(shadow_methods[0]->buffer);
+    ck_assert_ptr_null(shadow_methods[0]->outputs);
     l.radius = 0.1f;
     ck_assert_int_eq(shadow_method_index(&l), 1);
     ck_assert_str_eq(shadow_methods[1]->name, "pcss");
-    ck_assert_str_eq(shadow_methods[1]->buffer, "blocker");
+    ck_assert_str_eq(shadow_methods[1]->outputs[0].name, "shadow.light<i>[.face<f>].blocker");
 }
 END_TEST
 

@@ -18,6 +18,19 @@
 #define IND_RMIN 0.25
 #define IND_RMAX 2.0
 
+const pass_output ind_radiance_outputs[] = {
+    {.name = "<m>.indirect", .attachment = 0, .pick = {0, 1, 2}, .channels = {"R", "G", "B"}},
+    {.name = "<m>.count", .attachment = 0, .pick = {3}, .channels = {"Y"}},
+    {0},
+};
+
+const pass_output ind_irradiance_outputs[] = {
+    {.name = "<m>.irradiance", .attachment = 0, .pick = {0, 1, 2}, .channels = {"R", "G", "B"}},
+    {.name = "<m>.count", .attachment = 0, .pick = {3}, .channels = {"Y"}},
+    {.name = "<m>.glossy", .attachment = 1, .pick = {0, 1, 2}, .channels = {"R", "G", "B"}},
+    {0},
+};
+
 static double clampd(double v, double lo, double hi) { return v < lo ? lo : v > hi ? hi : v; }
 
 

@@ -12,8 +12,8 @@
  *
  * The frame loop (engine.c) only sees this table: it creates the method once, runs it once
  * per frame, announces the returned target's attachments under the method's buffer prefix
- * (`<prefix>.indirect`/`.count`, or `.irradiance`/`.count`/`.glossy` in irradiance mode) and
- * any extra buffers the method lists, and times it as the method's pass. Methods of other
+ * by walking ind_radiance_outputs (`<prefix>.indirect`/`.count`) or, in irradiance mode,
+ * ind_irradiance_outputs (`.irradiance`/`.count`/`.glossy`), and any extra buffers the method lists, and times it as the method's pass. Methods of other
  * kinds (photon trace, eye specular) follow the same pattern in their own headers. */
 #ifndef ISPM_INDIRECT_H
 #define ISPM_INDIRECT_H
@@ -79,6 +79,11 @@ typedef struct ind_method {
      * and the engine refuses it; 0 for the kernel methods. */
     int traced_gather;
 } ind_method;
+
+/* What the frame loop announces of a method's target (ind_output), <m> its prefix: radiance
+ * mode, and irradiance mode (the reconstruction filters). */
+extern const pass_output ind_radiance_outputs[];
+extern const pass_output ind_irradiance_outputs[];
 
 extern const ind_method ind_scatter_method;
 extern const ind_method ind_quads_method;

@@ -40,6 +40,12 @@ void pass_composite_set_occlusion(pass_composite *p, GLuint tex)
     p->occlusion_tex = tex;
 }
 
+const pass_output pass_composite_outputs[] = {
+    {.name = "composite.radiance", .attachment = 0, .pick = {0, 1, 2}, .channels = {"R", "G", "B"}},
+    {.name = "final.display", .attachment = 1, .pick = {0, 1, 2}, .channels = {"R", "G", "B"}},
+    {0},
+};
+
 const glu_target *pass_composite_run(pass_composite *p, GLuint direct_tex, GLuint indirect_tex,
                                      GLuint specular_tex, GLuint emission_tex, GLuint translucent_tex,
                                      const eng_settings *s)

@@ -63,6 +63,14 @@ float pass_direct_shadow_texel(const eng_light_pose *l, const shadow_map *sm, co
     return sm->far_value / (float)s->shadow_map_size;
 }
 
+/* Radiance, and the penumbra width where a light has a size (optional: runs of punctual lights
+ * announce no direct.penumbra). */
+const pass_output pass_direct_outputs[] = {
+    {.name = "direct.radiance", .attachment = 0, .pick = {0, 1, 2}, .channels = {"R", "G", "B"}},
+    {.name = "direct.penumbra", .attachment = 1, .pick = {0}, .channels = {"Y"}, .optional = 1},
+    {0},
+};
+
 const glu_target *pass_direct_run(pass_direct *p, const eng_frame_scene *fs, const glu_target *gbuf,
                                   const shadow_map *const *shadows, const glu_target *const *extra,
                                   const eng_settings *s)

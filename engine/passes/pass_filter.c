@@ -57,6 +57,12 @@ eng_result pass_upsample_create(int width, int height, pass_upsample **out, eng_
     return ENG_OK;
 }
 
+/* <k>: the level upsampled to (0 = full size). */
+const pass_output pass_upsample_outputs[] = {
+    {.name = "upsample.level<k>", .attachment = 0, .pick = {0, 1, 2}, .channels = {"R", "G", "B"}},
+    {0},
+};
+
 const glu_target *pass_upsample_run(pass_upsample *p, const glu_target *lo_gb, GLuint lo_irradiance,
                                     GLuint lo_glossy, const glu_target *hi_gb)
 {
@@ -113,6 +119,13 @@ eng_result pass_temporal_create(int width, int height, pass_temporal **out, eng_
 }
 
 void pass_temporal_reset(pass_temporal *p) { p->current = -1; }
+
+const pass_output pass_temporal_outputs[] = {
+    {.name = "temporal.history", .attachment = 1, .pick = {0, 1, 2}, .channels = {"R", "G", "B"}},
+    {.name = "temporal.alpha", .attachment = 0, .pick = {3}, .channels = {"Y"}},
+    {.name = "temporal.result", .attachment = 0, .pick = {0, 1, 2}, .channels = {"R", "G", "B"}},
+    {0},
+};
 
 const glu_target *pass_temporal_run(pass_temporal *p, const glu_target *gb, GLuint irradiance, float alpha)
 {
@@ -183,6 +196,19 @@ eng_result pass_atrous_create(int width, int height, int iterations, pass_atrous
     return ENG_OK;
 }
 
+/* Per iteration i (<k>) from its target: S_{i+1} and the kept detail D'_i. */
+const pass_output pass_atrous_outputs[] = {
+    {.name = "atrous.scale<k>", .attachment = 0, .pick = {0, 1, 2}, .channels = {"R", "G", "B"}, .level_offset = 1},
+    {.name = "atrous.detail<k>", .attachment = 1, .pick = {0, 1, 2}, .channels = {"R", "G", "B"}},
+    {0},
+};
+
+/* From the last iteration's target. */
+const pass_output pass_atrous_result_outputs[] = {
+    {.name = "atrous.result", .attachment = 3, .pick = {0, 1, 2}, .channels = {"R", "G", "B"}},
+    {0},
+};
+
 const glu_target *pass_atrous_run(pass_atrous *p, const glu_target *gb, GLuint irradiance,
                                   eng_atrous_detail detail, float gamma)
 {
@@ -237,6 +263,11 @@ eng_result pass_resolve_create(int width, int height, pass_resolve **out, eng_er
     *out = p;
     return ENG_OK;
 }
+
+const pass_output pass_resolve_outputs[] = {
+    {.name = "indirect.radiance", .attachment = 0, .pick = {0, 1, 2}, .channels = {"R", "G", "B"}},
+    {0},
+};
 
 const glu_target *pass_resolve_run(pass_resolve *p, const glu_target *gb, GLuint irradiance, GLuint glossy)
 {

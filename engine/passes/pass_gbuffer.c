@@ -46,6 +46,28 @@ eng_result pass_gbuffer_create(int width, int height, pass_gbuffer **out, eng_er
     return ENG_OK;
 }
 
+/* What the frame loop announces of the eye G-buffer, in this order. */
+const pass_output pass_gbuffer_outputs[] = {
+    {.name = "gbuffer.position", .attachment = 0, .pick = {0, 1, 2}, .channels = {"X", "Y", "Z"}},
+    {.name = "gbuffer.normal", .attachment = 1, .pick = {0, 1, 2}, .channels = {"X", "Y", "Z"}},
+    {.name = "gbuffer.albedo", .attachment = 2, .pick = {0, 1, 2}, .channels = {"R", "G", "B"}},
+    /* Five channels from two attachments (3: the parameters, 4.y: the id), assembled on the CPU. */
+    {.name = "gbuffer.material",
+     .attachment = PASS_OUT_CPU,
+     .channels = {"roughness", "metallic", "transmission", "ior", "id"}},
+    {.name = "gbuffer.depth", .attachment = 4, .pick = {0}, .channels = {"Z"}},
+    {.name = "gbuffer.motion", .attachment = 4, .pick = {2, 3}, .channels = {"X", "Y"}},
+    {0},
+};
+
+/* The G-buffers of the subsampled levels the filters run on (<k>: the level, 1 = half size). */
+const pass_output pass_gbuffer_level_outputs[] = {
+    {.name = "gbuffer.level<k>.position", .attachment = 0, .pick = {0, 1, 2}, .channels = {"X", "Y", "Z"}},
+    {.name = "gbuffer.level<k>.normal", .attachment = 1, .pick = {0, 1, 2}, .channels = {"X", "Y", "Z"}},
+    {.name = "gbuffer.level<k>.depth", .attachment = 4, .pick = {0}, .channels = {"Z"}},
+    {0},
+};
+
 const glu_target *pass_gbuffer_run(pass_gbuffer *p, const eng_frame_scene *fs)
 {
     glu_target *t = &p->target;

@@ -85,6 +85,19 @@ static void draw_scene(const pass_lightmaps *p, const eng_frame_scene *fs)
     glBindVertexArray(0);
 }
 
+/* Per light <i> and face <f>: the light G-buffer's position, normal and albedo, then the bounce
+ * map, assembled on the CPU from the bounce target's attachments (power RGB, direction XYZ,
+ * path density ρp, ior). */
+const pass_output pass_lightmaps_outputs[] = {
+    {.name = "lightgbuffer.light<i>[.face<f>].position", .attachment = 0, .pick = {0, 1, 2}, .channels = {"X", "Y", "Z"}},
+    {.name = "lightgbuffer.light<i>[.face<f>].normal", .attachment = 1, .pick = {0, 1, 2}, .channels = {"X", "Y", "Z"}},
+    {.name = "lightgbuffer.light<i>[.face<f>].albedo", .attachment = 2, .pick = {0, 1, 2}, .channels = {"R", "G", "B"}},
+    {.name = "bounce.light<i>[.face<f>]",
+     .attachment = PASS_OUT_CPU,
+     .channels = {"R", "G", "B", "X", "Y", "Z", "density", "ior"}},
+    {0},
+};
+
 eng_result pass_lightmaps_run(pass_lightmaps *p, const eng_frame_scene *fs, uint32_t light, int size,
                               const eng_rmap_frame *rf, light_maps *lm, eng_error *err)
 {

@@ -45,6 +45,12 @@ eng_result pass_shadow_create(int size, uint32_t light_count, pass_shadow **out,
     return ENG_OK;
 }
 
+/* Light <i>'s shadow map, per face: metric depth. */
+const pass_output pass_shadow_outputs[] = {
+    {.name = "shadow.light<i>[.face<f>]", .attachment = 0, .pick = {0}, .channels = {"Z"}},
+    {0},
+};
+
 const shadow_map *pass_shadow_run(pass_shadow *p, const eng_frame_scene *fs, uint32_t light)
 {
     const eng_light_pose *l = &fs->lights[light];

@@ -8,6 +8,57 @@
 
 #include "trace.h"
 
+/* ---------------------------------------------------------------- outputs */
+
+/* One buffer a pass announces (DESIGN.md "Buffer (EXR part) names"). Each pass declares its
+ * outputs as a table next to its code, ended by an entry whose name is NULL; the frame loop
+ * (engine.c) announces a pass's target by walking its table, in table order, so the tables,
+ * not hand-written calls, name the buffers. name is the part's name as DESIGN.md spells it;
+ * pass_output_name fills its placeholders from a pass_output_at: <i> the light, <f> the face,
+ * [...] written only for lights with more than one face (cube maps), <k> the level or
+ * iteration plus level_offset, <m> the indirect method's buffer prefix (ind_method.prefix). */
+#define PASS_OUT_CPU (-1) /* attachment of a buffer the frame loop assembles on the CPU */
+#define PASS_OUT_MAX_CHANNELS 8
+typedef struct pass_output {
+    const char *name;
+    int attachment; /* colour attachment of the pass's target it is read from, or PASS_OUT_CPU */
+    int pick[4];    /* the components read, in channel order (attachment >= 0 only) */
+    const char *channels[PASS_OUT_MAX_CHANNELS]; /* channel names, NULL after the last */
+    int level_offset;                            /* added to pass_output_at.level for <k> */
+    int optional; /* 1: announced only where the frame loop says so (direct.penumbra) */
+} pass_output;
+
+/* Where in the frame loop a table is walked: what the placeholders stand for. */
+typedef struct pass_output_at {
+    uint32_t light;
+    int faces, face; /* faces > 1 writes [...] */
+    int level;
+    const char *prefix;
+} pass_output_at;
+
+/* The number of channels of o (1..PASS_OUT_MAX_CHANNELS). */
+int pass_output_channels(const pass_output *o);
+/* o's name with its placeholders filled from at (NULL: all zero, no prefix) into out; returns
+ * 0, or -1 when it does not fit or a placeholder is unknown. */
+int pass_output_name(const pass_output *o, const pass_output_at *at, char *out, size_t size);
+
+/* The tables (each pass's file): the eye G-buffer (gbuffer.material assembled on the CPU from
+ * attachments 3 and 4), its subsampled levels, the shadow maps, the light G-buffers and bounce
+ * maps (bounce.* assembled on the CPU from the bounce target), direct light, the filters and
+ * the composite. pass_resolve_outputs is also the layout of a method's (or the boundary or
+ * progressive pass's) output target when no filter runs: indirect.radiance in attachment 0. */
+extern const pass_output pass_gbuffer_outputs[];
+extern const pass_output pass_gbuffer_level_outputs[];
+extern const pass_output pass_shadow_outputs[];
+extern const pass_output pass_lightmaps_outputs[];
+extern const pass_output pass_direct_outputs[];
+extern const pass_output pass_upsample_outputs[];
+extern const pass_output pass_temporal_outputs[];
+extern const pass_output pass_atrous_outputs[];        /* per iteration, from its target */
+extern const pass_output pass_atrous_result_outputs[]; /* from the last iteration's target */
+extern const pass_output pass_resolve_outputs[];
+extern const pass_output pass_composite_outputs[];
+
 /* ---------------------------------------------------------------- passes */
 
 /* Eye G-buffer (pass_gbuffer.c). Attachments: 0 position.xyz + coverage in w, 1 normal.xyz,

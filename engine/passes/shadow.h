@@ -8,8 +8,8 @@
  *                          lookup of that width (shaders/shadow_pcss.glsl)
  *
  * The frame loop (engine.c) creates every method once, runs the method of each light after
- * that light's shadow map, announces the maps it returns as `shadow.light<i>[.face<f>].<name>`
- * and hands them to the direct pass, which binds them and lets the shader pick the method by
+ * that light's shadow map, announces the map it returns through the method's output table
+ * (passes.h; `shadow.light<i>[.face<f>].<name>`) and hands them to the direct pass, which binds them and lets the shader pick the method by
  * u_light_radius (0: pcf). */
 #ifndef ISPM_SHADOW_H
 #define ISPM_SHADOW_H
@@ -18,7 +18,7 @@
 
 typedef struct shadow_method {
     const char *name;
-    const char *buffer; /* name of the per-face map run returns ("blocker"), or NULL */
+    const pass_output *outputs; /* what the frame loop announces of the map run returns, or NULL */
     const char *pass;   /* pass name in the timings, or NULL */
     eng_result (*create)(int size, uint32_t light_count, void **state, eng_error *err);
     /* After light `light`'s shadow map sm: the method's own map of it (one layer per face,

@@ -106,7 +106,13 @@ static const glu_target *pcss_run(void *state, const eng_light_pose *l, const sh
     return t;
 }
 
-const shadow_method shadow_pcss_method = {"pcss", "blocker", "softshadow", pcss_create, pcss_run, pcss_destroy};
+/* Light <i>'s blocker map, per face: the average occluder depth. */
+static const pass_output pcss_outputs[] = {
+    {.name = "shadow.light<i>[.face<f>].blocker", .attachment = 0, .pick = {0}, .channels = {"Z"}},
+    {0},
+};
+
+const shadow_method shadow_pcss_method = {"pcss", pcss_outputs, "softshadow", pcss_create, pcss_run, pcss_destroy};
 
 float shadow_penumbra_texels(int directional, float r, float receiver, float blocker, float texel)
 {
