@@ -1,5 +1,5 @@
 /* kdgather_speed.c — bench/kdgather-speed.sh's driver: kd_gather (this tree) against
- * kd_gather_old (an older kdgather.c compiled beside it) on one synthetic frame, alternating,
+ * kd_gather_old (an older ind_kdgather.c compiled beside it) on one synthetic frame, alternating,
  * 7 rounds; prints both medians and their ratio, and whether the images agree bit for bit. */
 #define _POSIX_C_SOURCE 200809L
 #include "indirect.h"
@@ -15,7 +15,7 @@ eng_result kd_gather_old(const eng_photon_map *map, int w, int h, const float *p
                          const float *albedo, const float *material, const float eye[3], const eng_settings *s,
                          float *out, eng_error *err);
 
-/* pass_splat.c's, which the gathers call (that file is not linked: it needs GL). */
+/* ind_scatter_splat.c's, which the gathers call (that file is not linked: it needs GL). */
 float splat_radius(float kernel_radius, float rho)
 {
     float s = rho > 0.0f ? powf(1000.0f * rho, -0.25f) : 2.0f;
@@ -26,7 +26,7 @@ float splat_radius(float kernel_radius, float rho)
     return kernel_radius * s;
 }
 
-/* What the method wrappers of kdgather.c reference besides the gather; never called here. */
+/* What the method wrappers of ind_kdgather.c reference besides the gather; never called here. */
 eng_result eng_fail(eng_error *err, eng_result code, const char *fmt, ...)
 {
     (void)err;

@@ -221,7 +221,9 @@ def settings_keys(files):
     table = os.path.join(ROOT, "engine", "core", "settings.def")
     if os.path.isfile(table):
         with open(table, encoding="utf-8") as f:
-            keys = re.findall(r'^\s*[A-Z_]*X[A-Z_]*\(\s*"?(\w+)"?', f.read(), re.M)
+            # One setting per line that opens with ISPM_<TYPE>(key, ...); the ISPM_NAMES_* lists
+            # of an enum's names are not keys.
+            keys = re.findall(r'^ISPM_(?!NAMES)[A-Z]+\(\s*"?(\w+)"?', f.read(), re.M)
         return keys, rel(table)
     seq = next((f for f in files if os.path.basename(f) == "sequence.c"), None)
     if not seq:

@@ -1,4 +1,4 @@
-/* test_kdgather.c — Check suite of the k-d gather baseline (engine/indirect/kdgather.c, 003_… Appendix
+/* test_kdgather.c — Check suite of the k-d gather baseline (engine/indirect/ind_kdgather.c, 003_… Appendix
  * A): the balanced k-d tree's range query against brute force, the gather against the GPU's
  * photon-volume scatter on the Cornell box (ISPM §5: "mathematically identical"; here equal up
  * to float rounding), and bit-identical results for any thread count. */

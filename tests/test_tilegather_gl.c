@@ -1,6 +1,6 @@
 /* test_tilegather_gl.c — Check suite of the tile gather evaluated in a GL compute shader
  * (engine/indirect/ind_tilegather_gl.c, shaders/tile_gather.comp.glsl; 002_… §6.3). It walks the same
- * tile lists as the CPU tile gather (tilelists.c) in the same order with the same kernel and
+ * tile lists as the CPU tile gather (ind_tilelists.c) in the same order with the same kernel and
  * BSDF, so it must equal the CPU tile gather — itself bit-identical to the k-d gather — up to
  * llvmpipe's rounding: every value within 1e-5 relative where not tiny, the photon counts
  * equal except for a few pixels at a kernel's edge; the same list lengths (gather.tile_count)

@@ -121,31 +121,31 @@ typedef struct eng_settings {
     int atrous_iterations;    /* À-Trous wavelet iterations (002 §7.3, Eq. 7.5), 0 = off; default 0 */
     eng_atrous_detail atrous_detail; /* default clipped */
     float atrous_gamma;       /* γ of Eq. 7.7; default 0.05 (002 §8.2's table) */
-    /* Convergence for still views (issue 13). */
+    /* Convergence for still views. */
     eng_kernel_scaling kernel_scaling; /* default path-density */
     int progressive;          /* 1: running mean of the indirect estimate while nothing moves, the
                                * kernel shrinking as in progressive photon mapping; default 0 */
     eng_boundary boundary;    /* kernel boundary correction after the method; default none */
-    /* Photon trace method (issue 16). */
+    /* Photon trace method (trace_method.h). */
     eng_photon_trace photon_trace; /* default embree */
     int multi_image_maps;     /* cube maps (centres) of the multi-image trace, 1..8; default 2 */
     int multi_image_size;     /* texels per cube-map face side, 4..1024; default 64 */
     eng_miss_mode multi_image_miss; /* rays no map resolves: embree (default) or drop */
     int multi_image_compare;  /* 1: also trace every multi-image ray with Embree and count the
                                * hits that agree (the bench's measure); default 0 */
-    /* Specular eye paths (issue 14, specular.h). */
+    /* Specular eye paths (specular.h). */
     eng_specular specular;    /* default traced */
     int specular_depth;       /* specular surfaces an eye path crosses, 1..16; default 4 */
     /* The frame files' EXR compression by name, one of settings.def's list; the engine passes it
      * on to capture, which knows what the names mean (cap_compression_parse). Default "none". */
     char capture_compression[8];
-    /* Issue 13: `"progressive_radius": "pixel"` (1): progressive photon mapping's radius per pixel
+    /* `"progressive_radius": "pixel"` (1): progressive photon mapping's radius per pixel
      * (progressive.h; every method but tile-gather-gl); "frame" (0, default): one scale per frame. */
     int progressive_pixel;
-    /* Issue 13: `"bounce_strata": N` (2, 4, …, 64): the bounce map's first-bounce numbers
+    /* `"bounce_strata": N` (2, 4, …, 64): the bounce map's first-bounce numbers
      * stratified within each N×N block of texels (bsdf_strata, bsdf.h); 0 (default) or 1: off. */
     int bounce_strata;
-    /* Issue 13: `"final_gather_rays": N` (4, 16, 64, …, 4096): gather rays per pixel of the
+    /* `"final_gather_rays": N` (4, 16, 64, …, 4096): gather rays per pixel of the
      * "final-gather" method (ind_finalgather.c), a correlated multi-jittered set; default 64. */
     int final_gather_rays;
     /* `"final_gather_radius"`: the factor (0, 1] on every photon's kernel radius r_xy at the

@@ -25,7 +25,7 @@
  *
  * Determinism: llvmpipe bins primitives per tile and each tile is rasterised by one thread in
  * submission order (photon order here), so the float sums are the same whatever
- * LP_NUM_THREADS is (as in pass_splat.c).
+ * LP_NUM_THREADS is (as in ind_scatter_splat.c).
  *
  * Buffers "splat.*" (a scatter, like the photon volumes), pass "quads". Owns its program, the unit quad, the instance buffer and its
  * target. */
@@ -36,7 +36,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-/* Per-instance attributes, 16 floats (the photon volumes' layout, pass_splat.c); stretch: the
+/* Per-instance attributes, 16 floats (the photon volumes' layout, ind_scatter_splat.c); stretch: the
  * anisotropic kernel's s_u (1: isotropic; quad_kernel.glsl). */
 typedef struct quad_instance {
     float position[3], normal[3], power[3], direction[3], radius[2], stretch, pad;

@@ -1,5 +1,5 @@
 /* ind_scatter.c — `"indirect": "ispm"`: photon volumes scattered by the rasteriser (ISPM 003_…
- * §5; pass_splat.c draws them, shaders/splat*.frag.glsl evaluate Eq. 1). Buffers "splat.*". */
+ * §5; ind_scatter_splat.c draws them, shaders/splat*.frag.glsl evaluate Eq. 1). Buffers "splat.*". */
 #include "indirect.h"
 
 static eng_result scatter_create(int width, int height, int irradiance, void **state, eng_error *err)

@@ -11,14 +11,14 @@
  * Buffers "gather.*" (like the k-d gather) and gather.tile_count: the length of each tile's
  * list, one value per tile (where the work goes).
  *
- * The planes, boxes, rectangles and lists are built by tilelists.c, which the GL compute
+ * The planes, boxes, rectangles and lists are built by ind_tilelists.c, which the GL compute
  * evaluation of the same lists (ind_tilegather_gl.c, "tile-gather-gl") shares.
  *
  * Why the CPU: on llvmpipe a GL compute shader runs each invocation's loop iterations as
  * scalar work per SIMD lane with heavy per-iteration overhead, while the per-pixel work here
  * is a few dozen flops; the CPU evaluation reads the same G-buffer the scatter does
  * (docs/indirect.md measures both). */
-#include "tilelists.h"
+#include "ind_tilelists.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -33,7 +33,7 @@
 #define ROW (TILE + 8)  /* a tile row of the local planes: room for an 8-wide step past its end */
 #define LANES (TILE * ROW) /* floats per plane of a tile's local block */
 
-/* Planes of a tile's local copy: tilelists.h's. */
+/* Planes of a tile's local copy: ind_tilelists.h's. */
 enum { P_SX = TL_SX, P_SY = TL_SY, P_SZ = TL_SZ, P_NX = TL_NX, P_NY = TL_NY, P_NZ = TL_NZ, P_FR = TL_FR,
        P_FG = TL_FG, P_FB = TL_FB, P_METAL = TL_METAL, PLANES = TL_PLANES };
 
@@ -46,7 +46,7 @@ typedef struct tg_state {
     gk_pixel *px; /* per pixel, for the scalar path (metallic pixels) */
     float *reach; /* per photon s_u·r_xy under the anisotropic kernel (the lists' radius) */
     size_t reach_capacity;
-    tl_lists tl;  /* G-buffer planes, tile boxes and lists (tilelists.h) */
+    tl_lists tl;  /* G-buffer planes, tile boxes and lists (ind_tilelists.h) */
 } tg_state;
 
 static void tg_destroy(void *state)
@@ -310,7 +310,7 @@ static eng_result tg_run(void *state, const ind_input *in, ind_output *out, eng_
     if (t->glossy)
         memset(t->glossy, 0, npix * 4 * sizeof(float));
 
-    /* Planes, per-pixel terms and tile boxes, then the tile lists (tilelists.c). */
+    /* Planes, per-pixel terms and tile boxes, then the tile lists (ind_tilelists.c). */
     tl_prepare(&t->tl, &t->gb, in->fs->camera.eye, t->px, threads);
     tl_build(&t->tl, map, ind_reach(in, &t->reach, &t->reach_capacity), s->normal_compression,
              in->fs->camera.view_proj, threads);

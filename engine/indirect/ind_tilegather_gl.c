@@ -1,7 +1,7 @@
 /* ind_tilegather_gl.c — `"indirect": "tile-gather-gl"`: the tile-based gather of 002_… §6.3
  * with the evaluation in a GL compute shader, as the paper does it on a GPU (its §6.4 /
  * Table 6.1 compares it with splatting). The CPU builds the same tile lists as the CPU tile
- * gather (tilelists.c: tile boxes from the read-back G-buffer positions, conservative photon
+ * gather (ind_tilelists.c: tile boxes from the read-back G-buffer positions, conservative photon
  * rectangles, per-tile lists in photon order); they are uploaded with the photons as shader
  * storage buffers, and shaders/tile_gather.comp.glsl runs one 16×16 workgroup per tile, one
  * invocation per pixel, each summing its tile's list in order with splat.frag.glsl's kernel
@@ -12,7 +12,7 @@
  * Buffers "gather.*" and gather.tile_count, like the CPU tile gather. Owns its program,
  * three buffers, the target and the lists. On llvmpipe this is slower than the CPU
  * evaluation (docs/indirect.md: "tile-gather-gl"); it exists to measure the paper's design. */
-#include "tilelists.h"
+#include "ind_tilelists.h"
 
 #include <stdlib.h>
 #include <string.h>
@@ -102,7 +102,7 @@ static eng_result tgl_run(void *state, const ind_input *in, ind_output *out, eng
     const int tx = t->tl.tiles_x, ty = t->tl.tiles_y;
     const size_t tiles = (size_t)tx * (size_t)ty, n = map->count;
 
-    /* The lists (tilelists.c); only the positions are read back, for the tile boxes. */
+    /* The lists (ind_tilelists.c); only the positions are read back, for the tile boxes. */
     static const int p4[] = {0, 1, 2, 3};
     glu_read(in->gbuf, 0, 0, 4, p4, t->gb.position);
     tl_prepare(&t->tl, &t->gb, in->fs->camera.eye, NULL, threads);

@@ -6,7 +6,7 @@
  *   ind_quads.c       "quads"        camera-independent photon quads (001 §3.3)
  *   ind_tilegather.c  "tile-gather"  screen tiles, each evaluating its photon list (002 §6.3)
  *   ind_tilegather_gl.c "tile-gather-gl" the same lists evaluated in a GL compute shader (002 §6.3)
- *   kdgather.c        "kd-gather"    per-pixel k-d tree gather, the baseline (003 App. A)
+ *   ind_kdgather.c        "kd-gather"    per-pixel k-d tree gather, the baseline (003 App. A)
  *   ind_finalgather.c "final-gather" the k-d gather one bounce away, at the surfaces that rays
  *                                    from each pixel meet: final gathering (003 App. A)
  *
@@ -117,9 +117,9 @@ const ind_method *ind_method_find(const char *name);
 int ind_method_count(void);
 const ind_method *ind_method_at(int i); /* NULL past the last */
 
-/* CPU helpers shared by the CPU methods (kdgather.c, ind_finalgather.c). ------------------- */
+/* CPU helpers shared by the CPU methods (ind_kdgather.c, ind_finalgather.c). ------------------- */
 
-/* What a CPU method that writes per-pixel images keeps between frames (kdgather.c,
+/* What a CPU method that writes per-pixel images keeps between frames (ind_kdgather.c,
  * ind_finalgather.c): its target, the G-buffer read back and the w×h×4 output images, glossy
  * in irradiance mode only. */
 typedef struct ind_cpu_state {
@@ -135,7 +135,7 @@ void ind_cpu_state_free(ind_cpu_state *c);
 /* Uploads out (and glossy) into the target and points o at it, no extra buffers. */
 void ind_cpu_state_output(ind_cpu_state *c, ind_output *o);
 
-/* Photon volumes (pass_splat.c, ISPM §5): accumulates Eq. 1 of every photon into an RGBA32F
+/* Photon volumes (ind_scatter_splat.c, ISPM §5): accumulates Eq. 1 of every photon into an RGBA32F
  * target (RGB radiance, A = number of kernels covering the pixel), depth-tested against the
  * eye G-buffer's depth buffer. */
 typedef struct pass_splat pass_splat;
@@ -158,7 +158,7 @@ const glu_target *pass_splat_run(pass_splat *p, const eng_frame_scene *fs, const
                                  const float *aniso, const eng_settings *s);
 void pass_splat_destroy(pass_splat *p);
 
-/* Where photon volumes can reach the G-buffer (splat_bounds.c): per SPLAT_TILE² tile of the
+/* Where photon volumes can reach the G-buffer (ind_scatter_bounds.c): per SPLAT_TILE² tile of the
  * eye G-buffer, the bounding box of its surface points. position: width×height RGBA (xyz, w
  * = coverage; w = 0 pixels are background and left out), GL row order (bottom row first).
  * A zero-initialised splat_tiles is empty; build (re)allocates. */
@@ -186,7 +186,7 @@ typedef struct splat_bounds {
 int splat_photon_bounds(const float view_proj[16], const float proj[16], const splat_tiles *t, const float x[3],
                         const float n[3], float r_xy, float r_z, splat_bounds *out);
 
-/* k-d tree gather (kdgather.c), the traditional photon mapping baseline (003_… Appendix A):
+/* k-d tree gather (ind_kdgather.c), the traditional photon mapping baseline (003_… Appendix A):
  * outgoing indirect radiance at each eye G-buffer pixel from the photons of `map` whose
  * kernel reaches the pixel's surface point, with the same kernel (splat_kernel, splat_radius,
  * s->kernel_radius, s->normal_compression) and the same BSDF as shaders/splat.frag.glsl, so

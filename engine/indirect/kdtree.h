@@ -1,6 +1,6 @@
-/* kdtree.h — the balanced 3-d tree of the k-d gather baseline (kdgather.c; 003_… Appendix A:
+/* kdtree.h — the balanced 3-d tree of the k-d gather baseline (ind_kdgather.c; 003_… Appendix A:
  * "balance the photon map k-d tree once before any radiance estimates"). Engine-private: only
- * kdgather.c and its test use it.
+ * ind_kdgather.c and its test use it.
  *
  * The tree is implicit over a permutation of the input points: the node of the index range
  * [lo, hi) is element mid = lo + (hi − lo)/2, its left subtree [lo, mid), its right subtree
@@ -32,7 +32,7 @@ void kd_tree_free(kd_tree *t); /* accepts a zeroed tree */
  * out of memory ends the process) in tree order, *n updated. Thread-safe (reads only). */
 void kd_tree_range(const kd_tree *t, const float q[3], float r, uint32_t **out, size_t *n, size_t *cap);
 
-/* The k-d gather's sum at one surface point px (kdgather.c): the photons of map within
+/* The k-d gather's sum at one surface point px (ind_kdgather.c): the photons of map within
  * `radius` of px->s (the largest r_xy) whose own kernel (radius r_xy[i]) reaches it, added
  * with gk_add in photon-index order. list/cap: the caller's scratch (grown with realloc).
  * Used per eye pixel by the k-d gather and per secondary hit by the specular pass

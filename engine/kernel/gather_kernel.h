@@ -1,6 +1,6 @@
 /* gather_kernel.h — one photon's contribution to one pixel on the CPU: shaders/splat.frag.glsl
  * (radiance) and splat_irradiance.frag.glsl (irradiance + glossy) in the same float
- * operations, shared by the CPU methods (kdgather.c, ind_tilegather.c) so that they sum the
+ * operations, shared by the CPU methods (ind_kdgather.c, ind_tilegather.c) so that they sum the
  * same numbers in the same order and agree bit for bit. Engine-private.
  *
  * ISPM 003_… §5 Eq. 1 without the extra cosine (see splat.frag.glsl), κ of §5.1 Eq. 2–3 in

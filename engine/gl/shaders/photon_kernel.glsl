@@ -1,5 +1,5 @@
 // The photon volume kernel, ISPM 003_… §5.1 Eq. 2–3, shared by splat.frag.glsl and
-// splat_irradiance.frag.glsl (and mirrored on the CPU by splat_kernel() in pass_splat.c).
+// splat_irradiance.frag.glsl (and mirrored on the CPU by splat_kernel() in ind_scatter_splat.c).
 // Eq. 2 as printed, t = |d|/r_xy · (1 − |d̂·n_p| (r_xy − r_z)/r_z), goes negative along n_p once
 // r_z < r_xy/2; we use the form that maps the ellipsoid's surface to t = 1, which is what the
 // text describes: t = |d|/r_xy · (1 + |d̂·n_p| (r_xy − r_z)/r_z) (t = |d|/r_xy in the plane,

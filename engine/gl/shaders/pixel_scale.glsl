@@ -1,5 +1,5 @@
 // Progressive photon mapping's per-pixel radius (engine/progressive.h, "progressive_radius":
-// "pixel"), for the photon programs compiled with PIXEL_SCALE (pass_splat.c, ind_quads.c):
+// "pixel"), for the photon programs compiled with PIXEL_SCALE (ind_scatter_splat.c, ind_quads.c):
 // KERNEL_RADIUS is the photon's (r_xy, r_z) times this pixel's scale (≤ 1, so what the photon
 // draws still covers every pixel its kernel reaches); without PIXEL_SCALE it is v_radius itself.
 // Expects v_radius and, where KERNEL_RADIUS is used, the pixel px.

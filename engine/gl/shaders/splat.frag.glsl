@@ -10,7 +10,7 @@
 // depth of the volume's far side, depth test GEQUAL against the eye G-buffer's depth (the far
 // side lies behind every surface point the volume contains). Additive blending accumulates ΔL in RGB and the number of photons whose kernel
 // covers the pixel in A.
-// pass_splat.c compiles variants for frames whose scene has no metallic material
+// ind_scatter_splat.c compiles variants for frames whose scene has no metallic material
 // (SPLAT_NO_METALLIC: mat.y = 0 at every pixel; llvmpipe evaluates both sides of a branch
 // that differs between pixels, so the glossy term would cost every pixel) and, besides, no
 // transmissive one (SPLAT_NO_TRANSMISSION: no material fetch at all). They sum the same floats.

@@ -1,6 +1,6 @@
 #version 450 core
 // Photon volumes (ISPM 003_… §5), drawn as one screen-aligned rectangle per photon, two
-// triangles, vertices pulled from a buffer (no instancing): pass_splat.c and splat_bounds.c
+// triangles, vertices pulled from a buffer (no instancing): ind_scatter_splat.c and ind_scatter_bounds.c
 // compute on the CPU the pixel rectangle that holds every pixel whose G-buffer point can lie
 // in the photon's kernel ellipsoid (radius r_xy in the plane of the surface the photon hit,
 // r_z = compression · r_xy along that surface's normal n_p; §5.1, Fig. 4 right), and the NDC

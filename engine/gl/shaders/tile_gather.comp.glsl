@@ -1,12 +1,12 @@
 #version 450 core
 // Tile-based gathering in a compute shader, 002_… §6.3: one 16×16 workgroup per screen tile,
 // one invocation per pixel of it; each walks its tile's photon list (built on the CPU by
-// engine/tilelists.c, in photon order) and sums the photons whose kernel reaches its G-buffer
+// engine/ind_tilelists.c, in photon order) and sums the photons whose kernel reaches its G-buffer
 // surface point, with the kernel and BSDF of splat.frag.glsl / splat_irradiance.frag.glsl
 // (003_… §5 Eq. 1, κ of §5.1 Eq. 2–3; photon_kernel.glsl, ggx.glsl) and the k-d gather's
 // distance test (gather_kernel.h). Each pixel's sum runs in list order in one invocation, so
 // the result does not depend on how llvmpipe schedules the invocations. Tile rows count from
-// the top of the image (as tilelists.c's); GL's texture rows from the bottom.
+// the top of the image (as ind_tilelists.c's); GL's texture rows from the bottom.
 //
 // u_irradiance = 0: image 0 RGB = Σ f Φ κ (radiance), A = number of photons that passed.
 // u_irradiance = 1: image 0 RGB = Σ Φ κ (irradiance), A = count; image 1 RGB = the glossy part
@@ -26,7 +26,7 @@ struct photon {
 };
 layout(std430, binding = 0) readonly buffer Photons { photon u_photons[]; };
 layout(std430, binding = 1) readonly buffer Offsets { uint u_offset[]; }; // tiles + 1
-// Entries (tilelists.h tl_entry): x the photon, y its rectangle clipped to the tile (bytes xa,
+// Entries (ind_tilelists.h tl_entry): x the photon, y its rectangle clipped to the tile (bytes xa,
 // xb, ya, yb, tile coordinates, rows top first). Pixels outside it are skipped before any
 // arithmetic (the rectangle is conservative: the CPU gathers visit only those pixels too).
 layout(std430, binding = 2) readonly buffer Entries { uvec2 u_entry[]; };

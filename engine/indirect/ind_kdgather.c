@@ -1,4 +1,4 @@
-/* kdgather.c — traditional photon mapping's radiance estimate (003_… Appendix A), the baseline
+/* ind_kdgather.c — traditional photon mapping's radiance estimate (003_… Appendix A), the baseline
  * that ISPM's scatter is measured against: the photon map is balanced into a k-d tree once
  * per frame, then every eye G-buffer pixel gathers the photons within a constant radius
  * (Appendix A, "Radiance estimates" step 2, the constant-radius variant) and sums step 3(a),

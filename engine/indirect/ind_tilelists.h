@@ -1,4 +1,4 @@
-/* tilelists.h — the screen-tile photon lists of the tile-based gather (002_… §6.3), built on
+/* ind_tilelists.h — the screen-tile photon lists of the tile-based gather (002_… §6.3), built on
  * the CPU and shared by the two tile-gather methods: ind_tilegather.c (evaluates the lists on
  * the CPU) and ind_tilegather_gl.c (uploads them and evaluates them in a GL compute shader).
  * Engine-private.

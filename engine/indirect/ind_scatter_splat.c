@@ -1,7 +1,7 @@
-/* pass_splat.c — indirect light by scattering photon volumes (ISPM 003_… §5, Eq. 1–3): every
+/* ind_scatter_splat.c — indirect light by scattering photon volumes (ISPM 003_… §5, Eq. 1–3): every
  * photon-map photon whose kernel can reach a visible surface is drawn as one screen-aligned
  * rectangle (two triangles, one draw, vertices pulled from a storage buffer) holding every
- * pixel whose G-buffer point can lie in its kernel ellipsoid (splat_bounds.c, from the
+ * pixel whose G-buffer point can lie in its kernel ellipsoid (ind_scatter_bounds.c, from the
  * G-buffer's positions read back and boxed per 8×8 tile); the fragment shader evaluates Eq. 1
  * against the eye G-buffer and additive blending sums the contributions (see
  * shaders/splat.frag.glsl for the kernel). The rectangles are drawn at the NDC depth of the

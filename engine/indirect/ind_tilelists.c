@@ -1,9 +1,9 @@
-/* tilelists.c — the CPU half of the tile-based gather (002_… §6.3: tile culling, counting,
+/* ind_tilelists.c — the CPU half of the tile-based gather (002_… §6.3: tile culling, counting,
  * allocation and copy, done here on the CPU), shared by its CPU (ind_tilegather.c) and GL
  * compute (ind_tilegather_gl.c) evaluations: per-tile boxes of the visible points,
  * conservative per-photon screen rectangles, and per-tile photon lists in photon order
- * (tilelists.h). Owns nothing but the tl_lists arrays. */
-#include "tilelists.h"
+ * (ind_tilelists.h). Owns nothing but the tl_lists arrays. */
+#include "ind_tilelists.h"
 
 #include <math.h>
 #include <stdio.h>

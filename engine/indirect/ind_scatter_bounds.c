@@ -1,5 +1,5 @@
-/* splat_bounds.c — where a photon volume can reach the eye G-buffer (ISPM 003_… §5, §5.1), on
- * the CPU, for pass_splat.c: which photons to draw and the screen rectangle each is drawn as.
+/* ind_scatter_bounds.c — where a photon volume can reach the eye G-buffer (ISPM 003_… §5, §5.1), on
+ * the CPU, for ind_scatter_splat.c: which photons to draw and the screen rectangle each is drawn as.
  *
  * The kernel of Eq. 2–3 is nonzero only where t < 1, a region inside the ellipsoid of
  * semi-axes (r_xy, r_xy, r_z) about the photon (r_z ≤ r_xy; with t = |d|/r_xy + |d·n_p|
