@@ -180,4 +180,9 @@ static void egl_close(void *impl)
     free(c);
 }
 
-const glctx_backend glctx_egl_backend = {"egl", egl_open, egl_get_proc, egl_close};
+const glctx_backend glctx_egl_backend = {
+    .name = "egl",
+    .open = egl_open,
+    .get_proc = egl_get_proc,
+    .close = egl_close,
+};

@@ -105,4 +105,9 @@ static void osm_close(void *impl)
     free(c);
 }
 
-const glctx_backend glctx_osmesa_backend = {"osmesa", osm_open, osm_get_proc, osm_close};
+const glctx_backend glctx_osmesa_backend = {
+    .name = "osmesa",
+    .open = osm_open,
+    .get_proc = osm_get_proc,
+    .close = osm_close,
+};

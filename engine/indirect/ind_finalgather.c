@@ -266,5 +266,12 @@ static eng_result fg_run(void *state, const ind_input *in, ind_output *out, eng_
 }
 
 /* No kernel at the pixel: no per-pixel radii, no boundary correction (traced_gather). */
-const ind_method ind_finalgather_method = {"final-gather", "final_gather", "final_gather", fg_create, fg_run,
-                                           fg_destroy, 0, NULL, 1};
+const ind_method ind_finalgather_method = {
+    .name = "final-gather",
+    .prefix = "final_gather",
+    .pass = "final_gather",
+    .create = fg_create,
+    .run = fg_run,
+    .destroy = fg_destroy,
+    .traced_gather = 1,
+};

@@ -373,4 +373,12 @@ static eng_result kd_run(void *state, const ind_input *in, ind_output *out, eng_
     return ENG_OK;
 }
 
-const ind_method ind_kdgather_method = {"kd-gather", "gather", "gather", kd_create, kd_run, kd_destroy, 1, NULL, 0};
+const ind_method ind_kdgather_method = {
+    .name = "kd-gather",
+    .prefix = "gather",
+    .pass = "gather",
+    .create = kd_create,
+    .run = kd_run,
+    .destroy = kd_destroy,
+    .per_pixel_radius = 1,
+};

@@ -215,4 +215,12 @@ static eng_result quads_run(void *state, const ind_input *in, ind_output *out, e
     return ENG_OK;
 }
 
-const ind_method ind_quads_method = {"quads", "splat", "quads", quads_create, quads_run, quads_destroy, 1, NULL, 0};
+const ind_method ind_quads_method = {
+    .name = "quads",
+    .prefix = "splat",
+    .pass = "quads",
+    .create = quads_create,
+    .run = quads_run,
+    .destroy = quads_destroy,
+    .per_pixel_radius = 1,
+};

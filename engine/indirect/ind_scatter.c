@@ -26,5 +26,13 @@ static void scatter_reserve(void *state, size_t photons, int threads)
     pass_splat_reserve(state, photons, threads > 1);
 }
 
-const ind_method ind_scatter_method = {"ispm",          "splat",         "splat",         scatter_create,
-                                       scatter_run,     scatter_destroy, 1,               scatter_reserve, 0};
+const ind_method ind_scatter_method = {
+    .name = "ispm",
+    .prefix = "splat",
+    .pass = "splat",
+    .create = scatter_create,
+    .run = scatter_run,
+    .destroy = scatter_destroy,
+    .per_pixel_radius = 1,
+    .reserve = scatter_reserve,
+};

@@ -332,4 +332,12 @@ static eng_result tg_run(void *state, const ind_input *in, ind_output *out, eng_
     return ENG_OK;
 }
 
-const ind_method ind_tilegather_method = {"tile-gather", "gather", "gather", tg_create, tg_run, tg_destroy, 1, NULL, 0};
+const ind_method ind_tilegather_method = {
+    .name = "tile-gather",
+    .prefix = "gather",
+    .pass = "gather",
+    .create = tg_create,
+    .run = tg_run,
+    .destroy = tg_destroy,
+    .per_pixel_radius = 1,
+};

@@ -170,5 +170,11 @@ static eng_result tgl_run(void *state, const ind_input *in, ind_output *out, eng
     return ENG_OK;
 }
 
-const ind_method ind_tilegather_gl_method = {"tile-gather-gl", "gather", "gather", tgl_create, tgl_run,
-                                             tgl_destroy, 0, NULL, 0};
+const ind_method ind_tilegather_gl_method = {
+    .name = "tile-gather-gl",
+    .prefix = "gather",
+    .pass = "gather",
+    .create = tgl_create,
+    .run = tgl_run,
+    .destroy = tgl_destroy,
+};

@@ -29,4 +29,9 @@ static void pcf_destroy(void *state)
     (void)state;
 }
 
-const shadow_method shadow_pcf_method = {"pcf", NULL, NULL, pcf_create, pcf_run, pcf_destroy};
+const shadow_method shadow_pcf_method = {
+    .name = "pcf",
+    .create = pcf_create,
+    .run = pcf_run,
+    .destroy = pcf_destroy,
+};

@@ -112,7 +112,14 @@ static const pass_output pcss_outputs[] = {
     {0},
 };
 
-const shadow_method shadow_pcss_method = {"pcss", pcss_outputs, "softshadow", pcss_create, pcss_run, pcss_destroy};
+const shadow_method shadow_pcss_method = {
+    .name = "pcss",
+    .outputs = pcss_outputs,
+    .pass = "softshadow",
+    .create = pcss_create,
+    .run = pcss_run,
+    .destroy = pcss_destroy,
+};
 
 float shadow_penumbra_texels(int directional, float r, float receiver, float blocker, float texel)
 {

@@ -207,4 +207,9 @@ static eng_result envmap_run(void *state, const spec_input *in, spec_output *out
     return ENG_OK;
 }
 
-const spec_method spec_envmap_method = {"envmap", envmap_create, envmap_run, envmap_destroy};
+const spec_method spec_envmap_method = {
+    .name = "envmap",
+    .create = envmap_create,
+    .run = envmap_run,
+    .destroy = envmap_destroy,
+};

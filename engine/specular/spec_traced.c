@@ -60,4 +60,9 @@ static eng_result traced_run(void *state, const spec_input *in, spec_output *out
     return ENG_OK;
 }
 
-const spec_method spec_traced_method = {"traced", traced_create, traced_run, traced_destroy};
+const spec_method spec_traced_method = {
+    .name = "traced",
+    .create = traced_create,
+    .run = traced_run,
+    .destroy = traced_destroy,
+};

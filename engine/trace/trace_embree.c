@@ -43,5 +43,11 @@ static void embree_frame_info(const void *state, eng_frame_stats *stats)
 
 static void embree_destroy(void *state) { (void)state; }
 
-const pt_method pt_embree_method = {"embree", NULL, embree_create, embree_prepare, embree_buffer,
-                                    embree_frame_info, embree_destroy};
+const pt_method pt_embree_method = {
+    .name = "embree",
+    .create = embree_create,
+    .prepare = embree_prepare,
+    .buffer = embree_buffer,
+    .frame_info = embree_frame_info,
+    .destroy = embree_destroy,
+};

@@ -732,5 +732,12 @@ static void mi_destroy(void *state)
     free(st);
 }
 
-const pt_method pt_multiimage_method = {"multi-image", "multiimage", mi_create, mi_prepare, mi_buffer,
-                                        mi_frame_info, mi_destroy};
+const pt_method pt_multiimage_method = {
+    .name = "multi-image",
+    .pass = "multiimage",
+    .create = mi_create,
+    .prepare = mi_prepare,
+    .buffer = mi_buffer,
+    .frame_info = mi_frame_info,
+    .destroy = mi_destroy,
+};
