@@ -124,6 +124,10 @@ void cap_destroy(cap_capture *c); /* accepts NULL */
  * the folder for that. A one-part file is a plain single-part EXR that still carries the
  * part name. */
 eng_result cap_write_exr(const char *path, const eng_buffer *const *bufs, int count, eng_error *err);
+/* One buffer as a single-part cap_write_exr file, ZIP at zlib level `level` (1..9; 0: OpenEXR's
+ * default), without frame attributes: a golden's stored object (the smallest lossless file
+ * OpenEXR's ZIP makes, written once and read many times). */
+eng_result cap_write_exr_zip(const char *path, const eng_buffer *b, int level, eng_error *err);
 /* cap_write_exr without the fsync, for files whose durability nobody relies on (replay's
  * stability run, which is renamed into place whole): the same bytes, without waiting on the disk. */
 eng_result cap_write_exr_unsynced(const char *path, const eng_buffer *const *bufs, int count, eng_error *err);

@@ -10,6 +10,7 @@ typedef struct cap_exr_meta {
     int frame;
     double time;
     cap_compression compression; /* 0 (default): none */
+    int zip_level;               /* ZIP/ZIPS zlib level 1..9; 0: OpenEXR's default */
 } cap_exr_meta;
 
 /* cap_write_exr with metadata (meta may be NULL). */

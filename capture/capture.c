@@ -767,7 +767,7 @@ static int write_job(void *ctx, void *job)
         eng_buffer_nonfinite(&views[i], &rec->nan_count, &rec->inf_count, &rec->first_x, &rec->first_y);
     }
     char *path = frame_path(c, j->frame);
-    cap_exr_meta meta = {j->frame, j->rec.time, c->compression};
+    cap_exr_meta meta = {j->frame, j->rec.time, c->compression, 0};
     eng_result r = cap__write_exr(path, bufs, j->count, &meta, &err);
     free(bufs);
     free(views);

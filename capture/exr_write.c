@@ -382,6 +382,8 @@ static exr_result_t fill_frame(exr_context_t ctxt, void *arg)
         if (rv == EXR_ERR_SUCCESS)
             rv = exr_initialize_required_attr(ctxt, part, &display, &data, 1.0f, &center, 1.0f,
                                               EXR_LINEORDER_INCREASING_Y, exr_compression(meta));
+        if (rv == EXR_ERR_SUCCESS && meta && meta->zip_level > 0)
+            rv = exr_set_zip_compression_level(ctxt, part, meta->zip_level);
         for (int c = 0; c < b->channel_count && rv == EXR_ERR_SUCCESS; c++)
             rv = exr_add_channel(ctxt, part, b->channels[c], EXR_PIXEL_FLOAT,
                                  EXR_PERCEPTUALLY_LOGARITHMIC, 1, 1);
@@ -686,6 +688,13 @@ eng_result cap_recompress_exr(const char *src, const char *dst, cap_compression 
     }
     free_recode(&r);
     return res;
+}
+
+eng_result cap_write_exr_zip(const char *path, const eng_buffer *b, int level, eng_error *err)
+{
+    cap_exr_meta meta = {-1, 0.0, CAP_COMPRESSION_ZIP, level};
+    const eng_buffer *bufs[1] = {b};
+    return write_exr_file(path, bufs, 1, &meta, 1, err);
 }
 
 eng_result cap_write_exr_unsynced(const char *path, const eng_buffer *const *bufs, int count, eng_error *err)

@@ -1,7 +1,9 @@
 /* cmd_inspect.c — looking into a run without replaying it:
  *   `ispm info RUN`: frames, buffers, settings, provenance and the verdict of its last replay;
  *   `ispm export RUN --frame F --buffer NAME -o FILE.png|.exr`: one buffer of one frame as an
- *   image, with the display mapping of the replay report's thumbnails (PNG) or as float (EXR). */
+ *   image, with the display mapping of the replay report's thumbnails (PNG) or as float (EXR);
+ *   without --buffer, the whole frame as one multi-part EXR (a frame file, also of a golden whose
+ *   buffers are stored as objects, for oiiotool and tev). */
 #define _POSIX_C_SOURCE 200809L
 #include "eng.h"
 #include "rep_compare.h"
@@ -32,10 +34,13 @@ static void info_usage(FILE *f)
 static void export_usage(FILE *f)
 {
     fprintf(f, "usage: ispm export RUN --frame F --buffer NAME -o FILE.png|FILE.exr\n"
+               "       ispm export RUN --frame F -o FILE.exr\n"
                "\n"
                "Writes one buffer of one frame: .exr as float (the buffer's channels), .png 8-bit with\n"
                "the replay report's display mapping (*.display clamped, *.radiance sRGB, other buffers\n"
-               "their min..max range; NaN/Inf magenta), full size.\n"
+               "their min..max range; NaN/Inf magenta), full size. Without --buffer: every buffer of the\n"
+               "frame as one multi-part EXR, one part per buffer (what a frame file holds; RUN may be a\n"
+               "golden whose buffers are stored as objects).\n"
                "\n"
                "  -f, --frame F     frame index\n"
                "  -b, --buffer NAME buffer name (ispm info lists them)\n"
@@ -251,8 +256,12 @@ int cmd_export(int argc, char **argv)
         default: export_usage(stderr); return INS_INPUT;
         }
     }
-    if (optind + 1 != argc || frame < 0 || !buffer || !out) {
+    if (optind + 1 != argc || frame < 0 || !out) {
         export_usage(stderr);
+        return INS_INPUT;
+    }
+    if (!buffer && !ends_with(out, ".exr")) {
+        fprintf(stderr, "ispm export: %s: a whole frame is written as .exr (or name one --buffer)\n", out);
         return INS_INPUT;
     }
     if (!ends_with(out, ".png") && !ends_with(out, ".exr")) {
@@ -266,7 +275,7 @@ int cmd_export(int argc, char **argv)
         return INS_INPUT;
     }
     int rc = INS_INPUT;
-    int j = frame < run->frame_count ? rep_frame_find(&run->frames[frame], buffer) : -1;
+    int j = frame >= run->frame_count ? -1 : buffer ? rep_frame_find(&run->frames[frame], buffer) : 0;
     rep_part *parts = NULL;
     if (frame >= run->frame_count)
         fprintf(stderr, "ispm export: %s: no frame %ld (the run has %d)\n", run->manifest_path, frame, run->frame_count);
@@ -275,10 +284,24 @@ int cmd_export(int argc, char **argv)
                 frame, buffer);
     else if (rep_run_read_frame(run, (int)frame, &parts, &err) != ENG_OK)
         fprintf(stderr, "ispm export: %s\n", err.msg);
-    else {
+    else if (buffer) {
         eng_buffer b = rep_part_buffer(&parts[j]);
         rc = export_buffer(&b, out);
         rep_parts_free(parts, run->frames[frame].buffer_count);
+    } else {
+        int n = run->frames[frame].buffer_count;
+        eng_buffer *bufs = rep_xcalloc((size_t)n, sizeof *bufs);
+        for (int k = 0; k < n; k++)
+            bufs[k] = rep_part_buffer(&parts[k]);
+        rc = INS_OK;
+        if (rep_oiio_write_parts(out, bufs, n, &err) != ENG_OK) {
+            fprintf(stderr, "ispm export: %s\n", err.msg);
+            rc = INS_RUNTIME;
+        } else {
+            printf("%s: frame %ld, %d parts\n", out, frame, n);
+        }
+        free(bufs);
+        rep_parts_free(parts, n);
     }
     rep_run_close(run);
     return rc;

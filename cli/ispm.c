@@ -35,7 +35,8 @@ static void usage(FILE *f)
             "  bless RUN DIR [--accept]   review a run against the golden in DIR, then make it the golden\n"
             "  check SEQUENCE             record to a temporary run and replay it (for git bisect run)\n"
             "  info RUN                   frames, buffers, settings, provenance, last replay's verdict\n"
-            "  export RUN --frame F --buffer NAME -o FILE.png|.exr   one buffer as an image\n"
+            "  export RUN --frame F [--buffer NAME] -o FILE.png|.exr   one buffer as an image, or a frame\n"
+            "  golden migrate GOLDEN... | gc ROOT   goldens' buffers stored once, by digest\n"
             "  lineage RUN --frame F --pixel X,Y [--json]   everything that made one pixel\n"
             "  reference SEQUENCE -o RUN  render ground truth (path tracing + photon mapping) to RUN\n"
             "  bench CONFIG -o OUTDIR     speed vs accuracy of engine settings against a reference run\n"
@@ -139,6 +140,10 @@ static void bless_usage(FILE *f)
             "    (atomically, keeping its tolerances.json) and DIR/BLESS.md records the review, so the\n"
             "    commit that moves a golden carries its own evidence.\n"
             "A new golden (DIR absent, empty, or holding only tolerances.json) needs no --accept.\n"
+            "Where a folder above DIR holds an object store (../objects, up to three levels up), or DIR\n"
+            "its own objects/, the golden stores each distinct buffer once there, by digest (format 2):\n"
+            "only buffers the store lacks are written. A run whose GL renderer is not the golden's goes\n"
+            "into DIR/renderers/<slug of the renderer>/, the golden's set for that renderer.\n"
             "\n"
             "  -a, --accept            replace a golden that differs from RUN (an intended change)\n"
             "  -r, --review DIR        where the HTML review goes (default RUN/bless)\n"
@@ -630,6 +635,7 @@ int cmd_info(int argc, char **argv);                            /* cmd_inspect.c
 int cmd_export(int argc, char **argv);                          /* cmd_inspect.c */
 int cmd_lineage(int argc, char **argv);                         /* cmd_lineage.c */
 int cmd_tracebench(int argc, char **argv);                      /* cmd_tracebench.c */
+int cmd_golden(int argc, char **argv);                          /* cmd_golden.c */
 
 int main(int argc, char **argv)
 {
@@ -677,6 +683,8 @@ int main(int argc, char **argv)
         return cmd_info(argc, argv);
     if (!strcmp(cmd, "export"))
         return cmd_export(argc, argv);
+    if (!strcmp(cmd, "golden"))
+        return cmd_golden(argc, argv);
     if (!strcmp(cmd, "lineage"))
         return cmd_lineage(argc, argv);
     if (!strcmp(cmd, "tracebench"))

@@ -79,75 +79,71 @@ static eng_result make_parent(const char *path, eng_error *err)
     return r;
 }
 
-/* The run's manifest as the golden's, "capture": {"compression": "zip"} in it (the only
- * change; cJSON prints the rest as capture wrote it). */
-static eng_result write_zip_manifest(const rep_run *run, const char *dst, eng_error *err)
-{
-    char *text = NULL;
-    size_t len = 0;
-    eng_result r = eng_read_file(run->manifest_path, REP_MAX_JSON_BYTES, &text, &len, err);
-    if (r != ENG_OK)
-        return r;
-    cJSON *root = cJSON_ParseWithLength(text, len);
-    free(text);
-    if (!cJSON_IsObject(root)) {
-        cJSON_Delete(root);
-        return eng_fail(err, ENG_ERR_PARSE, "%s: not a JSON object", run->manifest_path);
-    }
-    cJSON *cap = cJSON_GetObjectItemCaseSensitive(root, "capture");
-    if (!cJSON_IsObject(cap)) {
-        cJSON_DeleteItemFromObjectCaseSensitive(root, "capture");
-        cap = cJSON_AddObjectToObject(root, "capture");
-    }
-    cJSON_DeleteItemFromObjectCaseSensitive(cap, "compression");
-    char *out = cJSON_AddStringToObject(cap, "compression", "zip") ? cJSON_Print(root) : NULL;
-    cJSON_Delete(root);
-    if (!out) {
-        fprintf(stderr, "ispm: out of memory\n");
-        abort();
-    }
-    char *doc = rep_xprintf("%s\n", out);
-    cJSON_free(out);
-    r = rep_write_atomic(dst, doc, strlen(doc), err);
-    free(doc);
-    return r;
-}
-
-static eng_result build_tmp(const rep_run *run, const char *golden, const char *tmp, eng_error *err)
+/* The golden's frames into tmp: as objects (format 2) in the shared store above the golden
+ * (rep_store_find) or in the golden's own objects/ when it has one, else as ZIP frame files. */
+static eng_result build_tmp(const rep_run *run, const char *golden, const char *tol_from, const char *tmp,
+                            rep_store_stats *st, eng_error *err)
 {
     eng_result r = rep_remove_tree(tmp, err);
     if (r == ENG_OK)
         r = rep_mkdirs(tmp, err);
     if (r != ENG_OK)
         return r;
-    int recompressed = 0;
-    for (int i = 0; i < run->frame_count && r == ENG_OK; i++) {
-        char *dst = rep_path_join(tmp, run->frames[i].file);
-        int rewritten = 0;
-        r = make_parent(dst, err);
-        if (r == ENG_OK)
-            r = cap_recompress_exr(run->frames[i].path, dst, CAP_COMPRESSION_ZIP, &rewritten, err);
-        if (r == ENG_OK && !rewritten)
-            r = rep_copy_file(run->frames[i].path, dst, err);
-        recompressed |= rewritten;
-        free(dst);
+    char *rel = NULL, *store = rep_store_find(golden, &rel);
+    char *own = rep_path_join(golden, "objects");
+    if (!store && rep_is_dir(own)) {
+        rel = rep_xstrdup("objects");
+        store = rep_path_join(tmp, rel);
+        r = rep_mkdirs(store, err);
     }
-    char *dst = rep_path_join(tmp, "manifest.json");
-    if (r == ENG_OK)
-        r = recompressed ? write_zip_manifest(run, dst, err) : rep_copy_file(run->manifest_path, dst, err);
-    free(dst);
-    if (r == ENG_OK && recompressed) {
-        /* Read back as replay reads it: every frame decodes to its manifest's digests
-         * (cap_recompress_exr has compared each file with the run's bit for bit). A failure here
-         * is one of writing. */
-        rep_run *g = NULL;
-        if (verify_run(tmp, &g, err) != ENG_OK)
-            r = ENG_ERR_IO;
-        rep_run_close(g);
+    free(own);
+    if (store) {
+        if (r == ENG_OK)
+            r = rep_store_put_run(run, store, st, err);
+        char *dst = rep_path_join(tmp, "manifest.json");
+        if (r == ENG_OK)
+            r = rep_store_write_manifest(run, dst, rel, err);
+        free(dst);
+        if (r == ENG_OK) { /* read back as replay reads it: every object checked */
+            rep_run *g = NULL;
+            if (verify_run(tmp, &g, err) != ENG_OK)
+                r = ENG_ERR_IO;
+            rep_run_close(g);
+        }
+        free(store);
+        free(rel);
+    } else {
+        int recompressed = 0;
+        for (int i = 0; i < run->frame_count && r == ENG_OK; i++) {
+            char *dst = rep_path_join(tmp, run->frames[i].file);
+            int rewritten = 0;
+            r = make_parent(dst, err);
+            if (r == ENG_OK)
+                r = cap_recompress_exr(run->frames[i].path, dst, CAP_COMPRESSION_ZIP, &rewritten, err);
+            if (r == ENG_OK && !rewritten)
+                r = rep_copy_file(run->frames[i].path, dst, err);
+            recompressed |= rewritten;
+            free(dst);
+        }
+        char *dst = rep_path_join(tmp, "manifest.json");
+        if (r == ENG_OK)
+            r = recompressed ? rep_store_write_manifest(run, dst, NULL, err) : rep_copy_file(run->manifest_path, dst, err);
+        free(dst);
+        if (r == ENG_OK && recompressed) {
+            /* Read back as replay reads it: every frame decodes to its manifest's digests
+             * (cap_recompress_exr has compared each file with the run's bit for bit). A failure here
+             * is one of writing. */
+            rep_run *g = NULL;
+            if (verify_run(tmp, &g, err) != ENG_OK)
+                r = ENG_ERR_IO;
+            rep_run_close(g);
+        }
     }
     if (r != ENG_OK)
         return r;
-    char *old_tol = rep_path_join(golden, "tolerances.json");
+    char *golden_tol = rep_path_join(golden, "tolerances.json");
+    char *old_tol = rep_path_join(rep_is_file(golden_tol) ? golden : tol_from, "tolerances.json");
+    free(golden_tol);
     char *new_tol = rep_path_join(tmp, "tolerances.json");
     if (rep_is_file(old_tol)) {
         r = rep_copy_file(old_tol, new_tol, err);
@@ -158,31 +154,6 @@ static eng_result build_tmp(const rep_run *run, const char *golden, const char *
     }
     free(old_tol);
     free(new_tol);
-    return r;
-}
-
-static eng_result swap_in(const char *golden, const char *tmp, eng_error *err)
-{
-    if (!rep_is_dir(golden)) {
-        eng_result r = make_parent(golden, err);
-        if (r != ENG_OK)
-            return r;
-        if (rename(tmp, golden) != 0)
-            return eng_fail(err, ENG_ERR_IO, "%s: cannot rename %s into place: %s", golden, tmp, strerror(errno));
-        return ENG_OK;
-    }
-    char *old = rep_xprintf("%s.old", golden);
-    eng_result r = rep_remove_tree(old, err);
-    if (r == ENG_OK && rename(golden, old) != 0)
-        r = eng_fail(err, ENG_ERR_IO, "%s: cannot move the old golden aside: %s", golden, strerror(errno));
-    if (r == ENG_OK && rename(tmp, golden) != 0) {
-        r = eng_fail(err, ENG_ERR_IO, "%s: cannot rename %s into place: %s", golden, tmp, strerror(errno));
-        if (rename(old, golden) != 0) /* put the old golden back; the message above stands */
-            fprintf(stderr, "ispm: %s: the old golden is left at %s\n", golden, old);
-    }
-    if (r == ENG_OK)
-        r = rep_remove_tree(old, err);
-    free(old);
     return r;
 }
 
@@ -214,6 +185,31 @@ static eng_result check_target(const char *golden, eng_error *err)
                         "%s: not a golden (no manifest.json or tolerances.json) and not empty: refusing to replace it",
                         golden);
     return ENG_OK;
+}
+
+/* Where a run is blessed: canonical itself, or canonical/renderers/<slug> when canonical is a
+ * golden whose GL renderer is another than the run's (*slug set then; caller frees). */
+static char *renderer_target(char *canonical, const rep_run *run, char **slug)
+{
+    *slug = NULL;
+    char *mf = rep_path_join(canonical, "manifest.json");
+    int has = rep_is_file(mf);
+    free(mf);
+    rep_run *g = NULL;
+    eng_error ignored; /* an unreadable canonical golden is the review's to report */
+    if (!has || !run->gl_renderer || rep_run_open(canonical, &g, &ignored) != ENG_OK)
+        return canonical;
+    char *mine = rep_renderer_slug(run->gl_vendor, run->gl_renderer);
+    char *theirs = g->gl_renderer ? rep_renderer_slug(g->gl_vendor, g->gl_renderer) : NULL;
+    rep_run_close(g);
+    if (!theirs || strcmp(mine, theirs) == 0) {
+        free(mine);
+        free(theirs);
+        return canonical;
+    }
+    free(theirs);
+    *slug = mine;
+    return rep_xprintf("%s/renderers/%s", canonical, mine);
 }
 
 /* At most this many buffer lines in BLESS.md: goldens are committed, the HTML review has all. */
@@ -316,6 +312,19 @@ eng_result rep_bless_reviewed(const rep_bless_options *o, FILE *summary, rep_ble
         free(golden);
         return r;
     }
+    /* A run from another renderer than the canonical golden's goes into its renderer's set. */
+    char *canonical = golden, *slug = NULL;
+    golden = renderer_target(canonical, run, &slug);
+    if (golden != canonical && (r = check_target(golden, err)) != ENG_OK) {
+        free(golden);
+        free(canonical);
+        free(slug);
+        rep_run_close(run);
+        return r;
+    }
+    if (summary && slug)
+        fprintf(summary, "bless: the run's renderer \"%s\" is not the golden's: renderer set %s\n", run->gl_renderer,
+                slug);
     char *review_dir = o->review_dir ? rep_xstrdup(o->review_dir) : rep_path_join(o->run_dir, "bless");
     char *old_manifest = rep_path_join(golden, "manifest.json");
     int has_old = rep_is_file(old_manifest);
@@ -348,11 +357,16 @@ eng_result rep_bless_reviewed(const rep_bless_options *o, FILE *summary, rep_ble
     }
     if (out == REP_BLESS_NEW || out == REP_BLESS_REPLACED) {
         char *tmp = rep_xprintf("%s.tmp", golden);
-        r = build_tmp(run, golden, tmp, err);
+        rep_store_stats st;
+        memset(&st, 0, sizeof st);
+        r = build_tmp(run, golden, canonical, tmp, &st, err);
+        if (r == ENG_OK && summary && st.buffers)
+            fprintf(summary, "bless: %zu buffers stored as objects: %d new (%llu bytes), %d already stored\n",
+                    st.buffers, st.objects_new, (unsigned long long)st.bytes_new, st.objects_had);
         if (r == ENG_OK)
             r = write_review(tmp, md, err);
         if (r == ENG_OK)
-            r = swap_in(golden, tmp, err);
+            r = rep_swap_in(golden, tmp, err);
         if (r != ENG_OK)
             rep_remove_tree(tmp, NULL);
         free(tmp);
@@ -362,6 +376,9 @@ eng_result rep_bless_reviewed(const rep_bless_options *o, FILE *summary, rep_ble
     free(md);
     rep_report_free(&rev);
     free(review_dir);
+    if (golden != canonical)
+        free(canonical);
+    free(slug);
     free(golden);
     rep_run_close(run);
     return r;

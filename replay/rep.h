@@ -85,6 +85,29 @@ typedef enum rep_bless_outcome {
  * then blesses per rep_bless_outcome. A blessed golden holds BLESS.md, the written review. */
 eng_result rep_bless_reviewed(const rep_bless_options *o, FILE *summary, rep_bless_outcome *outcome, eng_error *err);
 
+/* ispm golden migrate: a golden of frame files (format 1) becomes one of objects (format 2)
+ * in the shared store found by rep_store_find, or a new "../objects" beside it. Every buffer is
+ * read, verified and stored; the new golden is read back and must be the old one buffer by
+ * buffer (name, digest, size, channel names, float bits) before it replaces it. A golden of
+ * format 2 is left as it is. One line on out says what was done. */
+eng_result rep_golden_migrate(const char *golden_dir, FILE *out, eng_error *err);
+
+/* ispm golden unpack: any golden (or run) written again as a golden of frame files (format 1) in
+ * the new folder dst, with its tolerances.json, for tools that read frame files (oiiotool,
+ * idiff, older builds of ispm under scripts/bisect.sh); read back and checked buffer by buffer. */
+eng_result rep_golden_unpack(const char *golden, const char *dst, FILE *out, eng_error *err);
+
+typedef struct rep_gc_stats {
+    int goldens;                /* goldens read under the root */
+    size_t kept, removed;       /* objects */
+    uint64_t bytes_kept, bytes_removed;
+} rep_gc_stats;
+
+/* ispm golden gc: removes the objects of root/objects that no golden under root (four levels
+ * deep, renderer sets included) lists. Any golden that cannot be read stops it before anything
+ * is removed (ENG_ERR_*: it might list any object). dry_run: counts only. */
+eng_result rep_golden_gc(const char *root, int dry_run, rep_gc_stats *st, eng_error *err);
+
 #ifdef __cplusplus
 }
 #endif

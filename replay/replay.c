@@ -408,13 +408,25 @@ static eng_result walk(const rep_options *o, const char *report_dir, rep_report 
     rep_tolerances *tols = NULL;
     char *tol_default = NULL;
     eng_result res = rep_run_open(o->run_dir, &run, err);
-    if (res == ENG_OK && o->golden_dir)
-        res = rep_run_open(o->golden_dir, &gold, err);
+    const char *gdir = o->golden_dir;
+    if (res == ENG_OK && gdir)
+        res = rep_run_open(gdir, &gold, err);
+    if (res == ENG_OK && gold) { /* the golden's set for the run's renderer, when it has one */
+        char *slug = NULL, *set = rep_renderer_set_dir(gdir, run, gold, &slug);
+        if (set) {
+            rep_run_close(gold);
+            gold = NULL;
+            r->renderer_set = slug;
+            r->renderer_set_dir = set;
+            r->golden_dir = gdir = set;
+            res = rep_run_open(gdir, &gold, err);
+        }
+    }
     if (res == ENG_OK && gold) {
         if (o->tolerances) {
             res = rep_tol_load(o->tolerances, 0, &tols, err);
         } else {
-            tol_default = rep_path_join(o->golden_dir, "tolerances.json");
+            tol_default = rep_path_join(gdir, "tolerances.json");
             res = rep_tol_load(tol_default, 1, &tols, err);
         }
     }
@@ -427,7 +439,7 @@ static eng_result walk(const rep_options *o, const char *report_dir, rep_report 
         if (use->path || use != tols)
             r->tol_path = rep_xstrdup(use->path ? use->path : "built-in cross-renderer defaults");
         /* what made each run, before any pixel */
-        res = rep_prov_compare(o->run_dir, o->golden_dir, o->provenance_fail, o->timing_fail, &r->prov, err);
+        res = rep_prov_compare(o->run_dir, gdir, o->provenance_fail, o->timing_fail, &r->prov, err);
     }
     if (res != ENG_OK)
         goto done;

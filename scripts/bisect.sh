@@ -65,7 +65,15 @@ cleanup() {
   [ -n "${ISPM_BISECT_WORK:-}" ] || rm -rf "$WORK"
 }
 trap cleanup EXIT
-cp -r "$GOLDEN" "$WORK/golden" || exit 2
+if grep -q '"format_version": *2' "$GOLDEN/manifest.json"; then
+  # A golden of stored objects: the commits under test may read only frame files, so it is
+  # unpacked with this tree's ispm (ISPM, default build/cli/ispm) into frame files first.
+  ISPM_NOW=${ISPM:-$TOP/build/cli/ispm}
+  [ -x "$ISPM_NOW" ] || { echo "bisect: $GOLDEN stores objects: build $ISPM_NOW (or set ISPM) to unpack it" >&2; exit 2; }
+  "$ISPM_NOW" golden unpack "$GOLDEN" "$WORK/golden" > /dev/null || exit 2
+else
+  cp -r "$GOLDEN" "$WORK/golden" || exit 2
+fi
 git -C "$TOP" worktree add --detach "$WORK/wt" "$BAD" > /dev/null 2>&1 || { echo "bisect: cannot add a worktree in $WORK" >&2; exit 2; }
 SELF=$(cd "$(dirname "$0")" && pwd)/$(basename "$0")
 cd "$WORK/wt" || exit 2

@@ -12,6 +12,7 @@ mkdir -p "$WORK"
 bad=0; n=0
 for g in golden/*/; do
   g=${g%/}; name=$(basename "$g")
+  [ -f "$g/manifest.json" ] || continue   # golden/objects/: the shared object store
   seq=$(python3 -c 'import json,sys; print(json.load(open(sys.argv[1]))["sequence"]["path"])' "$g/manifest.json")
   n=$((n + 1))
   rm -rf "$WORK/$name"

@@ -9,6 +9,7 @@
 #include <check.h>
 #include <stdio.h>
 #include <stdlib.h>
+#include <math.h>
 #include <string.h>
 
 #define S 16
@@ -107,7 +108,9 @@ static void probe(const char *backend, int device, const char *where, float *out
     ck_assert_msg(glctx_create_on(backend, device >= 0, device, &c, &err) == ENG_OK, "%s: %s", backend, err.msg);
     ck_assert_str_eq(glctx_backend_name(c), backend);
     ck_assert_msg(strncmp(glctx_where(c), where, strlen(where)) == 0, "%s", glctx_where(c));
-    ck_assert_msg(strstr(glctx_version(c), "4.5") != NULL, "%s", glctx_version(c));
+    int major = 0, minor = 0;
+    ck_assert_msg(sscanf(glctx_version(c), "%d.%d", &major, &minor) == 2 && (major > 4 || (major == 4 && minor >= 5)),
+                  "GL 4.5 or later: %s", glctx_version(c));
     snprintf(renderer, 128, "%s", glctx_renderer(c));
     ck_assert_ptr_nonnull(glDispatchCompute); /* loaded through the backend */
     render_probe(out);
@@ -124,13 +127,26 @@ START_TEST(osmesa_and_egl_give_the_same_bits)
     probe("egl", 0, "device 0", d, rd);
     ck_assert_msg(strstr(ra, "llvmpipe") && strstr(ra, "128 bits"), "pinned llvmpipe: %s", ra);
     ck_assert_str_eq(rb, ra);
-    ck_assert_str_eq(rd, ra);
     int varied = 0;
     for (int i = 1; i < S * S * 4; i++)
         varied |= a[i] != a[0];
     ck_assert(varied); /* the probe really computed something */
     ck_assert(memcmp(a, b, sizeof a) == 0);
-    ck_assert(memcmp(a, d, sizeof a) == 0);
+    if (strstr(rd, "llvmpipe")) { /* a machine without a GPU: EGL device 0 is the same llvmpipe */
+        ck_assert_str_eq(rd, ra);
+        ck_assert(memcmp(a, d, sizeof a) == 0);
+    } else {
+        /* A GPU (the machines the EGL backend is for): another renderer, so not llvmpipe's bits,
+         * but the probe must run there and compute the same functions (transcendentals to a
+         * GPU's precision: nearly every value within 1 %). */
+        int close = 0;
+        for (int i = 0; i < S * S * 4; i++) {
+            ck_assert_msg(isfinite(d[i]) == isfinite(a[i]), "%s: value %d: %g, llvmpipe %g", rd, i, d[i], a[i]);
+            close += fabsf(d[i] - a[i]) <= 1e-2f * fmaxf(1.0f, fabsf(a[i]));
+        }
+        ck_assert_msg(close >= S * S * 4 * 95 / 100, "%s: %d of %d values within 1 %% of llvmpipe's", rd, close,
+                      S * S * 4);
+    }
 }
 END_TEST
 

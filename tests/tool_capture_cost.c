@@ -59,7 +59,7 @@ int main(int argc, char **argv)
                 bufs[i] = &views[i];
             }
             double tc[100], tw[100], uc[100], uw[100];
-            cap_exr_meta meta = {f, f / 8.0, (cap_compression)m};
+            cap_exr_meta meta = {f, f / 8.0, (cap_compression)m, 0};
             for (int r = 0; r < reps; r++) {
                 double c0 = tool_ms(CLOCK_THREAD_CPUTIME_ID), w0 = tool_ms(CLOCK_MONOTONIC);
                 if (cap__write_exr(tmp, bufs, n, &meta, &err) != ENG_OK) {

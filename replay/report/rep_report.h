@@ -70,6 +70,9 @@ typedef struct rep_report {
      * differ; then the buffers were compared under the cross-renderer tolerances. */
     char *run_renderer, *golden_renderer; /* owned; NULL if not recorded */
     int renderer_differs;
+    /* The golden's set for the run's renderer (golden/renderers/<slug>) when it has one: the
+     * slug, and the set's folder, which golden_dir then names (both owned); NULL: the canonical set. */
+    char *renderer_set, *renderer_set_dir;
     rep_keep *keep;          /* owned: parts and ꟻLIP maps kept for report.html, or NULL */
 } rep_report;
 
@@ -99,6 +102,10 @@ void rep_sb_xml(rep_sb *sb, const char *s);
  * against an llvmpipe golden). Manifests without gl.renderer (older runs) count as the same. */
 const rep_tolerances *rep_renderer_tolerances(rep_report *r, const rep_run *run, const rep_run *gold,
                                               const rep_tolerances *tols);
+/* The set of golden_dir for the run's renderer: golden_dir/renderers/<rep_renderer_slug> when
+ * the run and the canonical golden (gold) name different renderers and that set holds a
+ * manifest; else NULL. *slug gets the slug then (caller frees both). */
+char *rep_renderer_set_dir(const char *golden_dir, const rep_run *run, const rep_run *gold, char **slug);
 /* One line on the renderers for the reports ("different renderer: run …, golden …; …"), or
  * NULL when they are the same. Caller frees. */
 char *rep_renderer_note(const rep_report *r);

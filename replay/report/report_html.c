@@ -260,8 +260,15 @@ static rep_part *kept_parts(const page *pg, const rep_run *side, int which, int 
 static void decode_side(const rep_run *side, int f, rep_part **parts, int *n, int *bad)
 {
     eng_error err;
-    *bad = side && f < side->frame_count &&
-           rep_read_parts(side->frames[f].path, REP_MAX_FLOATS, parts, n, &err) != ENG_OK;
+    *bad = 0;
+    if (!side || f >= side->frame_count)
+        return;
+    if (side->frames[f].path) {
+        *bad = rep_read_parts(side->frames[f].path, REP_MAX_FLOATS, parts, n, &err) != ENG_OK;
+    } else { /* a golden of stored objects */
+        *bad = rep_run_read_frame(side, f, parts, &err) != ENG_OK;
+        *n = *bad ? 0 : side->frames[f].buffer_count;
+    }
 }
 
 /* Makes the thumbnails of each frame that has jobs from the parts the walk kept, or else from
@@ -611,7 +618,7 @@ static void exr_links(rep_sb *sb, const page *pg, int frame, const char *buffer)
     const char *names[2] = {"run", "golden"};
     int any = 0;
     for (int s = 0; s < 2; s++) {
-        if (!sides[s] || frame >= sides[s]->frame_count)
+        if (!sides[s] || frame >= sides[s]->frame_count || !sides[s]->frames[frame].path)
             continue;
         char *href = rel_href(pg->real_dir, sides[s]->frames[frame].path);
         if (!href)

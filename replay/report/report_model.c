@@ -46,6 +46,9 @@ void rep_report_free(rep_report *r)
     free(r->tol_path);
     free(r->run_renderer);
     free(r->golden_renderer);
+    free(r->renderer_set);
+    free(r->renderer_set_dir);
+    r->renderer_set = r->renderer_set_dir = NULL;
     rep_stab_report_free(r->stab);
     r->stab = NULL;
     rep_prov_free(r->prov);

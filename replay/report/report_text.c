@@ -223,6 +223,7 @@ char *rep_report_json(const rep_report *r)
         add_str(rd, "run", r->run_renderer);
         add_str(rd, "golden", r->golden_renderer);
         cJSON_AddBoolToObject(rd, "different", r->renderer_differs);
+        add_str(rd, "set", r->renderer_set ? r->renderer_set : "canonical");
     }
     cJSON_AddStringToObject(root, "verdict", rep_exit_word(r->exit));
     cJSON_AddNumberToObject(root, "exit_code", (double)r->exit);

@@ -116,6 +116,18 @@ static void oiio_channel_order(chan *ch, int n)
     qsort(ch, (size_t)n, sizeof *ch, chan_order);
 }
 
+void rep_exr_channel_order(const char *const *names, int n, int *order)
+{
+    chan ch[ENG_MAX_CHANNELS];
+    for (int c = 0; c < n; c++)
+        ch[c].name = names[c];
+    oiio_channel_order(ch, n);
+    for (int c = 0; c < n; c++)
+        for (int k = 0; k < n; k++)
+            if (ch[c].name == names[k])
+                order[c] = k;
+}
+
 /* A luminance-chroma channel set (Y, RY, BY, maybe A), which OpenImageIO converts to RGB. */
 static int luminance_chroma(const chan *ch, int n)
 {

@@ -58,6 +58,9 @@ eng_result rep_read_parts(const char *path, size_t max_floats, rep_part **parts,
  * why) for a file it leaves to OpenImageIO (tiled, deep, non-float, subsampled or offset parts,
  * limits exceeded, or an error while decoding); or rep_exr_check_header's refusal. */
 eng_result rep_exr_read_parts(const char *path, size_t max_floats, rep_part **parts, int *count, eng_error *err);
+/* The order in which the readers present n distinct channel names (OpenImageIO's): order[c] is
+ * the index in names of the c-th channel presented. */
+void rep_exr_channel_order(const char *const *names, int n, int *order);
 
 /* Walks the header(s) of the EXR at path before any library parses them (exr_check.c): refuses
  * (ENG_ERR_INVALID, or ENG_ERR_IO when truncated) attributes, chunk counts, data windows or

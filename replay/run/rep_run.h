@@ -37,8 +37,8 @@ typedef struct rep_buffer_info {
 typedef struct rep_frame_info {
     int index;
     double time;
-    char *file; /* as in the manifest, relative to the run folder */
-    char *path; /* run folder + file */
+    char *file; /* as in the manifest, relative to the run folder; NULL in a format-2 golden */
+    char *path; /* run folder + file; NULL in a format-2 golden (its buffers are objects) */
     int buffer_count;
     rep_buffer_info *buffers;
     int has_camera;        /* the manifest gave "camera" (runs recorded before it did not) */
@@ -53,6 +53,9 @@ typedef struct rep_run {
     int width, height; /* "resolution" */
     char *sequence_name; /* may be NULL */
     char *gl_renderer;   /* the manifest's gl.renderer (GL_RENDERER); NULL if absent */
+    char *gl_vendor;     /* the manifest's gl.vendor (GL_VENDOR); NULL if absent */
+    int format_version;  /* 1: one frame file per frame; 2: buffers stored once (objects.c) */
+    char *objects_dir;   /* format 2: the object store, run folder + the manifest's "objects" */
     int frame_count;
     rep_frame_info *frames;
     int complete;        /* manifest.json read; 0: a run still being recorded (rep_run_open_live) */
@@ -79,6 +82,27 @@ eng_result rep_run_open_live(const char *dir, rep_run **out, eng_error *err);
  * number of new frames. Already listed frames keep their rep_frame_info (pointers stay valid;
  * the frames array itself may move). A complete run is left as it is. */
 eng_result rep_run_refresh(rep_run *run, int *added, eng_error *err);
+
+/* ---------------------------------------------------------------- objects.c */
+
+/* A golden of format 2 ("format_version": 2, "objects": "../objects") has no frame files: each
+ * distinct buffer is a single-part EXR <store>/<ab>/<digest>.exr, named by its digest, shared
+ * across frames and goldens; frames list buffers by digest. rep_run_open checks that every
+ * listed object exists, is a regular file (no symbolic link) and that the store stays within
+ * the golden or its parents' "objects"; rep_run_read_frame decodes and verifies each one. */
+
+/* The path of the object of digest in store (caller frees). */
+char *rep_object_path(const char *store, const char *digest);
+/* The object exists as a regular file in a real folder (no symbolic link on the way from the
+ * store); mf names who listed it in the message. */
+eng_result rep_object_check(const char *store, const char *digest, const char *mf, eng_error *err);
+/* Decodes the object of buffer b into *out, as the buffer: b's name and channel names (matched
+ * by rank in name order), checked against b's size, digest and non-finite counts. */
+eng_result rep_object_read(const char *store, const rep_buffer_info *b, const char *mf, rep_part *out, eng_error *err);
+/* A folder name for the renderer that made a run: vendor and renderer lowercased, every run of
+ * other characters one '-' ("llvmpipe-llvm-15-0-6-128-bits"); "unknown" when both are empty.
+ * Caller frees. */
+char *rep_renderer_slug(const char *vendor, const char *renderer);
 
 /* Index of the buffer called name in frame f, or -1. */
 int rep_frame_find(const rep_frame_info *f, const char *name);

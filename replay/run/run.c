@@ -16,6 +16,7 @@
 #include "oiio_shim.h"
 #include "rep_run.h"
 #include "rep_util.h"
+#include "run_internal.h"
 
 #include <cjson/cJSON.h>
 #include <math.h>
@@ -98,6 +99,8 @@ void rep_run_close(rep_run *run)
     free(run->frames);
     free(run->sequence_name);
     free(run->gl_renderer);
+    free(run->gl_vendor);
+    free(run->objects_dir);
     free(run->manifest_path);
     free(run->dir);
     free(run);
@@ -186,11 +189,17 @@ static eng_result parse_frame(rep_run *run, const char *mf, int i, const cJSON *
         return eng_fail(err, ENG_ERR_INVALID, "%s: %s: \"time\" must be a finite number", mf, where);
     f->time = t ? t->valuedouble : 0.0;
     const char *file = get_string(jf, "file");
-    if (!file || !is_safe_relative(file))
+    if (run->format_version == 2) {
+        if (cJSON_GetObjectItemCaseSensitive(jf, "file"))
+            return eng_fail(err, ENG_ERR_INVALID, "%s: %s: a frame of format 2 lists objects, not a \"file\"", mf,
+                            where);
+    } else if (!file || !is_safe_relative(file)) {
         return eng_fail(err, ENG_ERR_INVALID,
                         "%s: %s: \"file\" must be a relative path inside the run folder", mf, where);
-    f->file = rep_xstrdup(file);
-    f->path = rep_path_join(run->dir, file);
+    } else {
+        f->file = rep_xstrdup(file);
+        f->path = rep_path_join(run->dir, file);
+    }
     const cJSON *cam = cJSON_GetObjectItemCaseSensitive(jf, "camera");
     if (cam) {
         const cJSON *vp = cJSON_GetObjectItemCaseSensitive(cam, "view_proj");
@@ -229,6 +238,12 @@ static eng_result parse_frame(rep_run *run, const char *mf, int i, const cJSON *
                 return eng_fail(err, ENG_ERR_INVALID, "%s: %s: buffer \"%s\" listed twice", mf, where,
                                 f->buffers[j].name);
     }
+    if (run->format_version == 2) {
+        for (int j = 0; j < n; j++)
+            if ((r = rep_object_check(run->objects_dir, f->buffers[j].digest, mf, err)) != ENG_OK)
+                return r;
+        return ENG_OK;
+    }
     if (!rep_is_file(f->path))
         return eng_fail(err, ENG_ERR_IO, "%s: frame %d's file is missing (listed in %s)", f->path, i, mf);
     return ENG_OK;
@@ -254,6 +269,9 @@ static eng_result parse_head(rep_run *run, const char *mf, const cJSON *root, en
     const char *renderer = cJSON_IsObject(gl) ? get_string(gl, "renderer") : NULL;
     if (renderer)
         run->gl_renderer = rep_xstrdup(renderer);
+    const char *vendor = cJSON_IsObject(gl) ? get_string(gl, "vendor") : NULL;
+    if (vendor)
+        run->gl_vendor = rep_xstrdup(vendor);
     return ENG_OK;
 }
 
@@ -269,9 +287,17 @@ static eng_result parse_manifest(rep_run *run, const cJSON *root, eng_error *err
     eng_result r = get_int(mf, "top level", root, "format_version", 0, 1e9, &version, err);
     if (r != ENG_OK)
         return r;
-    if (version != 1)
-        return eng_fail(err, ENG_ERR_UNSUPPORTED, "%s: format_version %lld, this replay reads 1", mf,
+    if (version != 1 && version != 2)
+        return eng_fail(err, ENG_ERR_UNSUPPORTED, "%s: format_version %lld, this replay reads 1 and 2", mf,
                         (long long)version);
+    run->format_version = (int)version;
+    if (version == 2) {
+        const char *objects = get_string(root, "objects");
+        if (!objects)
+            return eng_fail(err, ENG_ERR_INVALID, "%s: format_version 2 without \"objects\" (the object store)", mf);
+        if ((r = rep_objects_resolve(run->dir, mf, objects, &run->objects_dir, err)) != ENG_OK)
+            return r;
+    }
     if (!cJSON_IsTrue(cJSON_GetObjectItemCaseSensitive(root, "complete")))
         return eng_fail(err, ENG_ERR_INVALID, "%s: run is incomplete (\"complete\" is not true)", mf);
     if ((r = parse_head(run, mf, root, err)) != ENG_OK)
@@ -332,50 +358,11 @@ eng_result rep_run_open(const char *dir, rep_run **out, eng_error *err)
     return ENG_OK;
 }
 
-/* Does the decoded part have exactly the manifest's channel set? */
-static int same_channels(const rep_part *p, const rep_buffer_info *b)
-{
-    if (p->channel_count != b->channel_count)
-        return 0;
-    for (int c = 0; c < b->channel_count; c++) {
-        int found = 0;
-        for (int k = 0; k < p->channel_count && !found; k++)
-            found = strcmp(p->channels[k], b->channels[c]) == 0;
-        if (!found)
-            return 0;
-    }
-    return 1;
-}
-
-static eng_result verify_part(const char *path, const rep_part *p, const rep_buffer_info *b, eng_error *err)
-{
-    if (p->width != b->width || p->height != b->height)
-        return eng_fail(err, ENG_ERR_INVALID, "%s: part %s: %dx%d in the file, %dx%d in the manifest", path,
-                        p->name, p->width, p->height, b->width, b->height);
-    if (!same_channels(p, b))
-        return eng_fail(err, ENG_ERR_INVALID, "%s: part %s: channels differ from the manifest's", path, p->name);
-    eng_buffer view = rep_part_buffer(p);
-    char dg[40];
-    eng_buffer_digest(&view, dg);
-    if (strcmp(dg, b->digest) != 0)
-        return eng_fail(err, ENG_ERR_INVALID,
-                        "%s: part %s: decoded digest %s does not match the manifest's %s (corrupt or tampered file)",
-                        path, p->name, dg, b->digest);
-    if (b->has_nonfinite_counts) {
-        uint64_t nn, ni;
-        eng_buffer_nonfinite(&view, &nn, &ni, NULL, NULL);
-        if (nn != b->nan || ni != b->inf)
-            return eng_fail(err, ENG_ERR_INVALID,
-                            "%s: part %s: %llu NaN and %llu Inf decoded, the manifest says %llu and %llu", path,
-                            p->name, (unsigned long long)nn, (unsigned long long)ni,
-                            (unsigned long long)b->nan, (unsigned long long)b->inf);
-    }
-    return ENG_OK;
-}
-
 eng_result rep_run_read_frame(const rep_run *run, int frame, rep_part **out, eng_error *err)
 {
     *out = NULL;
+    if (run->format_version == 2)
+        return rep_objects_read_frame(run, frame, out, err);
     const rep_frame_info *f = &run->frames[frame];
     rep_part *parts = NULL;
     int count = 0;
@@ -391,7 +378,7 @@ eng_result rep_run_read_frame(const rep_run *run, int frame, rep_part **out, eng
                          run->manifest_path);
         else if (taken[j])
             r = eng_fail(err, ENG_ERR_INVALID, "%s: part %s appears twice", f->path, parts[k].name);
-        else if ((r = verify_part(f->path, &parts[k], &f->buffers[j], err)) == ENG_OK) {
+        else if ((r = rep_run_verify_part(f->path, &parts[k], &f->buffers[j], err)) == ENG_OK) {
             taken[j] = 1;
             sorted[j] = parts[k];
             memset(&parts[k], 0, sizeof parts[k]);
