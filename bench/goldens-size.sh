@@ -128,12 +128,12 @@ if echo "$ROWS" | grep -q 4; then
         cp -r golden/cornell-box-ci "$G/files"
     fi
     cp -r "$G/files" "$G/objs"; "$ISPM" golden migrate "$G/objs" > /dev/null
-    to="" tf="" ti="" i=0
+    # timed CMD...: appends "wall cpu" (seconds; CPU = user + system of the command) to $OUT/t
+    timed() { /usr/bin/time -f "%e %U %S" -o "$OUT/t1" "$@" > /dev/null 2>&1 || true; tail -n 1 "$OUT/t1" | awk '{ printf "%s %.2f\n", $1, $2 + $3 }'; }
+    to="" tf="" ti="" co="" cf="" i=0
     while [ "$i" -lt "$RUNS" ]; do
-        s=$(now); "$ISPM" replay "$OUT/run" --golden "$G/objs" --report "$OUT/rep-o" --quiet > /dev/null 2>&1 || true; e=$(now)
-        to="$to $(awk -v s="$s" -v e="$e" 'BEGIN { printf "%.3f", e - s }')"
-        s=$(now); "$ISPM" replay "$OUT/run" --golden "$G/files" --report "$OUT/rep-f" --quiet > /dev/null 2>&1 || true; e=$(now)
-        tf="$tf $(awk -v s="$s" -v e="$e" 'BEGIN { printf "%.3f", e - s }')"
+        x=$(timed "$ISPM" replay "$OUT/run" --golden "$G/objs" --report "$OUT/rep-o" --quiet); to="$to ${x% *}" co="$co ${x#* }"
+        x=$(timed "$ISPM" replay "$OUT/run" --golden "$G/files" --report "$OUT/rep-f" --quiet); tf="$tf ${x% *}" cf="$cf ${x#* }"
         if command -v idiff > /dev/null; then
             s=$(now)
             for f in "$OUT/run/frames/"*.exr; do idiff -a "$f" "$G/files/frames/$(basename "$f")" > /dev/null 2>&1 || true; done
@@ -143,8 +143,8 @@ if echo "$ROWS" | grep -q 4; then
         i=$((i + 1))
     done
     O=$(echo "$to" | median) F=$(echo "$tf" | median)
-    printf '  replay vs golden as objects:     %s s (runs:%s)\n' "$O" "$to"
-    printf '  replay vs golden as frame files: %s s (runs:%s)\n' "$F" "$tf"
+    printf '  replay vs golden as objects:     %s s (runs:%s; CPU %s s)\n' "$O" "$to" "$(echo "$co" | median)"
+    printf '  replay vs golden as frame files: %s s (runs:%s; CPU %s s)\n' "$F" "$tf" "$(echo "$cf" | median)"
     [ -n "$ti" ] && printf '  idiff -a over the same pairs:    %s s (runs:%s)\n' "$(echo "$ti" | median)" "$ti"
-    printf '  objects / frame files: %sx (goal <= 1.0x, \"no slower\")\n' "$(ratio "$O" "$F")"
+    printf '  objects / frame files: %sx (goal <= 1.0x: no slower)\n' "$(ratio "$O" "$F")"
 fi

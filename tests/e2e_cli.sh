@@ -8,7 +8,7 @@ SEQ=$SRC/scenes/cornell-box/cornell-box-ci.json
 fail() { echo "FAIL: $*"; exit 1; }
 rm -rf "$WORK"; mkdir -p "$WORK"
 
-for c in record replay bless check info export merge lineage tracebench; do
+for c in record replay bless check info export golden merge lineage tracebench; do
   "$ISPM" $c --help > "$WORK/help.txt" || fail "$c --help exited $?"
   grep -q "usage: ispm $c" "$WORK/help.txt" || fail "$c --help prints no usage"
 done

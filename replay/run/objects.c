@@ -16,6 +16,11 @@
  * object serves buffers whose channel names differ: channels are matched by their rank in name
  * order, and the part comes back with the manifest's names, in the order the frame-file reader
  * gives them (OpenImageIO's), so every tool sees what it would see in a frame file.
+ *
+ * Frames are mostly read in order, and a golden's buffers repeat from frame to frame (shadow
+ * maps of static lights, G-buffers of a still camera): the parts of the last frame read are
+ * kept, and a buffer of the next frame with the same digest, size and channel names is copied
+ * from them instead of being read and decoded again (they were verified when read).
  */
 #define _POSIX_C_SOURCE 200809L
 
@@ -25,6 +30,7 @@
 #include "run_internal.h"
 
 #include <errno.h>
+#include <pthread.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -167,7 +173,7 @@ eng_result rep_object_read(const char *store, const rep_buffer_info *b, const ch
     return r;
 }
 
-/* A copy of the part already decoded for an identical buffer of the same frame. */
+/* A copy of src, an already verified part of the same digest, as buffer b. */
 static void copy_part(const rep_part *src, const rep_buffer_info *b, rep_part *out)
 {
     size_t n = (size_t)src->width * (size_t)src->height * (size_t)src->channel_count;
@@ -181,6 +187,45 @@ static void copy_part(const rep_part *src, const rep_buffer_info *b, rep_part *o
     memcpy(out->data, src->data, n * sizeof *out->data);
 }
 
+struct rep_object_cache {
+    pthread_mutex_t lock;
+    int count;
+    rep_part *parts;
+    char (*digests)[40];
+};
+
+struct rep_object_cache *rep_object_cache_create(void)
+{
+    struct rep_object_cache *c = rep_xcalloc(1, sizeof *c);
+    pthread_mutex_init(&c->lock, NULL);
+    return c;
+}
+
+static void cache_clear(struct rep_object_cache *c)
+{
+    rep_parts_free(c->parts, c->count);
+    free(c->digests);
+    c->parts = NULL;
+    c->digests = NULL;
+    c->count = 0;
+}
+
+void rep_object_cache_free(struct rep_object_cache *c)
+{
+    if (!c)
+        return;
+    cache_clear(c);
+    pthread_mutex_destroy(&c->lock);
+    free(c);
+}
+
+/* Whether the verified part p (of digest d) can stand for buffer b. */
+static int serves(const rep_part *p, const char *d, const rep_buffer_info *b)
+{
+    return strcmp(d, b->digest) == 0 && p->width == b->width && p->height == b->height &&
+           p->channel_count == b->channel_count && same_names(p, b);
+}
+
 eng_result rep_objects_read_frame(const rep_run *run, int frame, rep_part **out, eng_error *err)
 {
     *out = NULL;
@@ -189,39 +234,65 @@ eng_result rep_objects_read_frame(const rep_run *run, int frame, rep_part **out,
     rep_part *parts = rep_xcalloc((size_t)n, sizeof *parts);
     eng_result *res = rep_xcalloc((size_t)n, sizeof *res);
     eng_error *errs = rep_xcalloc((size_t)n, sizeof *errs);
+    int *have = rep_xcalloc((size_t)n, sizeof *have);
+    struct rep_object_cache *cache = run->object_cache;
+    if (cache) {
+        pthread_mutex_lock(&cache->lock);
+        for (int j = 0; j < n; j++)
+            for (int k = 0; k < cache->count && !have[j]; k++)
+                if (serves(&cache->parts[k], cache->digests[k], &f->buffers[j])) {
+                    copy_part(&cache->parts[k], &f->buffers[j], &parts[j]);
+                    have[j] = 1;
+                }
+        pthread_mutex_unlock(&cache->lock);
+    }
     int *same_as = rep_xmalloc((size_t)n * sizeof *same_as);
     for (int j = 0; j < n; j++) {
         same_as[j] = -1;
-        for (int k = 0; k < j && same_as[j] < 0; k++)
-            if (same_as[k] < 0 && strcmp(f->buffers[k].digest, f->buffers[j].digest) == 0 &&
+        for (int k = 0; k < j && same_as[j] < 0 && !have[j]; k++)
+            if (!have[k] && same_as[k] < 0 && strcmp(f->buffers[k].digest, f->buffers[j].digest) == 0 &&
                 f->buffers[k].channel_count == f->buffers[j].channel_count &&
                 f->buffers[k].width == f->buffers[j].width && f->buffers[k].height == f->buffers[j].height)
                 same_as[j] = k;
     }
     /* Objects decode as tasks: on other threads inside replay's parallel region, on this one
      * outside it. Each task writes only its own slot. */
-#pragma omp taskloop grainsize(1) default(none) shared(run, f, parts, res, errs, same_as, n)
+#pragma omp taskloop grainsize(1) default(none) shared(run, f, parts, res, errs, same_as, have, n)
     for (int j = 0; j < n; j++)
-        if (same_as[j] < 0)
+        if (!have[j] && same_as[j] < 0)
             res[j] = rep_object_read(run->objects_dir, &f->buffers[j], run->manifest_path, &parts[j], &errs[j]);
     eng_result r = ENG_OK;
     for (int j = 0; j < n && r == ENG_OK; j++)
-        if (same_as[j] < 0 && res[j] != ENG_OK) {
+        if (!have[j] && same_as[j] < 0 && res[j] != ENG_OK) {
             r = res[j];
             if (err)
                 *err = errs[j];
         }
     for (int j = 0; j < n && r == ENG_OK; j++)
         if (same_as[j] >= 0) {
-            if (same_names(&parts[same_as[j]], &f->buffers[j])) {
+            if (same_names(&parts[same_as[j]], &f->buffers[j]))
                 copy_part(&parts[same_as[j]], &f->buffers[j], &parts[j]);
-            } else {
+            else
                 r = rep_object_read(run->objects_dir, &f->buffers[j], run->manifest_path, &parts[j], err);
-            }
         }
+    if (r == ENG_OK && cache) { /* this frame's parts become the cache */
+        rep_part *keep = rep_xcalloc((size_t)n, sizeof *keep);
+        char(*digests)[40] = rep_xmalloc((size_t)n * sizeof *digests);
+        for (int j = 0; j < n; j++) {
+            copy_part(&parts[j], &f->buffers[j], &keep[j]);
+            memcpy(digests[j], f->buffers[j].digest, 40);
+        }
+        pthread_mutex_lock(&cache->lock);
+        cache_clear(cache);
+        cache->parts = keep;
+        cache->digests = digests;
+        cache->count = n;
+        pthread_mutex_unlock(&cache->lock);
+    }
     free(res);
     free(errs);
     free(same_as);
+    free(have);
     if (r != ENG_OK) {
         rep_parts_free(parts, n);
         return r;

@@ -101,6 +101,7 @@ void rep_run_close(rep_run *run)
     free(run->gl_renderer);
     free(run->gl_vendor);
     free(run->objects_dir);
+    rep_object_cache_free(run->object_cache);
     free(run->manifest_path);
     free(run->dir);
     free(run);
@@ -297,6 +298,7 @@ static eng_result parse_manifest(rep_run *run, const cJSON *root, eng_error *err
             return eng_fail(err, ENG_ERR_INVALID, "%s: format_version 2 without \"objects\" (the object store)", mf);
         if ((r = rep_objects_resolve(run->dir, mf, objects, &run->objects_dir, err)) != ENG_OK)
             return r;
+        run->object_cache = rep_object_cache_create();
     }
     if (!cJSON_IsTrue(cJSON_GetObjectItemCaseSensitive(root, "complete")))
         return eng_fail(err, ENG_ERR_INVALID, "%s: run is incomplete (\"complete\" is not true)", mf);
