@@ -18,6 +18,13 @@
  * cap_recompress_exr before its rename) and, read back as replay reads it, to its manifest
  * digests. A run already in ZIP is copied byte for byte, as before.
  *
+ * Where a folder above the golden holds an object store (golden/objects), or the golden has its
+ * own objects/, the golden is written as format 2 instead (golden_store.c, run/objects.c): each
+ * distinct buffer once, by digest, only the objects the store lacks written, the manifest listing
+ * buffers by digest; the new golden is read back from the store before it is swapped in. A run
+ * whose GL renderer is not the golden's goes into the golden's set for that renderer,
+ * <golden>/renderers/<slug>/, and reblessing the canonical set keeps those sets.
+ *
  * A golden moves only with a written review: the run is first replayed against the golden it
  * would replace (provenance, pixels, timing; the HTML review with thumbnails goes to the run's
  * bless/ folder, outside the committed golden). A bit-exact run made from the same inputs

@@ -258,7 +258,7 @@ static eng_result same_runs(const rep_run *a, const rep_run *b, size_t *buffers,
 }
 
 /* Copies the golden's files other than its manifest and frames (tolerances.json, BLESS.md, ...)
- * into tmp; any folder other than frames/ is refused (it would be lost). */
+ * into tmp; any folder other than frames/ and renderers/ is refused (it would be lost). */
 static eng_result copy_extras(const char *golden, const char *tmp, eng_error *err)
 {
     DIR *d = opendir(golden);
@@ -267,8 +267,8 @@ static eng_result copy_extras(const char *golden, const char *tmp, eng_error *er
     eng_result r = ENG_OK;
     for (struct dirent *e; r == ENG_OK && (e = readdir(d));) {
         if (!strcmp(e->d_name, ".") || !strcmp(e->d_name, "..") || !strcmp(e->d_name, "manifest.json") ||
-            !strcmp(e->d_name, "frames"))
-            continue;
+            !strcmp(e->d_name, "frames") || !strcmp(e->d_name, "renderers"))
+            continue; /* renderers/: the sets, kept by rep_swap_in (each migrates on its own) */
         char *src = rep_path_join(golden, e->d_name), *dst = rep_path_join(tmp, e->d_name);
         struct stat st;
         if (lstat(src, &st) != 0 || !S_ISREG(st.st_mode))
