@@ -18,9 +18,10 @@
  * gives them (OpenImageIO's), so every tool sees what it would see in a frame file.
  *
  * Frames are mostly read in order, and a golden's buffers repeat from frame to frame (shadow
- * maps of static lights, G-buffers of a still camera): the parts of the last frame read are
- * kept, and a buffer of the next frame with the same digest, size and channel names is copied
- * from them instead of being read and decoded again (they were verified when read).
+ * maps of static lights, G-buffers of a still camera): of the last frame read, the parts whose
+ * digest the next frame lists again are kept, and a buffer of the next frame with the same
+ * digest, size and channel names is copied from them instead of being read and decoded again
+ * (they were verified when read). Keeping every part would cost more in copies than it saves.
  */
 #define _POSIX_C_SOURCE 200809L
 
@@ -275,18 +276,29 @@ eng_result rep_objects_read_frame(const rep_run *run, int frame, rep_part **out,
             else
                 r = rep_object_read(run->objects_dir, &f->buffers[j], run->manifest_path, &parts[j], err);
         }
-    if (r == ENG_OK && cache) { /* this frame's parts become the cache */
-        rep_part *keep = rep_xcalloc((size_t)n, sizeof *keep);
-        char(*digests)[40] = rep_xmalloc((size_t)n * sizeof *digests);
-        for (int j = 0; j < n; j++) {
-            copy_part(&parts[j], &f->buffers[j], &keep[j]);
-            memcpy(digests[j], f->buffers[j].digest, 40);
+    if (r == ENG_OK && cache) {
+        /* The cache keeps only what the next frame lists again (the manifest says which): a copy
+         * costs less than a decode, but copying every part would cost more than it saves. */
+        const rep_frame_info *next = frame + 1 < run->frame_count ? &run->frames[frame + 1] : NULL;
+        rep_part *keep = rep_xcalloc((size_t)n + 1, sizeof *keep);
+        char(*digests)[40] = rep_xmalloc(((size_t)n + 1) * sizeof *digests);
+        int kept = 0;
+        for (int j = 0; j < n && next; j++) {
+            int again = 0;
+            for (int k = 0; k < next->buffer_count && !again; k++)
+                again = strcmp(next->buffers[k].digest, f->buffers[j].digest) == 0;
+            for (int k = 0; k < kept && again; k++)
+                again = strcmp(digests[k], f->buffers[j].digest) != 0 || !same_names(&keep[k], &f->buffers[j]);
+            if (again) {
+                copy_part(&parts[j], &f->buffers[j], &keep[kept]);
+                memcpy(digests[kept++], f->buffers[j].digest, 40);
+            }
         }
         pthread_mutex_lock(&cache->lock);
         cache_clear(cache);
         cache->parts = keep;
         cache->digests = digests;
-        cache->count = n;
+        cache->count = kept;
         pthread_mutex_unlock(&cache->lock);
     }
     free(res);

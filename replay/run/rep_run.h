@@ -56,7 +56,7 @@ typedef struct rep_run {
     char *gl_vendor;     /* the manifest's gl.vendor (GL_VENDOR); NULL if absent */
     int format_version;  /* 1: one frame file per frame; 2: buffers stored once (objects.c) */
     char *objects_dir;   /* format 2: the object store, run folder + the manifest's "objects" */
-    struct rep_object_cache *object_cache; /* format 2: the last frame read (objects.c) */
+    struct rep_object_cache *object_cache; /* format 2: parts the next frame repeats (objects.c) */
     int frame_count;
     rep_frame_info *frames;
     int complete;        /* manifest.json read; 0: a run still being recorded (rep_run_open_live) */
