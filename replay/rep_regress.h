@@ -29,4 +29,8 @@ typedef struct rep_suggest_options {
  * is replay's error. One line per section goes to summary (may be NULL). */
 eng_result rep_tol_suggest(const rep_suggest_options *o, FILE *summary, eng_error *err);
 
+/* A suggested limit: v × margin rounded up to three significant digits, and never below
+ * v × margin once printed with %.3g (0 for v <= 0). */
+double rep_suggest_round(double v, double margin);
+
 #endif

@@ -73,8 +73,7 @@ static void see(sbuf *b, int k, double v, const char *run, int frame)
     }
 }
 
-/* v × margin rounded up to three significant digits, never below v × margin once printed. */
-static double round_up3(double v, double margin)
+double rep_suggest_round(double v, double margin)
 {
     double x = v * margin;
     if (!(x > 0))
@@ -123,7 +122,7 @@ static cJSON *rule_json(const sbuf *b, double margin)
             continue;
         if ((k == L_BLOCK || k == L_BLOCKREL) && b->frame[k] < 0)
             continue;
-        double lim = round_up3(b->v[k], margin);
+        double lim = rep_suggest_round(b->v[k], margin);
         if ((k == L_FAILPERCENT || k == L_WARNPERCENT) && lim > 100)
             lim = 100; /* every pixel: the margin cannot go further */
         cJSON_AddNumberToObject(o, LIMIT_KEYS[k], lim);

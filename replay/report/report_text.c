@@ -98,16 +98,16 @@ char *rep_report_text(const rep_report *r, int quiet)
     if (r->stab && r->stab->failed)
         rep_sb_printf(&sb, "stability: %d buffer%s over %s limits, ", r->stab->failed, r->stab->failed == 1 ? "" : "s",
                       r->stab->failed == 1 ? "its" : "their");
+    if (r->expect && (r->expect->unexpected_count || r->expect->expired_count))
+        rep_sb_printf(&sb, "expectations: %d unexpected pass%s, %d expired rule%s; ", r->expect->unexpected_count,
+                      r->expect->unexpected_count == 1 ? "" : "es", r->expect->expired_count,
+                      r->expect->expired_count == 1 ? "" : "s");
     if (r->prov && (r->prov->warn || r->prov->fail))
         rep_sb_printf(&sb, "provenance: %d difference%s %s; buffers: ", r->prov->warn + r->prov->fail,
                       r->prov->warn + r->prov->fail == 1 ? "" : "s", r->prov->fail ? "failing" : "warning");
     if (r->prov && r->prov->timing_failed)
         rep_sb_printf(&sb, "timing: %d pass%s over --timing-fail, ", r->prov->timing_failed,
                       r->prov->timing_failed == 1 ? "" : "es");
-    if (r->expect && (r->expect->unexpected_count || r->expect->expired_count))
-        rep_sb_printf(&sb, "expectations: %d unexpected pass%s, %d expired rule%s; buffers: ", r->expect->unexpected_count,
-                      r->expect->unexpected_count == 1 ? "" : "es", r->expect->expired_count,
-                      r->expect->expired_count == 1 ? "" : "s");
     size_t xf = expected_count(r);
     if (xf)
         rep_sb_printf(&sb, "%zu expected failure%s, ", xf, xf == 1 ? "" : "s");
