@@ -425,6 +425,7 @@ static void chart(rep_sb *html, const char *dir, const char *metric, const char 
     c.title = title;
     c.x_label = "run (in the order given)";
     c.y_label = metric;
+    c.marked_label = "moved most";
     int *marks = rep_xcalloc((size_t)(shown * n) + 1, sizeof *marks);
     for (int i = 0; i < shown; i++) {
         if (pick[i]->to >= 0)
