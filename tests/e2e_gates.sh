@@ -12,7 +12,8 @@
 #   - expectations: the spot light's failure expected (JUnit skipped), a kernel_radius run under
 #     the same rule an unexpected pass, an expired rule, a renderer that does not match, and bad
 #     files (unknown key, bad date, a glob naming nothing) as one line and exit 4;
-#   - trend: the four runs in order, and by commit in a small repository.
+#   - trend: the four runs in order, and by commit in a small repository;
+#   - a blessing keeps the golden's expectations.json.
 # usage: e2e_gates.sh ISPM SOURCE_DIR WORK_DIR   (run by CTest)
 set -u
 ISPM=$1; SRC=$2; WORK=$3
@@ -241,4 +242,8 @@ one_line "$WORK/err" "unknown commit"
 "$ISPM" trend "$WORK/base" -o "$WORK/trend4" > /dev/null 2> "$WORK/err"; rc=$?
 [ $rc -eq 4 ] || fail "trend of a run never replayed exited $rc, want 4"
 one_line "$WORK/err" "not replayed"
+# a blessing keeps the golden's expectations, as it keeps its tolerances
+echo '[{"match": "final.display", "expect": "fail", "reason": "kept"}]' > "$E"
+"$ISPM" bless "$WORK/spot" "$G" --accept > /dev/null || fail "bless --accept exited $?"
+grep -q '"reason": "kept"' "$E" || fail "bless dropped expectations.json"
 echo "e2e_gates: OK"
