@@ -235,12 +235,18 @@ void rep_report_line(rep_sb *sb, const rep_report *r, const rep_entry *e)
     else if (e->verdict == REP_V_WARN)
         tag = "WARN";
     rep_sb_printf(sb, "%-5s frame %d  %-22s ", tag, e->frame, e->buffer);
+    const char *reason = rep_entry_expect_reason(r, e);
+    const char *problem = NULL;
     switch (e->problem) {
-    case REP_PROB_MISSING: rep_sb_printf(sb, "in golden, missing from run\n"); return;
-    case REP_PROB_EXTRA: rep_sb_printf(sb, "in run, not in golden\n"); return;
-    case REP_PROB_FRAME_MISSING: rep_sb_printf(sb, "frame missing from run\n"); return;
-    case REP_PROB_FRAME_EXTRA: rep_sb_printf(sb, "frame not in golden\n"); return;
+    case REP_PROB_MISSING: problem = "in golden, missing from run"; break;
+    case REP_PROB_EXTRA: problem = "in run, not in golden"; break;
+    case REP_PROB_FRAME_MISSING: problem = "frame missing from run"; break;
+    case REP_PROB_FRAME_EXTRA: problem = "frame not in golden"; break;
     case REP_PROB_NONE: break;
+    }
+    if (problem) {
+        rep_sb_printf(sb, "%s%s%s\n", problem, reason ? "  expected failure: " : "", reason ? reason : "");
+        return;
     }
     if (e->verdict == REP_V_SIZE) {
         rep_sb_printf(sb, "run %s, golden %s\n", e->run_shape ? e->run_shape : "?",
@@ -289,7 +295,6 @@ void rep_report_line(rep_sb *sb, const rep_report *r, const rep_entry *e)
     } else {
         rep_sb_printf(sb, "  within tolerance (tol fail %g, %g%%)", e->tol.fail, e->tol.failpercent);
     }
-    const char *reason = rep_entry_expect_reason(r, e);
     if (reason)
         rep_sb_printf(sb, "  expected failure: %s", reason);
     rep_sb_printf(sb, "\n");
