@@ -581,8 +581,8 @@ static void map_caption(rep_sb *sb, const tset *t)
     }
 }
 
-/* golden | new (hover or click: golden) | difference; e (NULL: a preview) outlines its worst
- * block on the three. */
+/* golden | new (hover or click: golden) | difference | ꟻLIP; e (NULL: a preview) outlines its
+ * worst block on each. */
 static void thumbs(rep_sb *sb, const tset *t, const char *missing_golden, const char *missing_run, int with_diff,
                    const rep_entry *e)
 {
@@ -623,9 +623,10 @@ static void thumbs(rep_sb *sb, const tset *t, const char *missing_golden, const 
         placeholder(sb, "no difference image: sizes or channels differ");
     }
     if (t->flip) {
-        rep_sb_printf(sb, "<figure>");
+        rep_sb_printf(sb, "<figure><div class=\"stack\">");
         img(sb, t->flip, t->tw, t->th, "t", "FLIP heat map");
-        rep_sb_printf(sb, "<figcaption>ꟻLIP: black 0 (invisible), pale yellow 1</figcaption></figure>");
+        outline(sb, e);
+        rep_sb_printf(sb, "</div><figcaption>ꟻLIP: black 0 (invisible), pale yellow 1</figcaption></figure>");
     }
     rep_sb_printf(sb, "</div>\n<p class=\"map\">");
     map_caption(sb, t);
@@ -728,7 +729,7 @@ static const char CSS[] =
     ".line{font-size:12px;color:#57606a;margin:0 0 8px;white-space:pre-wrap}"
     ".thumbs{display:flex;flex-wrap:wrap;gap:14px}figure{margin:0}figcaption{font-size:12px;color:#57606a}"
     "img.t{display:block;image-rendering:pixelated;background:repeating-conic-gradient(#ccc 0 25%,#eee 0 50%) 0 0/16px 16px}"
-    ".stack{position:relative}.stack .old{position:absolute;left:0;top:0;visibility:hidden}"
+    ".stack{position:relative;width:max-content}.stack .old{position:absolute;left:0;top:0;visibility:hidden}"
     ".flip{cursor:pointer}.flip:hover .old,.flip.pinned .old{visibility:visible}"
     ".flip .lo{display:none}.flip:hover .lo,.flip.pinned .lo{display:inline;color:#b42318;font-weight:600}"
     ".flip:hover .ln,.flip.pinned .ln{display:none}"
@@ -1121,7 +1122,10 @@ eng_result rep_report_html_write(const rep_report *r, const rep_run *run, const 
                       "marks the largest difference. The ꟻLIP heat map (colour buffers: *.display as LDR-ꟻLIP, "
                       "*.radiance as HDR-ꟻLIP over the rule's pinned exposure range) shows per pixel how visible the "
                       "difference is when flipping between the images, black 0 through purple and orange to pale "
-                      "yellow 1, maximum over each box. At most %d thumbnails, worst buffers first.</p></footer>\n"
+                      "yellow 1, maximum over each box. A <span class=\"blkkey\"></span>magenta frame over all four marks "
+                      "the worst block: the block_size × block_size block (8 × 8 unless the rule says otherwise, aligned "
+                      "to pixel (0,0)) with the largest mean |new − golden| (docs/regression.md). At most %d thumbnails, "
+                      "worst buffers first.</p></footer>\n"
                       "<script>%s</script>\n</body>\n</html>\n",
                       REP_THUMB_MAX_SIDE, REP_THUMB_MAX_IMAGES, JS);
         char *path = rep_path_join(dir, "report.html");
