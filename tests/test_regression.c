@@ -288,6 +288,69 @@ START_TEST(expectations_applied)
 }
 END_TEST
 
+START_TEST(worst_block_in_every_format)
+{
+    rep_report r;
+    memset(&r, 0, sizeof r);
+    r.run_dir = "run";
+    r.golden_dir = "golden";
+    r.frames = 2;
+    r.digest_frame = -1;
+    for (int f = 0; f < 2; f++) {
+        rep_entry *e = rep_report_add(&r, f, "final.display");
+        e->compared = 1;
+        e->verdict = f == 1 ? REP_V_FAIL : REP_V_WITHIN;
+        e->m.fail_why = f == 1 ? REP_WHY_BLOCK : 0;
+        e->m.width = 40;
+        e->m.height = 20;
+        e->m.block_size = 8;
+        e->m.block_abs = (rep_block){f == 1 ? 0.05 : 0.01, 32, 16, 8, 4};
+        e->m.block_rel = (rep_block){0.5, 32, 16, 8, 4};
+        rep_tol_builtin(&e->tol);
+        e->tol.block_fail = 0.02;
+    }
+    r.exit = rep_report_exit(&r);
+    ck_assert_int_eq(r.exit, REP_FAIL);
+    const rep_entry *w = rep_report_worst_block(&r);
+    ck_assert_ptr_eq(w, &r.entries[1]);
+    char *json = rep_report_json(&r);
+    cJSON *root = cJSON_Parse(json);
+    const cJSON *wb = cJSON_GetObjectItem(root, "worst_block");
+    ck_assert_int_eq(cJSON_GetObjectItem(wb, "frame")->valueint, 1);
+    ck_assert_int_eq(cJSON_GetObjectItem(wb, "x")->valueint, 32);
+    ck_assert_int_eq(cJSON_GetObjectItem(wb, "h")->valueint, 4); /* a partial bottom block */
+    const cJSON *b1 = cJSON_GetArrayItem(
+        cJSON_GetObjectItem(cJSON_GetArrayItem(cJSON_GetObjectItem(root, "frames"), 1), "buffers"), 0);
+    const cJSON *why = cJSON_GetObjectItem(cJSON_GetObjectItem(b1, "metrics"), "fail_reasons");
+    ck_assert_str_eq(cJSON_GetArrayItem(why, 0)->valuestring, "block");
+    ck_assert_double_eq(cJSON_GetObjectItem(cJSON_GetObjectItem(b1, "tolerance"), "block_fail")->valuedouble, 0.02);
+    cJSON_Delete(root);
+    free(json);
+    char *junit = rep_report_junit(&r, "seq");
+    ck_assert_ptr_nonnull(strstr(junit, "<property name=\"worst_block\" value=\"worst 8×8 block: frame 1 final.display (32,16)"));
+    free(junit);
+    char *text = rep_report_text(&r, 0);
+    ck_assert_ptr_nonnull(strstr(text, "worst 8×8 block: frame 1 final.display (32,16) 8×4"));
+    ck_assert_ptr_nonnull(strstr(text, "block over block_fail 0.02"));
+    free(text);
+    char dir[] = "/tmp/ispm-test-block-XXXXXX";
+    ck_assert_ptr_nonnull(mkdtemp(dir));
+    eng_error err = {{0}};
+    ck_assert_int_eq(rep_report_html_write(&r, NULL, NULL, dir, &err), ENG_OK);
+    char p[600];
+    snprintf(p, sizeof p, "%s/report.html", dir);
+    char *html = NULL;
+    size_t len = 0;
+    ck_assert_int_eq(eng_read_file(p, 1 << 22, &html, &len, &err), ENG_OK);
+    ck_assert_ptr_nonnull(strstr(html, "id=\"worst-block\"><a href=\"#e1\">"));
+    ck_assert_ptr_nonnull(strstr(html, "worst block"));
+    free(html);
+    snprintf(p, sizeof p, "rm -rf %s", dir);
+    ck_assert_int_eq(system(p), 0);
+    rep_report_free(&r);
+}
+END_TEST
+
 START_TEST(suggest_rounding)
 {
     ck_assert_double_eq(rep_suggest_round(0, 1.25), 0);
@@ -433,6 +496,7 @@ int main(void)
     tcase_add_test(tc, block_keys_parsed);
     tcase_add_test(tc, expectations_parsed_and_validated);
     tcase_add_test(tc, expectations_applied);
+    tcase_add_test(tc, worst_block_in_every_format);
     tcase_add_test(tc, suggest_rounding);
     tcase_add_test(tc, trend_aggregates_and_marks);
     suite_add_tcase(s, tc);
