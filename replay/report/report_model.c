@@ -249,8 +249,8 @@ void rep_report_line(rep_sb *sb, const rep_report *r, const rep_entry *e)
         return;
     }
     if (e->verdict == REP_V_SIZE) {
-        rep_sb_printf(sb, "run %s, golden %s\n", e->run_shape ? e->run_shape : "?",
-                      e->golden_shape ? e->golden_shape : "?");
+        rep_sb_printf(sb, "run %s, golden %s%s%s\n", e->run_shape ? e->run_shape : "?",
+                      e->golden_shape ? e->golden_shape : "?", reason ? "  expected failure: " : "", reason ? reason : "");
         return;
     }
     if (m->fail_why & REP_WHY_NONFINITE) {
@@ -265,7 +265,7 @@ void rep_report_line(rep_sb *sb, const rep_report *r, const rep_entry *e)
                       (double)m->nf_run, (double)m->nf_golden);
         if (m->max_x >= 0)
             rep_sb_printf(sb, "  max |Δ| %.2e at (%d,%d).%s", m->max_abs, m->max_x, m->max_y, m->max_channel);
-        rep_sb_printf(sb, "\n");
+        rep_sb_printf(sb, "%s%s\n", reason ? "  expected failure: " : "", reason ? reason : "");
         return;
     }
     if (e->photon_set)
