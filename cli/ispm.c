@@ -43,6 +43,8 @@ static void usage(FILE *f)
             "  merge SHARD... -o RUN      frame shards (record --frames) checked and merged into one run\n"
             "  tracebench SEQUENCE        photon-trace rays/s against raw Embree rtcIntersect1 on the same rays\n"
             "  settings [--markdown]      every key of a sequence's \"settings\": type, default, range, meaning\n"
+            "  trend RUN... -o DIR        how replayed runs' metrics moved from run to run (charts)\n"
+            "  tolerances suggest RUN... --golden DIR -o FILE   tolerances from runs that should pass\n"
             "\n"
             "Run 'ispm <command> --help' for a command's options and exit codes.\n");
 }
@@ -90,7 +92,7 @@ static void replay_usage(FILE *f)
     fprintf(f,
             "usage: ispm replay RUN [--golden DIR] [--tolerances FILE] [-fail X ...] [--provenance-fail]\n"
             "                       [--timing-fail RATIO] [--frames A-B] [--buffers GLOB] [--report DIR]\n"
-            "                       [--reference REFRUN] [--quiet]\n"
+            "                       [--reference REFRUN] [--expectations FILE [--today YYYY-MM-DD]] [--quiet]\n"
             "\n"
             "Decodes every buffer of every frame of RUN, verifies it against the run's manifest,\n"
             "counts NaN/Inf, and compares it with the golden's buffer of the same name using the\n"
@@ -115,6 +117,10 @@ static void replay_usage(FILE *f)
             "      --frames A-B        compare frames A to B only (no stability measurement then)\n"
             "      --buffers GLOB      compare the buffers whose names match GLOB only\n"
             "      --no-flip           skip the perceptual metric FLIP of the colour buffers\n"
+            "      --expectations FILE known failures (default DIR/expectations.json, if present): a\n"
+            "                          failing buffer a rule names is an expected failure and does not\n"
+            "                          fail the run; one that now passes, or an expired rule, warns\n"
+            "      --today YYYY-MM-DD  the date expectations' \"until\" is judged on (default: today, UTC)\n"
             "  -q, --quiet             print only failures and the verdict\n"
             "  -h, --help              this text\n"
             "\n"
@@ -513,7 +519,8 @@ static int parse_frames(const char *s, rep_options *o)
 
 static int cmd_replay(int argc, char **argv)
 {
-    enum { OPT_TOL = 1000, OPT_TIMING_FAIL = 1100, OPT_PROV_FAIL, OPT_FRAMES, OPT_BUFFERS, OPT_NO_FLIP };
+    enum { OPT_TOL = 1000, OPT_TIMING_FAIL = 1100, OPT_PROV_FAIL, OPT_FRAMES, OPT_BUFFERS, OPT_NO_FLIP, OPT_EXPECT,
+           OPT_TODAY };
     static const struct option opts[] = {
         {"golden", required_argument, NULL, 'g'}, {"tolerances", required_argument, NULL, 't'},
         {"report", required_argument, NULL, 'r'}, {"quiet", no_argument, NULL, 'q'},
@@ -526,6 +533,7 @@ static int cmd_replay(int argc, char **argv)
         {"provenance-fail", no_argument, NULL, OPT_PROV_FAIL},
         {"frames", required_argument, NULL, OPT_FRAMES}, {"buffers", required_argument, NULL, OPT_BUFFERS},
         {"no-flip", no_argument, NULL, OPT_NO_FLIP},
+        {"expectations", required_argument, NULL, OPT_EXPECT}, {"today", required_argument, NULL, OPT_TODAY},
         {NULL, 0, NULL, 0},
     };
     rep_options o;
@@ -564,6 +572,14 @@ static int cmd_replay(int argc, char **argv)
             break;
         case OPT_BUFFERS: o.buffers = optarg; break;
         case OPT_NO_FLIP: o.no_flip = 1; break;
+        case OPT_EXPECT: o.expectations = optarg; break;
+        case OPT_TODAY:
+            if (!rep_date_valid(optarg)) {
+                fprintf(stderr, "ispm replay: --today: '%s' is not a date YYYY-MM-DD\n", optarg);
+                return EXIT_INPUT;
+            }
+            o.today = optarg;
+            break;
         default: replay_usage(stderr); return EXIT_INPUT;
         }
     }
@@ -571,8 +587,8 @@ static int cmd_replay(int argc, char **argv)
         replay_usage(stderr);
         return EXIT_INPUT;
     }
-    if ((o.flags.set || o.timing_fail > 0 || o.provenance_fail) && !o.golden_dir) {
-        fprintf(stderr, "ispm replay: thresholds, --timing-fail and --provenance-fail need --golden\n");
+    if ((o.flags.set || o.timing_fail > 0 || o.provenance_fail || o.expectations || o.today) && !o.golden_dir) {
+        fprintf(stderr, "ispm replay: thresholds, --timing-fail, --provenance-fail and --expectations need --golden\n");
         return EXIT_INPUT;
     }
     o.run_dir = argv[optind];
@@ -636,6 +652,8 @@ int cmd_export(int argc, char **argv);                          /* cmd_inspect.c
 int cmd_lineage(int argc, char **argv);                         /* cmd_lineage.c */
 int cmd_tracebench(int argc, char **argv);                      /* cmd_tracebench.c */
 int cmd_golden(int argc, char **argv);                          /* cmd_golden.c */
+int cmd_trend(int argc, char **argv);                           /* cmd_trend.c */
+int cmd_tolerances(int argc, char **argv);                      /* cmd_tolerances.c */
 
 int main(int argc, char **argv)
 {
@@ -691,6 +709,10 @@ int main(int argc, char **argv)
         return cmd_tracebench(argc, argv);
     if (!strcmp(cmd, "settings"))
         return cmd_settings(argc, argv);
+    if (!strcmp(cmd, "trend"))
+        return cmd_trend(argc, argv);
+    if (!strcmp(cmd, "tolerances"))
+        return cmd_tolerances(argc, argv);
     fprintf(stderr, "ispm: unknown command '%s'\n", cmd);
     usage(stderr);
     return EXIT_INPUT;

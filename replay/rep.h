@@ -55,6 +55,9 @@ typedef struct rep_options {
     const char *buffers;      /* NULL, or an fnmatch pattern: only the buffers it matches are compared */
     rep_progress *progress;   /* NULL, or stepped once per frame compared (total set by replay) */
     int no_flip;              /* skip ꟻLIP (flip.h) of the colour buffers (for timing it; reports show none) */
+    const char *expectations; /* NULL: <golden_dir>/expectations.json if there is one (report/expect_report.c) */
+    const char *today;        /* NULL: today's UTC date; "YYYY-MM-DD": the date expectations are judged on */
+    int no_files;             /* write no report files (fills the model only: ispm tolerances suggest) */
 } rep_options;
 
 /* Returns the idiff-style exit code; on REP_UNREADABLE err names the file and problem. The

@@ -441,6 +441,8 @@ static eng_result walk(const rep_options *o, const char *report_dir, rep_report 
         /* what made each run, before any pixel */
         res = rep_prov_compare(o->run_dir, gdir, o->provenance_fail, o->timing_fail, &r->prov, err);
     }
+    if (res == ENG_OK && gold) /* known failures, by rule */
+        res = rep_report_expect_load(r, o->expectations, o->golden_dir, run, gold, o->today, err);
     if (res != ENG_OK)
         goto done;
 
@@ -545,6 +547,7 @@ static eng_result walk(const rep_options *o, const char *report_dir, rep_report 
         rep_progress_end(o->progress);
     if (res == ENG_OK)
         res = stab_end(&sw, r, run, use, report_dir, err);
+    rep_report_expect_apply(r);
 done:
     stab_walk_free(&sw);
     free(tol_default);
@@ -579,7 +582,7 @@ rep_exit rep_replay_report(const rep_options *o, rep_report *r, eng_error *err)
     }
     /* An unreadable run folder that does not exist gets no report folder created inside it. */
     char *dir = o->report_dir ? rep_xstrdup(o->report_dir) : rep_path_join(o->run_dir, "replay");
-    int writable = o->report_dir || rep_is_dir(o->run_dir);
+    int writable = !o->no_files && (o->report_dir || rep_is_dir(o->run_dir));
     eng_result res = walk(o, writable ? dir : NULL, r, err);
     if (res != ENG_OK) {
         r->exit = REP_UNREADABLE;

@@ -7,7 +7,16 @@
  * through its comparisons, so here any value whose class (finite, NaN, +Inf, -Inf) differs
  * between run and golden fails the buffer whatever the tolerances, and the first such value
  * is named. Arithmetic is in double over float inputs, in a fixed pixel order, so the metrics
- * themselves are reproducible. Nothing here allocates or owns memory.
+ * themselves are reproducible.
+ *
+ * Local gates (Unreal's screenshot comparison moved to them): failpercent is global, so a light
+ * leak in one corner stays under it. Every buffer that differs is also cut into block_size ×
+ * block_size blocks aligned to pixel (0, 0), the right and bottom edge blocks partial and taken
+ * as they are; a block's measure is its mean |Δ| over its pixels and channels (values finite in
+ * both; a non-finite change fails on its own), and relative, that mean over the golden block's
+ * mean |value| floored at REP_BLOCK_REL_FLOOR. The worst block by each measure is kept, whether
+ * or not a gate is set, so every report can say where the error is densest. The only memory
+ * allocated is one row of block sums, freed before return.
  */
 #include "flip.h"
 #include "rep_compare.h"
@@ -143,8 +152,15 @@ rep_verdict rep_compare(const eng_buffer *run, const eng_buffer *golden, const r
     m->fail_percent = 100.0 * (double)m->fail_pixels / (double)npix;
     m->warn_percent = 100.0 * (double)m->warn_pixels / (double)npix;
 
+    m->width = run->width;
+    m->height = run->height;
+    m->block_size = tol->block_size > 0 ? tol->block_size : REP_BLOCK_SIZE;
+    m->block_abs = m->block_rel = (rep_block){0, -1, -1, 0, 0};
     if (m->values_differing == 0)
         return REP_V_BITEXACT;
+    rep_compare_blocks(run, golden, map, m->block_size, m);
+    if (m->block_abs.value > tol->block_fail || m->block_rel.value > tol->block_failrelative)
+        m->fail_why |= REP_WHY_BLOCK;
     if (tol->exact)
         m->fail_why |= REP_WHY_EXACT;
     if (m->nonfinite_mismatch)
@@ -163,7 +179,70 @@ rep_verdict rep_compare(const eng_buffer *run, const eng_buffer *golden, const r
         m->warn_why |= REP_WHY_HARD;
     if (m->rmse > tol->rmse_warn)
         m->warn_why |= REP_WHY_RMSE;
+    if (m->block_abs.value > tol->block_warn || m->block_rel.value > tol->block_warnrelative)
+        m->warn_why |= REP_WHY_BLOCK;
     return m->warn_why ? REP_V_WARN : REP_V_WITHIN;
+}
+
+/* Sums |a - b| of the values finite in both over one block row (rows y0..y1) into sum[bx]. */
+static void block_row_sums(const eng_buffer *run, const eng_buffer *golden, const int *map, int bs, int y0, int y1,
+                           double *sum)
+{
+    int nch = run->channel_count;
+    for (int y = y0; y < y1; y++)
+        for (int x = 0; x < run->width; x++) {
+            size_t p = (size_t)y * (size_t)run->width + (size_t)x;
+            const float *ra = run->data + p * (size_t)nch, *gb = golden->data + p * (size_t)nch;
+            double s = 0;
+            for (int c = 0; c < nch; c++) {
+                float a = ra[c], b = gb[map[c]];
+                if (a != b && isfinite(a) && isfinite(b))
+                    s += fabs((double)a - (double)b);
+            }
+            sum[x / bs] += s;
+        }
+}
+
+/* Mean |value| of the golden's finite values over the block at (x0, y0), w × h. */
+static double golden_block_mean(const eng_buffer *golden, int x0, int y0, int w, int h)
+{
+    int nch = golden->channel_count;
+    double s = 0;
+    for (int y = y0; y < y0 + h; y++) {
+        const float *g = golden->data + ((size_t)y * (size_t)golden->width + (size_t)x0) * (size_t)nch;
+        for (int k = 0; k < w * nch; k++)
+            if (isfinite(g[k]))
+                s += fabs((double)g[k]);
+    }
+    return s / ((double)w * (double)h * (double)nch);
+}
+
+void rep_compare_blocks(const eng_buffer *run, const eng_buffer *golden, const int *map, int bs, rep_metrics *m)
+{
+    m->width = run->width;
+    m->height = run->height;
+    m->block_size = bs;
+    m->block_abs = m->block_rel = (rep_block){0, -1, -1, 0, 0};
+    int nbx = (run->width + bs - 1) / bs;
+    double *sum = rep_xcalloc((size_t)nbx + 1, sizeof *sum);
+    for (int y0 = 0; y0 < run->height; y0 += bs) {
+        int y1 = y0 + bs < run->height ? y0 + bs : run->height;
+        memset(sum, 0, (size_t)nbx * sizeof *sum);
+        block_row_sums(run, golden, map, bs, y0, y1, sum);
+        for (int bx = 0; bx < nbx; bx++) {
+            if (!(sum[bx] > 0))
+                continue;
+            int x0 = bx * bs, w = x0 + bs < run->width ? bs : run->width - x0, h = y1 - y0;
+            double mean = sum[bx] / ((double)w * (double)h * (double)run->channel_count);
+            if (mean > m->block_abs.value)
+                m->block_abs = (rep_block){mean, x0, y0, w, h};
+            double mag = golden_block_mean(golden, x0, y0, w, h);
+            double rel = mean / (mag > REP_BLOCK_REL_FLOOR ? mag : REP_BLOCK_REL_FLOOR);
+            if (rel > m->block_rel.value)
+                m->block_rel = (rep_block){rel, x0, y0, w, h};
+        }
+    }
+    free(sum);
 }
 
 static int rgb_index(const eng_buffer *b, int idx[3])

@@ -63,7 +63,19 @@ typedef struct rep_tol {
      * (INFINITY: unchecked); the HDR exposure range [start, stop] and the observer's ppd (0: 67). */
     double flip_mean_fail, flip_p99_fail;
     double flip_exposure[2], flip_ppd;
+    /* Local gates: the mean |run − golden| over the pixels and channels of each block_size ×
+     * block_size block (aligned to pixel (0, 0); the right and bottom edge blocks partial, averaged
+     * over their own pixels) must not be over block_fail (block_warn); relative: that mean divided
+     * by max(the golden block's mean |value|, REP_BLOCK_REL_FLOOR) over block_failrelative
+     * (block_warnrelative). INFINITY: unchecked. */
+    double block_fail, block_failrelative, block_warn, block_warnrelative;
+    int block_size;
 } rep_tol;
+
+/* The default block side and the floor of the relative block measure's denominator (a black
+ * block would otherwise make any difference in it infinitely large). */
+#define REP_BLOCK_SIZE 8
+#define REP_BLOCK_REL_FLOOR 1e-3
 
 typedef struct rep_tol_rule {
     char *match; /* fnmatch pattern against the buffer name */
@@ -111,6 +123,39 @@ char *rep_tol_flags_text(const rep_tol_flags *f);
 /* The tolerances.json that bless writes for a new golden (the built-in defaults, spelled out). */
 char *rep_tol_default_json(void);
 
+/* ---------------------------------------------------------------- expect.c */
+
+/* One rule of expectations.json: buffers matching `match` are expected to fail, for `reason`,
+ * until the date `until` (inclusive; "" = no end), on renderers matching `renderer` (NULL: any). */
+typedef struct rep_expect_rule {
+    char *match, *reason, *renderer;
+    char until[11];
+} rep_expect_rule;
+
+typedef struct rep_expectations {
+    char *path;
+    int count;
+    rep_expect_rule *rules;
+} rep_expectations;
+
+/* Parses expectations JSON (a list of rules, or {"rules": [...]}); path is only used in
+ * messages. Unknown keys, a missing or empty match or reason, "expect" other than "fail", an
+ * invalid date are ENG_ERR_INVALID naming the file, the rule and the key. */
+eng_result rep_expect_parse(const char *path, const char *json, size_t len, rep_expectations **out, eng_error *err);
+eng_result rep_expect_load(const char *path, rep_expectations **out, eng_error *err);
+void rep_expect_free(rep_expectations *x);
+/* Whether s is a real calendar date spelled YYYY-MM-DD. */
+int rep_date_valid(const char *s);
+/* Today's UTC date, YYYY-MM-DD. */
+void rep_date_today(char out[11]);
+/* Whether rule k is past its date on today (both YYYY-MM-DD). */
+int rep_expect_expired(const rep_expect_rule *rule, const char *today);
+/* Whether rule k applies to a run made by renderer (the manifest's gl.renderer, NULL if not
+ * recorded: then only rules without "renderer" apply). */
+int rep_expect_applies(const rep_expect_rule *rule, const char *renderer);
+/* The first rule in force (applies, not expired) whose match matches buffer: its index, or -1. */
+int rep_expect_find(const rep_expectations *x, const char *buffer, const char *renderer, const char *today);
+
 /* ---------------------------------------------------------------- compare.c */
 
 typedef enum rep_verdict {
@@ -132,8 +177,16 @@ enum {
     REP_WHY_RMSE = 4,      /* RMSE over rmse_fail (rmse_warn) */
     REP_WHY_NONFINITE = 8, /* a non-finite value changed class, or appeared in a run without golden */
     REP_WHY_EXACT = 16,    /* exact mode and some bit differs */
-    REP_WHY_FLIP = 32      /* ꟻLIP mean or 99th percentile over flip_mean_fail / flip_p99_fail */
+    REP_WHY_FLIP = 32,     /* ꟻLIP mean or 99th percentile over flip_mean_fail / flip_p99_fail */
+    REP_WHY_BLOCK = 64     /* some block's mean |Δ| over block_fail / block_failrelative (warn twins) */
 };
+
+/* The worst block of a buffer by one measure: its mean |Δ| (or relative mean), its top-left
+ * pixel and size (partial at the right and bottom edges). x = -1: no block differs. */
+typedef struct rep_block {
+    double value;
+    int x, y, w, h;
+} rep_block;
 
 typedef struct rep_metrics {
     uint64_t pixels, values;
@@ -151,6 +204,10 @@ typedef struct rep_metrics {
     char nf_channel[REP_CHANNEL_NAME_MAX];
     float nf_run, nf_golden;         /* the values there */
     unsigned fail_why, warn_why;
+    /* Blocks of block_size (tolerance): the worst by mean |Δ| and by relative mean; the image's
+     * size, for placing them. Measured whenever values differ. */
+    int width, height, block_size;
+    rep_block block_abs, block_rel;
 } rep_metrics;
 
 /* Compares a run buffer with its golden under tol. Channels are matched by name; a different
@@ -158,9 +215,15 @@ typedef struct rep_metrics {
  * (0 when both are 0). A pixel fails (warns) if some channel has d > fail AND rel >
  * failrelative (warn/warnrelative). The buffer fails if failing pixels exceed failpercent % of
  * all pixels, or some d > hardfail, or RMSE > rmse_fail, or (exact) any bit differs, or any
- * value's class NaN/+Inf/-Inf/finite differs between run and golden; it warns likewise. Values
- * non-finite in both with the same class count as d = 0. */
+ * value's class NaN/+Inf/-Inf/finite differs between run and golden, or some block's mean |d|
+ * (rep_tol's block gates) is over block_fail or its relative mean over block_failrelative; it
+ * warns likewise. Values non-finite in both with the same class count as d = 0. */
 rep_verdict rep_compare(const eng_buffer *run, const eng_buffer *golden, const rep_tol *tol,
+                        rep_metrics *m);
+/* The block measures of rep_compare (tol's block gates), over the values finite in both; map:
+ * run channel c is golden channel map[c]. Fills m's width, height, block_size, block_abs and
+ * block_rel; the golden's magnitude is summed only in blocks that differ. */
+void rep_compare_blocks(const eng_buffer *run, const eng_buffer *golden, const int *map, int block_size,
                         rep_metrics *m);
 
 /* ꟻLIP of a colour buffer (flip.h; rep_flip_kind_of its name, channels R, G, B) against its

@@ -15,6 +15,10 @@
  * stability object replaces the default's whole: limits do not merge key by key, so what a
  * rule checks is what it says.
  *
+ * Local gates (compare.c): block_fail, block_failrelative, block_warn, block_warnrelative (off
+ * unless set) limit the mean |Δ| of the worst block_size × block_size block (default 8); "note"
+ * (a string, or an object of strings per key) says why a limit is what it is and is not read.
+ *
  * Colour buffers also take ꟻLIP limits (flip.h): flip_mean_fail and flip_p99_fail (off unless set),
  * flip_exposure [start, stop] (HDR-ꟻLIP's pinned range in stops, start <= stop; default −4..4) and
  * flip_ppd (0: the papers' 67).
@@ -39,14 +43,16 @@
 
 static const char *const KEYS[] = {"warn", "warnrelative", "warnpercent", "hardwarn", "fail", "failrelative",
                                    "failpercent", "hardfail", "rmse_warn", "rmse_fail",
-                                   "flip_mean_fail", "flip_p99_fail", "flip_ppd"};
+                                   "flip_mean_fail", "flip_p99_fail", "flip_ppd", "block_fail",
+                                   "block_failrelative", "block_warn", "block_warnrelative"};
 #define KEY_COUNT (sizeof KEYS / sizeof KEYS[0])
 
 static double *field(rep_tol *t, size_t k)
 {
     double *f[KEY_COUNT] = {&t->warn, &t->warnrelative, &t->warnpercent, &t->hardwarn, &t->fail,
                             &t->failrelative, &t->failpercent, &t->hardfail, &t->rmse_warn, &t->rmse_fail,
-                            &t->flip_mean_fail, &t->flip_p99_fail, &t->flip_ppd};
+                            &t->flip_mean_fail, &t->flip_p99_fail, &t->flip_ppd, &t->block_fail,
+                            &t->block_failrelative, &t->block_warn, &t->block_warnrelative};
     return f[k];
 }
 
@@ -66,6 +72,8 @@ void rep_tol_builtin(rep_tol *t)
     t->flip_mean_fail = INFINITY;
     t->flip_p99_fail = INFINITY;
     t->flip_ppd = 0;
+    t->block_fail = t->block_failrelative = t->block_warn = t->block_warnrelative = INFINITY;
+    t->block_size = REP_BLOCK_SIZE;
     t->flip_exposure[0] = REP_FLIP_EXPOSURE_START;
     t->flip_exposure[1] = REP_FLIP_EXPOSURE_STOP;
     t->stab.set = 0;
@@ -138,6 +146,23 @@ static eng_result parse_block(const char *path, const char *where, const cJSON *
                                 path, where);
             t->flip_exposure[0] = a->valuedouble;
             t->flip_exposure[1] = b->valuedouble;
+            continue;
+        }
+        if (strcmp(key, "note") == 0) { /* why the limits are what they are: for people, unused */
+            if (!cJSON_IsString(v) && !cJSON_IsObject(v))
+                return eng_fail(err, ENG_ERR_INVALID, "%s: %s: \"note\" must be a string or an object", path, where);
+            for (const cJSON *n = cJSON_IsObject(v) ? v->child : NULL; n; n = n->next)
+                if (!cJSON_IsString(n))
+                    return eng_fail(err, ENG_ERR_INVALID, "%s: %s: note \"%s\" must be a string", path, where,
+                                    n->string);
+            continue;
+        }
+        if (strcmp(key, "block_size") == 0) {
+            if (!cJSON_IsNumber(v) || !(v->valuedouble >= 1 && v->valuedouble <= 4096) ||
+                v->valuedouble != floor(v->valuedouble))
+                return eng_fail(err, ENG_ERR_INVALID, "%s: %s: \"block_size\" must be a whole number from 1 to 4096",
+                                path, where);
+            t->block_size = (int)v->valuedouble;
             continue;
         }
         if (strcmp(key, "stability") == 0) {

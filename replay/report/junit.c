@@ -7,7 +7,10 @@
  * sequence → frame → buffer. What replay counts as a failure (over tolerance, size mismatch,
  * non-finite values, a missing or extra buffer or frame) is a <failure> carrying report.txt's
  * line for the entry; warnings and differences within tolerance pass and say so in
- * <system-out>; nothing is skipped. An unreadable input is one extra test case with <error>.
+ * <system-out>; an expected failure (expectations.json) is <skipped> with the rule's reason, and
+ * each unexpected pass or expired rule is a passing test case of classname
+ * ispm.<sequence>.expectations that says so. The worst block is a property. An unreadable input
+ * is one extra test case with <error>.
  * Every name and message passes through rep_sb_xml, so a hostile buffer name cannot make the
  * document malformed. No times are written: the output is a pure function of the report.
  */
@@ -93,9 +96,12 @@ static void prov_cases_xml(rep_sb *sb, const rep_prov *p, const char *sname)
 char *rep_report_junit(const rep_report *r, const char *suite)
 {
     size_t failures = 0, errors = r->exit == REP_UNREADABLE ? 1 : 0;
-    for (size_t i = 0; i < r->count; i++)
-        if (r->entries[i].verdict == REP_V_FAIL || r->entries[i].verdict == REP_V_SIZE)
-            failures++;
+    size_t skipped = 0;
+    for (size_t i = 0; i < r->count; i++) {
+        failures += rep_entry_failed(&r->entries[i]) != 0;
+        skipped += r->entries[i].expected != 0;
+    }
+    size_t expect_cases = r->expect ? (size_t)(r->expect->unexpected_count + r->expect->expired_count) : 0;
     /* Buffers with stability limits are test cases too (classname ispm.<suite>.stability). */
     size_t checked = 0;
     for (int k = 0; r->stab && r->stab->verdicts && k < r->stab->run.buffer_count; k++)
@@ -104,16 +110,17 @@ char *rep_report_junit(const rep_report *r, const char *suite)
     size_t prov_cases = r->prov ? 2 : 0; /* provenance and timing, before the buffers */
     if (r->prov)
         failures += (r->prov->fail ? 1 : 0) + (r->prov->timing_failed ? 1 : 0);
-    size_t tests = r->count + errors + checked + prov_cases;
+    size_t tests = r->count + errors + checked + prov_cases + expect_cases;
     char *sname = rep_xprintf("ispm.%s", suite);
 
     rep_sb sb = {0};
     rep_sb_printf(&sb, "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n");
-    rep_sb_printf(&sb, "<testsuites name=\"ispm replay\" tests=\"%zu\" failures=\"%zu\" errors=\"%zu\" skipped=\"0\">\n",
-                  tests, failures, errors);
+    rep_sb_printf(&sb, "<testsuites name=\"ispm replay\" tests=\"%zu\" failures=\"%zu\" errors=\"%zu\" skipped=\"%zu\">\n",
+                  tests, failures, errors, skipped);
     rep_sb_printf(&sb, "  <testsuite");
     attr(&sb, "name", sname);
-    rep_sb_printf(&sb, " tests=\"%zu\" failures=\"%zu\" errors=\"%zu\" skipped=\"0\">\n", tests, failures, errors);
+    rep_sb_printf(&sb, " tests=\"%zu\" failures=\"%zu\" errors=\"%zu\" skipped=\"%zu\">\n", tests, failures, errors,
+                  skipped);
     rep_sb_printf(&sb, "    <properties>\n");
     const char *props[][2] = {
         {"run", r->run_dir},
@@ -126,6 +133,15 @@ char *rep_report_junit(const rep_report *r, const char *suite)
         attr(&sb, "name", props[i][0]);
         attr(&sb, "value", props[i][1]);
         rep_sb_printf(&sb, "/>\n");
+    }
+    const rep_entry *wb = r->golden_dir ? rep_report_worst_block(r) : NULL;
+    if (wb) {
+        rep_sb w = {0};
+        rep_block_text(&w, wb);
+        rep_sb_printf(&sb, "      <property name=\"worst_block\"");
+        attr(&sb, "value", w.s);
+        rep_sb_printf(&sb, "/>\n");
+        free(w.s);
     }
     rep_sb_printf(&sb, "    </properties>\n");
 
@@ -153,7 +169,15 @@ char *rep_report_junit(const rep_report *r, const char *suite)
         }
         char *text = entry_line(r, e);
         rep_sb_printf(&sb, ">\n");
-        if (e->verdict == REP_V_FAIL || e->verdict == REP_V_SIZE) {
+        if (e->expected) {
+            char *msg = rep_xprintf("expected failure: %s", rep_entry_expect_reason(r, e));
+            rep_sb_printf(&sb, "      <skipped");
+            attr(&sb, "message", msg);
+            rep_sb_printf(&sb, "/>\n      <system-out>");
+            rep_sb_xml(&sb, text);
+            rep_sb_printf(&sb, "</system-out>\n");
+            free(msg);
+        } else if (e->verdict == REP_V_FAIL || e->verdict == REP_V_SIZE) {
             rep_sb_printf(&sb, "      <failure");
             attr(&sb, "type", failure_type(e));
             attr(&sb, "message", text);
@@ -167,6 +191,29 @@ char *rep_report_junit(const rep_report *r, const char *suite)
         }
         rep_sb_printf(&sb, "    </testcase>\n");
         free(text);
+    }
+    if (expect_cases) {
+        char *cls = rep_xprintf("%s.expectations", sname);
+        const rep_expect_outcome *x = r->expect;
+        for (int i = 0; i < x->unexpected_count; i++) {
+            const rep_expect_rule *k = &x->set->rules[x->unexpected[i].rule];
+            char *name = rep_xprintf("unexpected pass: %s", x->unexpected[i].buffer);
+            char *t = rep_xprintf("%s passes in every frame but rules[%d] \"%s\" of %s expects it to fail: %s",
+                                  x->unexpected[i].buffer, x->unexpected[i].rule, k->match, x->set->path, k->reason);
+            text_case(&sb, cls, name, 0, NULL, t);
+            free(name);
+            free(t);
+        }
+        for (int i = 0; i < x->expired_count; i++) {
+            const rep_expect_rule *k = &x->set->rules[x->expired[i].rule];
+            char *name = rep_xprintf("expired: rules[%d] %s", x->expired[i].rule, k->match);
+            char *t = rep_xprintf("rules[%d] \"%s\" of %s expired on %s and excuses nothing: %s", x->expired[i].rule,
+                                  k->match, x->set->path, k->until, k->reason);
+            text_case(&sb, cls, name, 0, NULL, t);
+            free(name);
+            free(t);
+        }
+        free(cls);
     }
     for (int k = 0; checked && k < r->stab->run.buffer_count; k++) {
         const rep_stab_verdict *v = &r->stab->verdicts[k];

@@ -239,7 +239,7 @@ eng_result plot_xy(const char *path, const plot_chart *c, eng_error *err)
         widths[nleg] = 1.0;
         scales[nleg] = 1.8;
         numbers[nleg] = 1;
-        texts[nleg] = "Pareto front";
+        texts[nleg] = c->marked_label ? c->marked_label : "Pareto front";
         symbols[nleg] = "#(840)";
         nleg++;
     }

@@ -37,6 +37,7 @@ typedef struct plot_chart {
     int series_count;
     plot_series series[PLOT_MAX_SERIES];
     int width, height;    /* pixels (PNG) or points (SVG); 0 = 900×600 */
+    const char *marked_label; /* legend entry of the ring markers; NULL = "Pareto front" */
 } plot_chart;
 
 /* Writes the chart to path (.png or .svg). Errors (unwritable file, no finite point at all,

@@ -46,7 +46,24 @@ typedef struct rep_entry {
     char *golden_shape;
     rep_flip_kind flip_kind; /* ꟻLIP measured (LDR/HDR), or REP_FLIP_NONE */
     rep_flip_stats flip;     /* zero without computing when the buffer is bit-exact */
+    /* An expected failure (expectations.json): the entry failed and a rule in force names it;
+     * it does not fail the run. expect_rule indexes r->expect->rules. */
+    int expected, expect_rule;
 } rep_entry;
+
+/* What the expectations made of a replay (report/expect_report.c). */
+typedef struct rep_expect_note {
+    int rule;        /* index in the file's rules */
+    char *buffer;    /* unexpected pass: the buffer that no longer fails; expired: NULL */
+} rep_expect_note;
+
+typedef struct rep_expect_outcome {
+    rep_expectations *set;   /* owned: the rules (rep_compare.h) */
+    char today[11];          /* the date rules were judged on, YYYY-MM-DD */
+    int expected;            /* entries that failed as expected */
+    int unexpected_count, expired_count;
+    rep_expect_note *unexpected, *expired;
+} rep_expect_outcome;
 
 typedef struct rep_report {
     const char *run_dir;
@@ -74,6 +91,7 @@ typedef struct rep_report {
      * slug, and the set's folder, which golden_dir then names (both owned); NULL: the canonical set. */
     char *renderer_set, *renderer_set_dir;
     rep_keep *keep;          /* owned: parts and ꟻLIP maps kept for report.html, or NULL */
+    rep_expect_outcome *expect; /* owned: expectations in force, or NULL (no file) */
 } rep_report;
 
 /* Appends a zeroed entry for (frame, buffer) and returns it. */
@@ -84,6 +102,13 @@ void rep_report_free(rep_report *r);
 rep_exit rep_report_exit(const rep_report *r);
 /* Every entry, worst first (the order of report.txt). *n gets the count; caller frees. */
 const rep_entry **rep_report_sorted(const rep_report *r, size_t *n);
+/* Failed or size-mismatched, and not an expected failure: what fails the run. */
+int rep_entry_failed(const rep_entry *e);
+/* The worst block (compare.c's mean |Δ|) over every compared entry, or NULL when none differs. */
+const rep_entry *rep_report_worst_block(const rep_report *r);
+/* "worst 8×8 block: frame 3 final.display (48,56) 8×8 mean |Δ| 0.0322 (relative 0.41)", no
+ * newline; nothing when none. */
+void rep_block_text(rep_sb *sb, const rep_entry *e);
 /* Not bit-exact (with a golden) or not clean (without): the entries the reports dwell on. */
 int rep_entry_listed(const rep_entry *e);
 /* report.txt's line for one entry, newline included. */
@@ -110,6 +135,25 @@ char *rep_renderer_set_dir(const char *golden_dir, const rep_run *run, const rep
  * NULL when they are the same. Caller frees. */
 char *rep_renderer_note(const rep_report *r);
 
+/* ---------------------------------------------------------------- expect_report.c */
+/* Loads the expectations for a replay into r->expect: path, or where path is NULL
+ * golden_dir/expectations.json if it exists. Every rule's match must match some buffer of the
+ * run or the golden (a rule that names nothing is a stale rule: ENG_ERR_INVALID naming the
+ * file). today: "YYYY-MM-DD", or NULL for today's UTC date. No file: r->expect stays NULL. */
+eng_result rep_report_expect_load(rep_report *r, const char *path, const char *golden_dir, const rep_run *run,
+                                  const rep_run *gold, const char *today, eng_error *err);
+/* Marks the failing entries that a rule in force (not expired, renderer matching the run's)
+ * names as expected, and lists the unexpected passes (a buffer a rule in force names that fails
+ * in no frame) and expired rules. */
+void rep_report_expect_apply(rep_report *r);
+void rep_expect_outcome_free(rep_expect_outcome *x);
+/* report.txt's expectations block (expired rules, unexpected passes, expected failures with
+ * their reasons), nothing when there is no file; report.json's "expectations" object (cJSON *). */
+void rep_expect_text(rep_sb *sb, const rep_report *r);
+void *rep_expect_json(const rep_report *r);
+/* The rule's reason for an expected entry, or NULL. */
+const char *rep_entry_expect_reason(const rep_report *r, const rep_entry *e);
+
 /* ---------------------------------------------------------------- report_text.c */
 
 /* The human summary: header, one line per buffer that is not bit-exact (or, without golden,
@@ -124,7 +168,8 @@ char *rep_report_json(const rep_report *r);
  * after the buffer, classname "ispm.<suite>.frameNNNNNN". Failed and size-mismatched
  * entries (over tolerance, non-finite, missing or extra) get a <failure> whose type is
  * fail|size|nonfinite|missing|extra; warnings and within-tolerance differences are told in
- * <system-out>; nothing is <skipped/>. An unreadable input adds one testcase with <error>.
+ * <system-out>; expected failures are <skipped> with their reason; unexpected passes and
+ * expired expectations are test cases of their own (classname ispm.<suite>.expectations). An unreadable input adds one testcase with <error>.
  * Caller frees. */
 char *rep_report_junit(const rep_report *r, const char *suite);
 

@@ -353,6 +353,8 @@ static void run_jobs(page *pg, job *jobs, size_t n)
 
 static const char *css_class(const rep_entry *e)
 {
+    if (e->expected)
+        return "xfail";
     switch (e->verdict) {
     case REP_V_SIZE: return "size";
     case REP_V_FAIL: return "fail";
@@ -385,6 +387,8 @@ static const char *tag(const rep_entry *e)
         return "EXTRA";
     if (e->m.fail_why & REP_WHY_NONFINITE)
         return "NaN/Inf";
+    if (e->expected)
+        return "XFAIL";
     switch (e->verdict) {
     case REP_V_FAIL: return "FAIL";
     case REP_V_WARN: return "WARN";
@@ -413,7 +417,8 @@ static void why(rep_sb *sb, unsigned w)
 {
     static const struct { unsigned bit; const char *name; } names[] = {
         {REP_WHY_PERCENT, "too many pixels over threshold"}, {REP_WHY_HARD, "hard limit"}, {REP_WHY_RMSE, "RMSE"},
-        {REP_WHY_NONFINITE, "NaN/Inf"}, {REP_WHY_EXACT, "exact: bits differ"}, {REP_WHY_FLIP, "ꟻLIP"}};
+        {REP_WHY_NONFINITE, "NaN/Inf"}, {REP_WHY_EXACT, "exact: bits differ"}, {REP_WHY_FLIP, "ꟻLIP"},
+        {REP_WHY_BLOCK, "worst block"}};
     int any = 0;
     for (size_t i = 0; i < sizeof names / sizeof names[0]; i++)
         if (w & names[i].bit)
@@ -454,6 +459,15 @@ static void metrics_table(rep_sb *sb, const rep_report *r, const rep_entry *e)
         rep_sb_printf(sb, "</td></tr>");
         row(sb, "pixels over warn");
         rep_sb_printf(sb, "%llu (%.4g%%)</td></tr>", (unsigned long long)m->warn_pixels, m->warn_percent);
+        if (m->block_size > 0 && m->block_abs.x >= 0) {
+            row(sb, "worst block");
+            rep_sb_printf(sb, "<span class=\"blkkey\"></span>mean |Δ| ");
+            num(sb, m->block_abs.value);
+            rep_sb_printf(sb, " at (%d,%d), %d×%d; relative ", m->block_abs.x, m->block_abs.y, m->block_abs.w,
+                          m->block_abs.h);
+            num(sb, m->block_rel.value);
+            rep_sb_printf(sb, " at (%d,%d)</td></tr>", m->block_rel.x, m->block_rel.y);
+        }
     }
     if (e->flip_kind != REP_FLIP_NONE) {
         row(sb, e->flip_kind == REP_FLIP_HDR ? "ꟻLIP (HDR)" : "ꟻLIP (LDR)");
@@ -502,7 +516,9 @@ static void tol_table(rep_sb *sb, const rep_entry *e)
         {"fail", t->fail}, {"failrelative", t->failrelative}, {"failpercent", t->failpercent},
         {"hardfail", t->hardfail}, {"rmse_fail", t->rmse_fail}, {"warn", t->warn},
         {"warnrelative", t->warnrelative}, {"warnpercent", t->warnpercent}, {"hardwarn", t->hardwarn},
-        {"rmse_warn", t->rmse_warn}, {"flip_mean_fail", t->flip_mean_fail}, {"flip_p99_fail", t->flip_p99_fail}};
+        {"rmse_warn", t->rmse_warn}, {"flip_mean_fail", t->flip_mean_fail}, {"flip_p99_fail", t->flip_p99_fail},
+        {"block_fail", t->block_fail}, {"block_failrelative", t->block_failrelative}, {"block_warn", t->block_warn},
+        {"block_warnrelative", t->block_warnrelative}};
     for (size_t i = 0; i < sizeof v / sizeof v[0]; i++) {
         row(sb, v[i].k);
         if (isinf(v[i].v))
@@ -511,7 +527,21 @@ static void tol_table(rep_sb *sb, const rep_entry *e)
             num(sb, v[i].v);
         rep_sb_printf(sb, "</td></tr>");
     }
-    rep_sb_printf(sb, "</table>\n");
+    row(sb, "block_size");
+    rep_sb_printf(sb, "%d</td></tr></table>\n", t->block_size > 0 ? t->block_size : REP_BLOCK_SIZE);
+}
+
+/* The worst block's outline over a thumbnail of e (in a positioned box): placed in percent of
+ * the buffer's size, so it lands on the block at any thumbnail scale. */
+static void outline(rep_sb *sb, const rep_entry *e)
+{
+    if (!e || !e->compared || e->m.block_size <= 0 || e->m.block_abs.x < 0 || e->m.width <= 0 || e->m.height <= 0)
+        return;
+    const rep_block *b = &e->m.block_abs;
+    rep_sb_printf(sb, "<div class=\"blk\" title=\"worst block: (%d,%d) %d×%d, mean |Δ| %.3g\" "
+                      "style=\"left:%.4f%%;top:%.4f%%;width:%.4f%%;height:%.4f%%\"></div>",
+                  b->x, b->y, b->w, b->h, b->value, 100.0 * b->x / e->m.width, 100.0 * b->y / e->m.height,
+                  100.0 * b->w / e->m.width, 100.0 * b->h / e->m.height);
 }
 
 /* An <img> at an integer magnification that brings the longest side near 256 px. */
@@ -558,14 +588,17 @@ static void map_caption(rep_sb *sb, const tset *t)
     }
 }
 
-/* golden | new (hover or click: golden) | difference. */
-static void thumbs(rep_sb *sb, const tset *t, const char *missing_golden, const char *missing_run, int with_diff)
+/* golden | new (hover or click: golden) | difference | ꟻLIP; e (NULL: a preview) outlines its
+ * worst block on each. */
+static void thumbs(rep_sb *sb, const tset *t, const char *missing_golden, const char *missing_run, int with_diff,
+                   const rep_entry *e)
 {
     rep_sb_printf(sb, "<div class=\"thumbs\">");
     if (t->golden) {
-        rep_sb_printf(sb, "<figure>");
+        rep_sb_printf(sb, "<figure><div class=\"stack\">");
         img(sb, t->golden, t->tw, t->th, "t", "golden");
-        rep_sb_printf(sb, "<figcaption>golden</figcaption></figure>");
+        outline(sb, e);
+        rep_sb_printf(sb, "</div><figcaption>golden</figcaption></figure>");
     } else if (missing_golden) {
         placeholder(sb, missing_golden);
     }
@@ -575,6 +608,7 @@ static void thumbs(rep_sb *sb, const tset *t, const char *missing_golden, const 
         img(sb, t->run, t->tw, t->th, "t new", "new");
         if (t->golden)
             img(sb, t->golden, t->tw, t->th, "t old", "golden");
+        outline(sb, e);
         rep_sb_printf(sb, "</div><figcaption>");
         if (t->golden)
             rep_sb_printf(sb, "<span class=\"ln\">new — hover to flip to golden</span><span class=\"lo\">golden "
@@ -586,18 +620,20 @@ static void thumbs(rep_sb *sb, const tset *t, const char *missing_golden, const 
         placeholder(sb, missing_run);
     }
     if (t->diff) {
-        rep_sb_printf(sb, "<figure>");
+        rep_sb_printf(sb, "<figure><div class=\"stack\">");
         img(sb, t->diff, t->tw, t->th, "t", "difference heatmap");
-        rep_sb_printf(sb, "<figcaption>|new − golden|: black 0, white ");
+        outline(sb, e);
+        rep_sb_printf(sb, "</div><figcaption>|new − golden|: black 0, white ");
         num(sb, t->scale);
         rep_sb_printf(sb, "</figcaption></figure>");
     } else if (with_diff && t->golden && t->run) {
         placeholder(sb, "no difference image: sizes or channels differ");
     }
     if (t->flip) {
-        rep_sb_printf(sb, "<figure>");
+        rep_sb_printf(sb, "<figure><div class=\"stack\">");
         img(sb, t->flip, t->tw, t->th, "t", "FLIP heat map");
-        rep_sb_printf(sb, "<figcaption>ꟻLIP: black 0 (invisible), pale yellow 1</figcaption></figure>");
+        outline(sb, e);
+        rep_sb_printf(sb, "</div><figcaption>ꟻLIP: black 0 (invisible), pale yellow 1</figcaption></figure>");
     }
     rep_sb_printf(sb, "</div>\n<p class=\"map\">");
     map_caption(sb, t);
@@ -644,7 +680,14 @@ static void card(rep_sb *sb, const page *pg, const rep_entry *e, const tset *t)
     rep_sb_printf(sb, "\" data-verdict=\"%s\">\n<h3><span class=\"tag %s\">%s</span> frame %d · <span class=\"buf\">",
                   rep_verdict_name(e->verdict), css_class(e), tag(e), e->frame);
     esc(sb, e->buffer);
-    rep_sb_printf(sb, "</span></h3>\n<p class=\"line\">");
+    rep_sb_printf(sb, "</span></h3>\n");
+    const char *reason = rep_entry_expect_reason(r, e);
+    if (reason) {
+        rep_sb_printf(sb, "<p class=\"xreason\">expected failure: ");
+        esc(sb, reason);
+        rep_sb_printf(sb, "</p>\n");
+    }
+    rep_sb_printf(sb, "<p class=\"line\">");
     rep_sb line = {0};
     rep_report_line(&line, r, e);
     esc(sb, line.s);
@@ -653,7 +696,7 @@ static void card(rep_sb *sb, const page *pg, const rep_entry *e, const tset *t)
     const char *mg = e->problem == REP_PROB_EXTRA || e->problem == REP_PROB_FRAME_EXTRA ? "not in golden" : NULL;
     const char *mr = e->problem == REP_PROB_MISSING || e->problem == REP_PROB_FRAME_MISSING ? "missing from run" : NULL;
     if (t->golden || t->run || t->note || mg || mr)
-        thumbs(sb, t, mg, mr, 1);
+        thumbs(sb, t, mg, mr, 1, e);
     else if (r->golden_dir || e->verdict != REP_V_CHECKED)
         rep_sb_printf(sb, "<p class=\"map\"><span class=\"note\">no thumbnails: the report holds at most %d images</span></p>\n",
                       REP_THUMB_MAX_IMAGES);
@@ -693,7 +736,7 @@ static const char CSS[] =
     ".line{font-size:12px;color:#57606a;margin:0 0 8px;white-space:pre-wrap}"
     ".thumbs{display:flex;flex-wrap:wrap;gap:14px}figure{margin:0}figcaption{font-size:12px;color:#57606a}"
     "img.t{display:block;image-rendering:pixelated;background:repeating-conic-gradient(#ccc 0 25%,#eee 0 50%) 0 0/16px 16px}"
-    ".stack{position:relative}.stack .old{position:absolute;left:0;top:0;visibility:hidden}"
+    ".stack{position:relative;width:max-content}.stack .old{position:absolute;left:0;top:0;visibility:hidden}"
     ".flip{cursor:pointer}.flip:hover .old,.flip.pinned .old{visibility:visible}"
     ".flip .lo{display:none}.flip:hover .lo,.flip.pinned .lo{display:inline;color:#b42318;font-weight:600}"
     ".flip:hover .ln,.flip.pinned .ln{display:none}"
@@ -706,6 +749,9 @@ static const char CSS[] =
     "table.all{border-collapse:collapse;font-size:12px;background:#fff;width:100%}"
     "table.all th,table.all td{padding:2px 8px;border-bottom:1px solid #eaeef2;text-align:left}"
     "table.all td.n{text-align:right;font-variant-numeric:tabular-nums}"
+    ".entry.xfail{border-color:#8c959f;opacity:.85}.tag.xfail{background:#6e7781}.xreason{font-size:13px;margin:0 0 4px}"
+    ".blk{position:absolute;box-sizing:border-box;border:2px solid #f0f;outline:1px solid #000;pointer-events:none}"
+    ".blkkey{display:inline-block;width:10px;height:10px;border:2px solid #f0f;margin-right:4px;vertical-align:-2px}"
     ".links{font-size:12px;margin:6px 0 0}.previews{display:flex;flex-wrap:wrap;gap:28px}"
     "footer{font-size:12px;color:#57606a;padding:0 24px 24px;max-width:1200px}";
 
@@ -774,12 +820,58 @@ static void prov_section(rep_sb *sb, const rep_prov *p)
     rep_sb_printf(sb, "</tbody></table></section>\n");
 }
 
+/* The expectations in force: expired rules, unexpected passes, expected failures with reasons. */
+static void expect_section(rep_sb *sb, const rep_report *r)
+{
+    const rep_expect_outcome *x = r->expect;
+    if (!x)
+        return;
+    rep_sb_printf(sb, "<section id=\"expectations\"><h2>Expectations (");
+    esc(sb, x->set->path);
+    rep_sb_printf(sb, ", judged on %s)</h2>\n<table class=\"all\"><thead><tr><th>rule</th><th>match</th><th>renderer</th>"
+                      "<th>until</th><th>reason</th><th>outcome</th></tr></thead><tbody>\n", x->today);
+    for (int k = 0; k < x->set->count; k++) {
+        const rep_expect_rule *q = &x->set->rules[k];
+        int expired = rep_expect_expired(q, x->today), applies = rep_expect_applies(q, r->run_renderer);
+        size_t failed = 0;
+        for (size_t i = 0; i < r->count; i++)
+            failed += r->entries[i].expected && r->entries[i].expect_rule == k;
+        rep_sb up = {0};
+        for (int i = 0; i < x->unexpected_count; i++)
+            if (x->unexpected[i].rule == k)
+                rep_sb_printf(&up, "%s%s", up.len ? ", " : "", x->unexpected[i].buffer);
+        rep_sb_printf(sb, "<tr class=\"%s\"><td class=\"n\">%d</td><td><code>", expired || up.len ? "warn" : "", k);
+        esc(sb, q->match);
+        rep_sb_printf(sb, "</code></td><td>");
+        esc(sb, q->renderer ? q->renderer : "any");
+        rep_sb_printf(sb, "</td><td>%s</td><td>", q->until[0] ? q->until : "—");
+        esc(sb, q->reason);
+        rep_sb_printf(sb, "</td><td>");
+        if (expired)
+            rep_sb_printf(sb, "<b>expired</b>: excuses nothing");
+        else if (!applies)
+            rep_sb_printf(sb, "not this renderer");
+        else {
+            rep_sb_printf(sb, "%zu expected failure%s", failed, failed == 1 ? "" : "s");
+            if (up.len) {
+                rep_sb_printf(sb, "; <b>unexpected pass</b>: ");
+                esc(sb, up.s);
+            }
+        }
+        free(up.s);
+        rep_sb_printf(sb, "</td></tr>\n");
+    }
+    rep_sb_printf(sb, "</tbody></table></section>\n");
+}
+
 static void summary(rep_sb *sb, const page *pg, size_t listed)
 {
     const rep_report *r = pg->r;
-    size_t cnt[REP_V_COUNT] = {0};
-    for (size_t i = 0; i < r->count; i++)
-        cnt[r->entries[i].verdict]++;
+    size_t cnt[REP_V_COUNT] = {0}, xf = 0;
+    for (size_t i = 0; i < r->count; i++) {
+        cnt[r->entries[i].verdict] += !r->entries[i].expected;
+        xf += r->entries[i].expected != 0;
+    }
     rep_sb_printf(sb, "<header class=\"%s\" id=\"verdict\" data-exit=\"%d\"><h1>replay: %s</h1><p>", exit_class(r->exit),
                   (int)r->exit, rep_exit_word(r->exit));
     if (r->exit == REP_UNREADABLE) {
@@ -788,6 +880,14 @@ static void summary(rep_sb *sb, const page *pg, size_t listed)
     }
     if (cnt[REP_V_SIZE])
         rep_sb_printf(sb, "%zu size mismatch · ", cnt[REP_V_SIZE]);
+    if (xf)
+        rep_sb_printf(sb, "%zu expected failure%s · ", xf, xf == 1 ? "" : "s");
+    if (r->expect && r->expect->unexpected_count)
+        rep_sb_printf(sb, "%d unexpected pass%s · ", r->expect->unexpected_count,
+                      r->expect->unexpected_count == 1 ? "" : "es");
+    if (r->expect && r->expect->expired_count)
+        rep_sb_printf(sb, "%d expired expectation%s · ", r->expect->expired_count,
+                      r->expect->expired_count == 1 ? "" : "s");
     if (r->golden_dir)
         rep_sb_printf(sb, "%zu failed · %zu warned · %zu within tolerance · %zu bit-exact", cnt[REP_V_FAIL],
                       cnt[REP_V_WARN], cnt[REP_V_WITHIN], cnt[REP_V_BITEXACT]);
@@ -834,9 +934,20 @@ static void summary(rep_sb *sb, const page *pg, size_t listed)
     } else {
         rep_sb_printf(sb, "none");
     }
-    rep_sb_printf(sb, "</dd></dl>\n");
+    rep_sb_printf(sb, "</dd>");
+    const rep_entry *wb = r->golden_dir ? rep_report_worst_block(r) : NULL;
+    if (wb) {
+        rep_sb_printf(sb, "<dt>worst block</dt><dd id=\"worst-block\"><a href=\"#e%zu\">", (size_t)(wb - r->entries));
+        rep_sb w = {0};
+        rep_block_text(&w, wb);
+        esc(sb, w.s);
+        free(w.s);
+        rep_sb_printf(sb, "</a></dd>");
+    }
+    rep_sb_printf(sb, "</dl>\n");
     if (r->prov)
         prov_section(sb, r->prov);
+    expect_section(sb, r);
     rep_sb_printf(sb, "<section id=\"differences\"><h2>%s (%zu, worst first)</h2>\n",
                   r->golden_dir ? "Buffers that are not bit-exact" : "Buffers that are not clean", listed);
     if (!listed)
@@ -997,7 +1108,7 @@ eng_result rep_report_html_write(const rep_report *r, const rep_run *run, const 
                 rep_sb_printf(&sb, "<div class=\"preview\"><h3>frame %d · <code>", preview_frames[i]);
                 esc(&sb, b);
                 rep_sb_printf(&sb, "</code></h3>\n");
-                thumbs(&sb, &previews[i], NULL, NULL, 0);
+                thumbs(&sb, &previews[i], NULL, NULL, 0, NULL);
                 rep_sb_printf(&sb, "</div>\n");
             }
             rep_sb_printf(&sb, "</div></section>\n");
@@ -1018,7 +1129,10 @@ eng_result rep_report_html_write(const rep_report *r, const rep_run *run, const 
                       "marks the largest difference. The ꟻLIP heat map (colour buffers: *.display as LDR-ꟻLIP, "
                       "*.radiance as HDR-ꟻLIP over the rule's pinned exposure range) shows per pixel how visible the "
                       "difference is when flipping between the images, black 0 through purple and orange to pale "
-                      "yellow 1, maximum over each box. At most %d thumbnails, worst buffers first.</p></footer>\n"
+                      "yellow 1, maximum over each box. A <span class=\"blkkey\"></span>magenta frame over all four marks "
+                      "the worst block: the block_size × block_size block (8 × 8 unless the rule says otherwise, aligned "
+                      "to pixel (0,0)) with the largest mean |new − golden| (docs/regression.md). At most %d thumbnails, "
+                      "worst buffers first.</p></footer>\n"
                       "<script>%s</script>\n</body>\n</html>\n",
                       REP_THUMB_MAX_SIDE, REP_THUMB_MAX_IMAGES, JS);
         char *path = rep_path_join(dir, "report.html");

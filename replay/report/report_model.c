@@ -55,6 +55,8 @@ void rep_report_free(rep_report *r)
     r->prov = NULL;
     rep_keep_free(r->keep);
     r->keep = NULL;
+    rep_expect_outcome_free(r->expect);
+    r->expect = NULL;
     free(r->flags_text);
     free(r->scope_text);
     r->flags_text = r->scope_text = NULL;
@@ -70,6 +72,8 @@ rep_exit rep_report_exit(const rep_report *r)
     rep_exit x = REP_OK;
     for (size_t i = 0; i < r->count; i++) {
         rep_exit e = REP_OK;
+        if (r->entries[i].expected)
+            continue; /* an expected failure does not fail the run */
         switch (r->entries[i].verdict) {
         case REP_V_SIZE: e = REP_SIZE; break;
         case REP_V_FAIL: e = REP_FAIL; break;
@@ -84,6 +88,8 @@ rep_exit rep_report_exit(const rep_report *r)
     if (r->prov && (r->prov->fail || r->prov->timing_failed) && x < REP_FAIL)
         x = REP_FAIL;
     if (r->prov && r->prov->warn && x < REP_WARN)
+        x = REP_WARN;
+    if (r->expect && (r->expect->unexpected_count || r->expect->expired_count) && x < REP_WARN)
         x = REP_WARN;
     return x;
 }
@@ -100,14 +106,17 @@ const char *rep_exit_word(rep_exit x)
     return "UNREADABLE";
 }
 
+/* Expected failures rank below warnings (known) and above differences within tolerance. */
 static int rank(const rep_entry *e)
 {
+    if (e->expected)
+        return 5;
     switch (e->verdict) {
-    case REP_V_SIZE: return 5;
-    case REP_V_FAIL: return 4;
-    case REP_V_WARN: return 3;
-    case REP_V_WITHIN: return 2;
-    case REP_V_CHECKED: return 1;
+    case REP_V_SIZE: return 10;
+    case REP_V_FAIL: return 8;
+    case REP_V_WARN: return 6;
+    case REP_V_WITHIN: return 4;
+    case REP_V_CHECKED: return 2;
     default: return 0;
     }
 }
@@ -130,6 +139,35 @@ static int worst_first(const void *pa, const void *pb)
     if (a->frame != b->frame)
         return a->frame - b->frame;
     return a < b ? -1 : a > b; /* entries sit in manifest order: keep it */
+}
+
+int rep_entry_failed(const rep_entry *e)
+{
+    return (e->verdict == REP_V_FAIL || e->verdict == REP_V_SIZE) && !e->expected;
+}
+
+const rep_entry *rep_report_worst_block(const rep_report *r)
+{
+    const rep_entry *w = NULL;
+    for (size_t i = 0; i < r->count; i++) {
+        const rep_entry *e = &r->entries[i];
+        if (e->compared && e->m.block_size > 0 && e->m.block_abs.x >= 0 &&
+            (!w || e->m.block_abs.value > w->m.block_abs.value))
+            w = e;
+    }
+    return w;
+}
+
+void rep_block_text(rep_sb *sb, const rep_entry *e)
+{
+    if (!e || e->m.block_size <= 0 || e->m.block_abs.x < 0)
+        return;
+    const rep_metrics *m = &e->m;
+    rep_sb_printf(sb, "worst %d×%d block: frame %d %s (%d,%d) %d×%d mean |Δ| %.3g", m->block_size, m->block_size,
+                  e->frame, e->buffer, m->block_abs.x, m->block_abs.y, m->block_abs.w, m->block_abs.h,
+                  m->block_abs.value);
+    if (m->block_rel.x >= 0)
+        rep_sb_printf(sb, " (worst relative %.3g at (%d,%d))", m->block_rel.value, m->block_rel.x, m->block_rel.y);
 }
 
 int rep_entry_listed(const rep_entry *e)
@@ -167,6 +205,10 @@ static void why_text(rep_sb *sb, unsigned why, const rep_metrics *m, int fail, c
         rep_sb_printf(sb, "  exact: %llu values differ", (unsigned long long)m->values_differing);
     if (why & REP_WHY_FLIP)
         rep_sb_printf(sb, "  FLIP over flip_mean_fail %g / flip_p99_fail %g", t->flip_mean_fail, t->flip_p99_fail);
+    if (why & REP_WHY_BLOCK)
+        rep_sb_printf(sb, "  block over %s %g / %s %g", fail ? "block_fail" : "block_warn", fail ? t->block_fail : t->block_warn,
+                      fail ? "block_failrelative" : "block_warnrelative",
+                      fail ? t->block_failrelative : t->block_warnrelative);
 }
 
 /* "  FLIP mean 0.0123 p99 0.2 (HDR)" for a colour buffer (flip.h). */
@@ -189,21 +231,29 @@ void rep_report_line(rep_sb *sb, const rep_report *r, const rep_entry *e)
         tag = "EXTRA";
     else if (m->fail_why & REP_WHY_NONFINITE)
         tag = (m->run_nan || m->golden_nan) ? "NAN" : "INF";
+    else if (e->expected)
+        tag = "XFAIL";
     else if (e->verdict == REP_V_FAIL)
         tag = "FAIL";
     else if (e->verdict == REP_V_WARN)
         tag = "WARN";
     rep_sb_printf(sb, "%-5s frame %d  %-22s ", tag, e->frame, e->buffer);
+    const char *reason = rep_entry_expect_reason(r, e);
+    const char *problem = NULL;
     switch (e->problem) {
-    case REP_PROB_MISSING: rep_sb_printf(sb, "in golden, missing from run\n"); return;
-    case REP_PROB_EXTRA: rep_sb_printf(sb, "in run, not in golden\n"); return;
-    case REP_PROB_FRAME_MISSING: rep_sb_printf(sb, "frame missing from run\n"); return;
-    case REP_PROB_FRAME_EXTRA: rep_sb_printf(sb, "frame not in golden\n"); return;
+    case REP_PROB_MISSING: problem = "in golden, missing from run"; break;
+    case REP_PROB_EXTRA: problem = "in run, not in golden"; break;
+    case REP_PROB_FRAME_MISSING: problem = "frame missing from run"; break;
+    case REP_PROB_FRAME_EXTRA: problem = "frame not in golden"; break;
     case REP_PROB_NONE: break;
     }
+    if (problem) {
+        rep_sb_printf(sb, "%s%s%s\n", problem, reason ? "  expected failure: " : "", reason ? reason : "");
+        return;
+    }
     if (e->verdict == REP_V_SIZE) {
-        rep_sb_printf(sb, "run %s, golden %s\n", e->run_shape ? e->run_shape : "?",
-                      e->golden_shape ? e->golden_shape : "?");
+        rep_sb_printf(sb, "run %s, golden %s%s%s\n", e->run_shape ? e->run_shape : "?",
+                      e->golden_shape ? e->golden_shape : "?", reason ? "  expected failure: " : "", reason ? reason : "");
         return;
     }
     if (m->fail_why & REP_WHY_NONFINITE) {
@@ -218,7 +268,7 @@ void rep_report_line(rep_sb *sb, const rep_report *r, const rep_entry *e)
                       (double)m->nf_run, (double)m->nf_golden);
         if (m->max_x >= 0)
             rep_sb_printf(sb, "  max |Δ| %.2e at (%d,%d).%s", m->max_abs, m->max_x, m->max_y, m->max_channel);
-        rep_sb_printf(sb, "\n");
+        rep_sb_printf(sb, "%s%s\n", reason ? "  expected failure: " : "", reason ? reason : "");
         return;
     }
     if (e->photon_set)
@@ -233,6 +283,8 @@ void rep_report_line(rep_sb *sb, const rep_report *r, const rep_entry *e)
     else
         rep_sb_printf(sb, "max |Δ| 0 (%llu values differ in bits only)", (unsigned long long)m->values_differing);
     flip_text(sb, e);
+    if (m->block_size > 0 && m->block_abs.x >= 0)
+        rep_sb_printf(sb, "  block %.3g at (%d,%d)", m->block_abs.value, m->block_abs.x, m->block_abs.y);
     if (e->verdict == REP_V_FAIL) {
         rep_sb_printf(sb, "  over fail ");
         share_text(sb, m->fail_pixels, m->pixels, m->fail_percent, e->photon_set ? "photons" : "px");
@@ -246,6 +298,8 @@ void rep_report_line(rep_sb *sb, const rep_report *r, const rep_entry *e)
     } else {
         rep_sb_printf(sb, "  within tolerance (tol fail %g, %g%%)", e->tol.fail, e->tol.failpercent);
     }
+    if (reason)
+        rep_sb_printf(sb, "  expected failure: %s", reason);
     rep_sb_printf(sb, "\n");
 }
 

@@ -21,7 +21,16 @@
 
 static int is_failure(const rep_entry *e)
 {
-    return e->verdict == REP_V_FAIL || e->verdict == REP_V_SIZE;
+    return rep_entry_failed(e);
+}
+
+/* Failed entries that are expected failures. */
+static size_t expected_count(const rep_report *r)
+{
+    size_t n = 0;
+    for (size_t i = 0; i < r->count; i++)
+        n += r->entries[i].expected != 0;
+    return n;
 }
 
 char *rep_report_text(const rep_report *r, int quiet)
@@ -53,6 +62,7 @@ char *rep_report_text(const rep_report *r, int quiet)
     /* provenance first: why the pixels may differ, before how they do */
     if (r->prov && (!quiet || r->prov->fail))
         rep_prov_text(&sb, r->prov);
+    rep_expect_text(&sb, r);
     /* The model's worst-first order is total (ties broken by manifest position), so the entries
      * picked from it come in the order they would sort to among themselves. */
     size_t all;
@@ -73,21 +83,34 @@ char *rep_report_text(const rep_report *r, int quiet)
         rep_stab_text(&sb, r);
     if (r->prov && (!quiet || r->prov->timing_failed))
         rep_timing_text(&sb, r->prov);
+    const rep_entry *wb = rep_report_worst_block(r);
+    if (wb && r->golden_dir) {
+        rep_sb_printf(&sb, "replay: ");
+        rep_block_text(&sb, wb);
+        rep_sb_printf(&sb, "\n");
+    }
     size_t cnt[REP_V_COUNT] = {0};
     for (size_t i = 0; i < r->count; i++)
-        cnt[r->entries[i].verdict]++;
+        cnt[r->entries[i].verdict] += !r->entries[i].expected; /* expected failures counted apart */
     rep_sb_printf(&sb, "replay: %s — ", rep_exit_word(r->exit));
     if (cnt[REP_V_SIZE])
         rep_sb_printf(&sb, "%zu size mismatch, ", cnt[REP_V_SIZE]);
     if (r->stab && r->stab->failed)
         rep_sb_printf(&sb, "stability: %d buffer%s over %s limits, ", r->stab->failed, r->stab->failed == 1 ? "" : "s",
                       r->stab->failed == 1 ? "its" : "their");
+    if (r->expect && (r->expect->unexpected_count || r->expect->expired_count))
+        rep_sb_printf(&sb, "expectations: %d unexpected pass%s, %d expired rule%s; ", r->expect->unexpected_count,
+                      r->expect->unexpected_count == 1 ? "" : "es", r->expect->expired_count,
+                      r->expect->expired_count == 1 ? "" : "s");
     if (r->prov && (r->prov->warn || r->prov->fail))
         rep_sb_printf(&sb, "provenance: %d difference%s %s; buffers: ", r->prov->warn + r->prov->fail,
                       r->prov->warn + r->prov->fail == 1 ? "" : "s", r->prov->fail ? "failing" : "warning");
     if (r->prov && r->prov->timing_failed)
         rep_sb_printf(&sb, "timing: %d pass%s over --timing-fail, ", r->prov->timing_failed,
                       r->prov->timing_failed == 1 ? "" : "es");
+    size_t xf = expected_count(r);
+    if (xf)
+        rep_sb_printf(&sb, "%zu expected failure%s, ", xf, xf == 1 ? "" : "s");
     if (r->golden_dir)
         rep_sb_printf(&sb, "%zu failed, %zu warned, %zu within tolerance, %zu bit-exact (%zu buffers, %d frames)\n",
                       cnt[REP_V_FAIL], cnt[REP_V_WARN], cnt[REP_V_WITHIN], cnt[REP_V_BITEXACT], r->count, r->frames);
@@ -134,6 +157,7 @@ static cJSON *why_json(unsigned why)
     if (why & REP_WHY_NONFINITE) cJSON_AddItemToArray(a, cJSON_CreateString("nonfinite"));
     if (why & REP_WHY_EXACT) cJSON_AddItemToArray(a, cJSON_CreateString("exact"));
     if (why & REP_WHY_FLIP) cJSON_AddItemToArray(a, cJSON_CreateString("flip"));
+    if (why & REP_WHY_BLOCK) cJSON_AddItemToArray(a, cJSON_CreateString("block"));
     return a;
 }
 
@@ -159,6 +183,24 @@ static cJSON *tol_json(const rep_entry *e)
     cJSON_AddItemToArray(ex, cJSON_CreateNumber(t->flip_exposure[0]));
     cJSON_AddItemToArray(ex, cJSON_CreateNumber(t->flip_exposure[1]));
     add_num(o, "flip_ppd", t->flip_ppd > 0 ? t->flip_ppd : REP_FLIP_PPD_DEFAULT);
+    add_num(o, "block_fail", t->block_fail);
+    add_num(o, "block_failrelative", t->block_failrelative);
+    add_num(o, "block_warn", t->block_warn);
+    add_num(o, "block_warnrelative", t->block_warnrelative);
+    cJSON_AddNumberToObject(o, "block_size", t->block_size > 0 ? t->block_size : REP_BLOCK_SIZE);
+    return o;
+}
+
+static cJSON *block_json(const rep_block *b)
+{
+    if (b->x < 0)
+        return cJSON_CreateNull();
+    cJSON *o = cJSON_CreateObject();
+    add_num(o, "value", b->value);
+    cJSON_AddNumberToObject(o, "x", b->x);
+    cJSON_AddNumberToObject(o, "y", b->y);
+    cJSON_AddNumberToObject(o, "w", b->w);
+    cJSON_AddNumberToObject(o, "h", b->h);
     return o;
 }
 
@@ -178,6 +220,12 @@ static cJSON *metrics_json(const rep_report *r, const rep_metrics *m)
         cJSON_AddItemToObject(o, "first_fail", xy(m->first_fail_x, m->first_fail_y, NULL));
         cJSON_AddNumberToObject(o, "warn_pixels", (double)m->warn_pixels);
         add_num(o, "warn_percent", m->warn_percent);
+        if (m->block_size > 0) { /* the worst blocks (compare.c); null where nothing differs */
+            cJSON *bl = cJSON_AddObjectToObject(o, "block");
+            cJSON_AddNumberToObject(bl, "size", m->block_size);
+            cJSON_AddItemToObject(bl, "abs", block_json(&m->block_abs));
+            cJSON_AddItemToObject(bl, "relative", block_json(&m->block_rel));
+        }
     }
     cJSON *rn = cJSON_AddObjectToObject(o, "run");
     cJSON_AddNumberToObject(rn, "nan", (double)m->run_nan);
@@ -229,15 +277,32 @@ char *rep_report_json(const rep_report *r)
     cJSON_AddNumberToObject(root, "exit_code", (double)r->exit);
     if (r->exit == REP_UNREADABLE)
         cJSON_AddStringToObject(root, "error", r->error.msg);
+    const rep_entry *wb = rep_report_worst_block(r);
+    if (wb && r->golden_dir) {
+        cJSON *w = cJSON_AddObjectToObject(root, "worst_block");
+        cJSON_AddNumberToObject(w, "frame", wb->frame);
+        cJSON_AddStringToObject(w, "buffer", wb->buffer);
+        cJSON_AddNumberToObject(w, "size", wb->m.block_size);
+        cJSON_AddNumberToObject(w, "x", wb->m.block_abs.x);
+        cJSON_AddNumberToObject(w, "y", wb->m.block_abs.y);
+        cJSON_AddNumberToObject(w, "w", wb->m.block_abs.w);
+        cJSON_AddNumberToObject(w, "h", wb->m.block_abs.h);
+        add_num(w, "value", wb->m.block_abs.value);
+    } else {
+        cJSON_AddNullToObject(root, "worst_block");
+    }
+    cJSON_AddItemToObject(root, "expectations", (cJSON *)rep_expect_json(r));
     cJSON_AddNumberToObject(root, "frame_count", r->frames);
     cJSON_AddNumberToObject(root, "buffer_count", (double)r->count);
     cJSON *counts = cJSON_AddObjectToObject(root, "counts");
     size_t cnt[REP_V_COUNT] = {0};
     for (size_t i = 0; i < r->count; i++)
-        cnt[r->entries[i].verdict]++;
+        cnt[r->entries[i].verdict] += !r->entries[i].expected; /* expected failures counted apart */
     for (int v = 0; v < REP_V_COUNT; v++)
         if (v != REP_V_CHECKED || !r->golden_dir)
-            cJSON_AddNumberToObject(counts, rep_verdict_name((rep_verdict)v), (double)cnt[v]);
+            cJSON_AddNumberToObject(counts, rep_verdict_name((rep_verdict)v),
+                                    (double)cnt[v]);
+    cJSON_AddNumberToObject(counts, "expected failure", (double)expected_count(r));
     if (r->golden_dir && r->digest_frame >= 0) {
         cJSON *d = cJSON_AddObjectToObject(root, "first_digest_difference");
         cJSON_AddNumberToObject(d, "frame", r->digest_frame);
@@ -274,6 +339,11 @@ char *rep_report_json(const rep_report *r)
         cJSON_AddStringToObject(b, "name", e->buffer);
         cJSON_AddStringToObject(b, "verdict", rep_verdict_name(e->verdict));
         add_str(b, "problem", problem_name(e->problem));
+        if (e->expected) {
+            cJSON *xf = cJSON_AddObjectToObject(b, "expected_failure");
+            cJSON_AddNumberToObject(xf, "rule", e->expect_rule);
+            cJSON_AddStringToObject(xf, "reason", rep_entry_expect_reason(r, e));
+        }
         if (e->verdict == REP_V_SIZE) {
             add_str(b, "run_shape", e->run_shape);
             add_str(b, "golden_shape", e->golden_shape);
