@@ -22,6 +22,7 @@ const char *seq_preset_settings(eng_preset p)
     case ENG_PRESET_INTERACTIVE:
         return "{\"indirect\": \"final-gather\", \"final_gather_rays\": 64, \"final_gather_radius\": 0.15, "
                "\"final_gather_seed\": \"surface\", \"final_gather_reuse\": 16, \"splat_subsample\": 4, "
+               "\"atrous_iterations\": 3, \"atrous_detail\": \"none\", "
                "\"temporal\": true}";
     case ENG_PRESET_CONVERGED:
         return "{\"indirect\": \"final-gather\", \"final_gather_rays\": 64, \"random\": \"stratified\", "
