@@ -128,6 +128,11 @@ for p in pts:
     print("%-20s mean %+6.1f %%  block p90 away from edges %.3f  all blocks %.3f  frame %8.1f ms%s" % (
         p["method"], 100 * (bi["mean_ratio"] - 1), bi["flat_block_p90"], bi["block_p90"], p["frame_ms"],
         "  (%.2fx kd-gather)" % (p["frame_ms"] / kd["frame_ms"]) if kd else ""))
+    for f in p.get("series", []):
+        sb = f["indirect_bias"]
+        print("    frame %3d (%2d rendered, %9.1f ms): mean %+6.1f %%  block p90 away from edges %.3f  all blocks %.3f" % (
+            f["frame"], f["frames_rendered"], f["elapsed_ms"], 100 * (sb["mean_ratio"] - 1), sb["flat_block_p90"],
+            sb["block_p90"]))
 PY
 }
 summary "$OUT/one-frame" | tee "$OUT/one-frame-summary.txt"
