@@ -63,7 +63,8 @@ eng_result eng_render_frame(eng_engine *e, int frame, eng_error *err);
 void eng_set_history_start(eng_engine *e, int first);
 
 /* 1 when some pass carries state from frame to frame at these settings (temporal or
- * progressive accumulation): a frame then depends on the frames before it. */
+ * progressive accumulation, or an indirect method with a history, ind_method.history): a
+ * frame then depends on the frames before it. */
 int eng_stateful(const eng_engine *e);
 
 /* Is the segment from a to b blocked by scene geometry, as posed at the last rendered frame

@@ -63,6 +63,7 @@ struct eng_engine {
     int aniso_on;     /* aniso holds this frame's photons */
     const ind_method *method; /* indirect.h: the `indirect` setting's method, NULL for none */
     void *method_state;
+    int method_history; /* the method keeps a history (ind_method.history) */
     const pt_method *tracer; /* trace_method.h: the `photon_trace` setting's method */
     void *tracer_state;
     const spec_method *spec;  /* specular.h: NULL when "off" or the scene has no specular surface */
@@ -291,6 +292,7 @@ eng_result eng_create(const eng_desc *desc, eng_engine **out, eng_error *err)
         }
         if (r == ENG_OK)
             r = e->method->create(w, h, e->filtered, &e->method_state, err);
+        e->method_history = e->method->history && e->method->history(st);
         e->tracer = pt_method_find(eng_trace_name(st->photon_trace));
         if (r == ENG_OK)
             r = e->tracer->create(st, &e->tracer_state, err);
@@ -1282,6 +1284,8 @@ static void history_reset(eng_engine *e, int from)
         pass_temporal_reset(e->temporal);
     if (e->prog)
         prog_reset(e->prog);
+    if (e->method_history)
+        e->method->reset(e->method_state);
     e->temporal_from = from;
 }
 
@@ -1291,7 +1295,7 @@ static void history_reset(eng_engine *e, int from)
 static int history_from(const eng_engine *e, int frame)
 {
     int from = -1;
-    if (e->temporal)
+    if (e->temporal || e->method_history)
         from = e->temporal_from;
     if (e->prog) {
         int p = frame - prog_frames(e->prog) + 1;
@@ -1309,7 +1313,7 @@ void eng_set_history_start(eng_engine *e, int first)
 
 int eng_stateful(const eng_engine *e)
 {
-    return e->temporal || e->prog;
+    return e->temporal || e->prog || e->method_history;
 }
 
 eng_result eng_render_frame(eng_engine *e, int frame, eng_error *err)
@@ -1317,7 +1321,7 @@ eng_result eng_render_frame(eng_engine *e, int frame, eng_error *err)
     if (frame < 0 || frame >= e->seq->frame_count)
         return eng_fail(err, ENG_ERR_INVALID, "%s: frame %d outside 0..%d", e->seq->path, frame, e->seq->frame_count - 1);
     const int window = e->settings.temporal_window;
-    if ((e->temporal || e->prog) && !e->silent && frame != e->next_frame) {
+    if (eng_stateful(e) && !e->silent && frame != e->next_frame) {
         /* Frame i's temporal (or progressive) result depends on every earlier frame (since the
          * last temporal_window boundary): asked for frames out of order (e.g. record --resume,
          * or a shard's first frame), rebuild the history from frame 0 (or the window's start,
@@ -1339,7 +1343,7 @@ eng_result eng_render_frame(eng_engine *e, int frame, eng_error *err)
     }
     /* temporal_window: every state restarts at a multiple of the window (a bounded history,
      * so that a shard's warm-up of at most window - 1 frames reproduces it bit for bit). */
-    if ((e->temporal || e->prog) && window > 0 && frame % window == 0)
+    if (eng_stateful(e) && window > 0 && frame % window == 0)
         history_reset(e, frame);
     double t = seq_frame_time(e->seq, frame);
     memset(&e->stats, 0, sizeof e->stats);

@@ -457,9 +457,15 @@ START_TEST(bias_measures_and_edge_mask)
     ck_assert(fabs(b.edge_rel_rmse - 0.25) < 1e-9);
     ck_assert(fabs(b.edge_fraction - (double)edges / (BW * BH)) < 1e-12);
     ck_assert(fabs(b.mean_ratio - (1.0 - 0.25 * edges / (BW * BH))) < 1e-9);
-    /* Blocks: 8 blocks of 8×8; p90 = the second largest block error. */
+    /* Blocks away from edges (no pixel of the mask): the error is all at the edges, so they
+     * have none, while over all blocks the edge blocks count. */
+    ck_assert(b.block_p90 > 0.0 && b.block_p90 <= 0.25);
+    ck_assert(fabs(b.flat_block_p90) < 1e-9);
+    /* Blocks: 8 blocks of 8×8; p90 = the second largest block error. Without a mask every
+     * block is away from edges. */
     rep_metric_bias(test, ref, BW, BH, NULL, &b);
     ck_assert(b.block_p90 > 0.0 && b.block_p90 <= 0.25);
+    ck_assert(b.flat_block_p90 == b.block_p90);
     for (int i = 0; i < BW * BH * 3; i++)
         test[i] = 1.1f;
     rep_metric_bias(test, ref, BW, BH, NULL, &b);

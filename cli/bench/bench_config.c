@@ -206,23 +206,26 @@ eng_result bench_config_load(const char *path, bench_config *c, eng_error *err)
             return r;
         const cJSON *m = cJSON_GetObjectItemCaseSensitive(v, "metric"), *b = cJSON_GetObjectItemCaseSensitive(v, "buffer");
         if (m) {
-            static const char *const metrics[] = {"rmse", "rel_mse", "mae", "max_abs", "block_rmse", "block_p90"};
+            static const char *const metrics[] = {"rmse",       "rel_mse",   "mae",           "max_abs",
+                                                  "block_rmse", "block_p90", "flat_block_p90"};
             c->chart_metric = NULL;
-            for (int i = 0; i < 6 && cJSON_IsString(m); i++)
+            for (int i = 0; i < 7 && cJSON_IsString(m); i++)
                 if (!strcmp(m->valuestring, metrics[i]))
                     c->chart_metric = metrics[i];
             if (!c->chart_metric)
                 return eng_fail(err, ENG_ERR_INVALID,
-                                "%s: chart.metric: expected one of rmse, rel_mse, mae, max_abs, block_rmse, block_p90",
+                                "%s: chart.metric: expected one of rmse, rel_mse, mae, max_abs, block_rmse, block_p90, "
+                                "flat_block_p90",
                                 path);
         }
         if (b) {
             if (!cJSON_IsString(b) || (strcmp(b->valuestring, "indirect") && strcmp(b->valuestring, "full")))
                 return eng_fail(err, ENG_ERR_INVALID, "%s: chart.buffer: expected \"indirect\" or \"full\"", path);
             c->chart_buffer = !strcmp(b->valuestring, "indirect") ? "indirect" : "full";
-            if (!strcmp(c->chart_metric, "block_p90") && strcmp(c->chart_buffer, "indirect"))
-                return eng_fail(err, ENG_ERR_INVALID, "%s: chart.metric block_p90 is measured on the indirect buffer only",
-                                path);
+            if ((!strcmp(c->chart_metric, "block_p90") || !strcmp(c->chart_metric, "flat_block_p90")) &&
+                strcmp(c->chart_buffer, "indirect"))
+                return eng_fail(err, ENG_ERR_INVALID, "%s: chart.metric %s is measured on the indirect buffer only",
+                                path, c->chart_metric);
         }
     }
     return ENG_OK;

@@ -53,6 +53,8 @@ static double chart_error(const bench_config *c, const bench_point *p)
         return m->block_rmse;
     if (!strcmp(c->chart_metric, "block_p90")) /* indirect only (rep_metric_bias) */
         return p->bias.block_p90;
+    if (!strcmp(c->chart_metric, "flat_block_p90"))
+        return p->bias.flat_block_p90;
     return m->rmse;
 }
 
@@ -93,8 +95,8 @@ static void metric_csv(rep_sb *sb, const rep_metrics_err *m)
 
 static void bias_csv(rep_sb *sb, const rep_metrics_bias *m)
 {
-    rep_sb_printf(sb, ",%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g", m->mean_ratio, m->block_p90, m->edge_ratio,
-                  m->edge_rel_rmse, m->flat_ratio, m->flat_rel_rmse, m->edge_fraction);
+    rep_sb_printf(sb, ",%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g", m->mean_ratio, m->block_p90, m->edge_ratio,
+                  m->edge_rel_rmse, m->flat_ratio, m->flat_rel_rmse, m->edge_fraction, m->flat_block_p90);
 }
 
 static cJSON *bias_json(const rep_metrics_bias *m)
@@ -107,6 +109,7 @@ static cJSON *bias_json(const rep_metrics_bias *m)
     cJSON_AddNumberToObject(o, "flat_ratio", m->flat_ratio);
     cJSON_AddNumberToObject(o, "flat_rel_rmse", m->flat_rel_rmse);
     cJSON_AddNumberToObject(o, "edge_fraction", m->edge_fraction);
+    cJSON_AddNumberToObject(o, "flat_block_p90", m->flat_block_p90);
     return o;
 }
 
@@ -124,7 +127,7 @@ static char *make_csv(const bench_point *pts, int n, const columns *cols, const 
         rep_sb_printf(&sb, ",%s_rmse,%s_rel_mse,%s_mae,%s_max_abs,%s_block_rmse", which[b], which[b], which[b],
                       which[b], which[b]);
     rep_sb_printf(&sb, ",indirect_mean_ratio,indirect_block_p90,indirect_edge_ratio,indirect_edge_rel_rmse,"
-                       "indirect_flat_ratio,indirect_flat_rel_rmse,indirect_edge_fraction");
+                       "indirect_flat_ratio,indirect_flat_rel_rmse,indirect_edge_fraction,indirect_flat_block_p90");
     rep_sb_printf(&sb, ",pareto\n");
     for (int i = 0; i < n; i++) {
         const bench_point *p = &pts[i];

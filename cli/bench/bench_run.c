@@ -219,6 +219,7 @@ static void bias_add(rep_metrics_bias *acc, const rep_metrics_bias *m, double we
     acc->flat_ratio += m->flat_ratio * weight;
     acc->flat_rel_rmse += m->flat_rel_rmse * weight;
     acc->edge_fraction += m->edge_fraction * weight;
+    acc->flat_block_p90 += m->flat_block_p90 * weight;
 }
 
 static void metrics_add(rep_metrics_err *acc, const rep_metrics_err *m, double weight)
@@ -446,10 +447,10 @@ static eng_result run_point(const bench_config *c, const scn_scene *scene, bench
 static void print_bias(const bench_config *c, const bench_point *p)
 {
     const rep_metrics_bias *b = &p->bias;
-    fprintf(stderr, "        indirect mean ratio %.4f  block p90 %.4f  edges (%.0f%% of pixels): ratio %.4f rel rmse %.4f"
-                    "  elsewhere: ratio %.4f rel rmse %.4f\n",
-            b->mean_ratio, b->block_p90, 100.0 * b->edge_fraction, b->edge_ratio, b->edge_rel_rmse, b->flat_ratio,
-            b->flat_rel_rmse);
+    fprintf(stderr, "        indirect mean ratio %.4f  block p90 %.4f (away from edges %.4f)  edges (%.0f%% of pixels): "
+                    "ratio %.4f rel rmse %.4f  elsewhere: ratio %.4f rel rmse %.4f\n",
+            b->mean_ratio, b->block_p90, b->flat_block_p90, 100.0 * b->edge_fraction, b->edge_ratio, b->edge_rel_rmse,
+            b->flat_ratio, b->flat_rel_rmse);
     for (int k = 0; k < c->report_count; k++)
         fprintf(stderr, "        frame %3d (%3d rendered, %9.1f ms): rmse %.4g  mean ratio %.4f  block p90 %.4f  edge ratio %.4f\n",
                 c->frames[c->report_frames[k]], c->report_frames[k] + 1, p->series_ms[k], p->series_err[k].rmse,

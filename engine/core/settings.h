@@ -80,6 +80,22 @@ typedef enum eng_miss_mode {
     ENG_MISS_DROP            /* end the path there (the paper's behaviour) */
 } eng_miss_mode;
 
+/* How the final gather seeds each pixel's gather directions (ind_finalgather.c). */
+typedef enum eng_fg_seed {
+    ENG_FG_SEED_DEFAULT = 0, /* = pixel */
+    ENG_FG_SEED_PIXEL,       /* a hash of the eye position and the pixel */
+    ENG_FG_SEED_SURFACE      /* a hash of the surface point's world cell and normal (003 §4.1) */
+} eng_fg_seed;
+
+/* A named bundle of settings (engine/scene/presets.c) that a sequence's own keys override. */
+typedef enum eng_preset {
+    ENG_PRESET_DEFAULT = 0, /* = none */
+    ENG_PRESET_NONE,        /* no bundle: every setting its own default */
+    ENG_PRESET_DRAFT,
+    ENG_PRESET_INTERACTIVE,
+    ENG_PRESET_CONVERGED
+} eng_preset;
+
 const char *eng_indirect_name(eng_indirect m);
 const char *eng_trace_name(eng_photon_trace m);
 const char *eng_miss_name(eng_miss_mode m);
@@ -152,6 +168,17 @@ typedef struct eng_settings {
      * final gather's lookups, which the gather's rays average, so a small kernel's noise matters
      * less than its edge bias; default 0.25. */
     float final_gather_radius;
+    /* `"final_gather_seed"`: "pixel" (default) or "surface": a still surface seen from a moving
+     * camera gathers along the same directions (ind_finalgather.c). */
+    eng_fg_seed final_gather_seed;
+    /* `"final_gather_cell"`: the world cell (m) that "surface" seeds quantise positions to;
+     * default 0.01. */
+    float final_gather_cell;
+    /* `"final_gather_reuse": N`: a pixel's gathered light is reused by reprojection for up to
+     * N frames while it shows the same surface and nothing in the scene moved; 1 (default): off. */
+    int final_gather_reuse;
+    /* `"preset"`: the bundle the sequence's settings were expanded from (recorded only). */
+    eng_preset preset;
 } eng_settings;
 
 /* Fills every field still 0 (or "") with its default from settings.def. */

@@ -25,7 +25,23 @@
  * read from the random maps at a hash of the same with the frame's salt, then the frame's
  * Cranley–Patterson rotation of "random": "stratified" (002 §4.2; bsdf_stratify): a still
  * camera draws the same directions every frame with the precomputed maps, new ones per frame or
- * per stratum otherwise.
+ * per stratum otherwise. `"final_gather_seed": "surface"` hashes, instead of the eye and the
+ * pixel, the surface point's world cell (`final_gather_cell`, the point first moved half a cell
+ * along its normal so that a wall's cells do not straddle it) and its normal rounded to halves,
+ * as the random maps are seeded by scene quantities (003 §4.1): a still surface seen from a
+ * moving camera gathers along the same directions, so its light does not flicker with the eye.
+ *
+ * Reuse (`"final_gather_reuse": N` > 1): each pixel keeps its gathered light with an age. A
+ * pixel whose surface point the previous frame's camera projects onto a pixel that showed the
+ * same surface (same material and albedo, normals within 0.9, positions within the pixel's
+ * footprint) takes that pixel's light when its age is below N - 1 and nothing in the scene moved
+ * since (no draw's transform, no deformed draw, no light pose changed); every other pixel
+ * gathers. A pixel's first gather gets an age from a hash of the pixel in 0..N-1, so that about
+ * 1/N of the pixels gather afresh in each frame of a still view rather than all of them every
+ * N frames. Disocclusions and changed lighting gather at once. The glossy share (irradiance mode)
+ * is reused with it, view-dependent as it is; in radiance mode glossy pixels always gather.
+ * With a still camera and the precomputed maps a reused pixel holds the bits a new gather would
+ * give, so the frames are bit-identical to those of N = 1.
  *
  * Determinism: every pixel is computed by one thread with a fixed amount of work (its rays in
  * order, each gather summing in photon-index order), so the image is bit-identical for any
@@ -50,6 +66,13 @@ typedef struct fg_state {
     eng_photon_map caustic;  /* the frame's caustic photons (eng_photon.caustic) */
     float *caustic_radius;   /* their r_xy, as the kernel methods use them */
     size_t caustic_cap;
+    /* Reuse (final_gather_reuse > 1): the previous frame's G-buffer, light, ages, camera and
+     * scene key; have_prev 0 after a reset. */
+    int have_prev;
+    float *prev_pos, *prev_nrm, *prev_alb, *prev_mat, *prev_out, *prev_glossy;
+    int *age, *prev_age;
+    float prev_vp[16];
+    uint64_t prev_key;
 } fg_state;
 
 static void fg_destroy(void *state)
@@ -61,7 +84,25 @@ static void fg_destroy(void *state)
     free(k->radius);
     free(k->caustic.photons);
     free(k->caustic_radius);
+    free(k->prev_pos);
+    free(k->prev_nrm);
+    free(k->prev_alb);
+    free(k->prev_mat);
+    free(k->prev_out);
+    free(k->prev_glossy);
+    free(k->age);
+    free(k->prev_age);
     free(k);
+}
+
+static void fg_reset(void *state)
+{
+    ((fg_state *)state)->have_prev = 0;
+}
+
+static int fg_history(const eng_settings *s)
+{
+    return s->final_gather_reuse > 1;
 }
 
 static eng_result fg_create(int width, int height, int irradiance, void **state, eng_error *err)
@@ -100,7 +141,28 @@ typedef struct fg_ctx {
     const float *eye;
     uint32_t log2n, rays;
     float *out, *glossy;
+    int surface;    /* final_gather_seed "surface" */
+    float cell;     /* its world cell (m) */
 } fg_ctx;
+
+/* The pattern and jitter seeds of a pixel's gather directions (the header's Random numbers). */
+static void fg_seeds(const fg_ctx *c, int x, int y, const float p[3], const float n[3], uint32_t *pattern,
+                     uint32_t *seed)
+{
+    if (!c->surface) {
+        *pattern = rmap_hash_pixel(c->eye, (uint32_t)x, (uint32_t)y, 0u, c->rf->strata_salt ^ FG_SALT);
+        *seed = rmap_hash_pixel(c->eye, (uint32_t)x, (uint32_t)y, 1u, c->rf->salt ^ FG_SALT);
+        return;
+    }
+    float q[3];
+    uint32_t nq = 0;
+    for (int k = 0; k < 3; k++) {
+        q[k] = floorf((p[k] + 0.5f * c->cell * n[k]) / c->cell) + 0.0f; /* + 0: no -0 */
+        nq = nq * 5u + (uint32_t)(lrintf(n[k] * 2.0f) + 2);
+    }
+    *pattern = rmap_hash_pixel(q, nq, 0u, 2u, c->rf->strata_salt ^ FG_SALT);
+    *seed = rmap_hash_pixel(q, nq, 1u, 2u, c->rf->salt ^ FG_SALT);
+}
 
 /* Pixel (x, y): out (and glossy in irradiance mode) as the header says. */
 static void fg_pixel(const fg_ctx *c, int x, int y, eye_scratch *sc)
@@ -128,8 +190,8 @@ static void fg_pixel(const fg_ctx *c, int x, int y, eye_scratch *sc)
     const float eps = bsdf_offset_eps(p);
     for (int k = 0; k < 3; k++)
         org[k] = p[k] + eps * n[k];
-    const uint32_t pattern = rmap_hash_pixel(c->eye, (uint32_t)x, (uint32_t)y, 0u, c->rf->strata_salt ^ FG_SALT);
-    const uint32_t seed = rmap_hash_pixel(c->eye, (uint32_t)x, (uint32_t)y, 1u, c->rf->salt ^ FG_SALT);
+    uint32_t pattern, seed;
+    fg_seeds(c, x, y, p, n, &pattern, &seed);
     const uint32_t mask = c->rm->size - 1u;
     const float inv_n = 1.0f / (float)c->rays;
     float sum[3] = {0.0f, 0.0f, 0.0f}, gsum[3] = {0.0f, 0.0f, 0.0f};
@@ -173,6 +235,153 @@ static void fg_pixel(const fg_ctx *c, int x, int y, eye_scratch *sc)
             gl[j] = gsum[j] * inv_n + cgl[j];
     }
     acc[3] = met;
+}
+
+/* FNV-1a over n bytes, continuing from h. */
+static uint64_t fnv64(uint64_t h, const void *data, size_t n)
+{
+    const unsigned char *b = data;
+    for (size_t i = 0; i < n; i++)
+        h = (h ^ b[i]) * 0x100000001b3ull;
+    return h;
+}
+
+/* The key of what the gathered light depends on besides the camera: every draw's transform
+ * and every light's pose. *comparable 0 when a draw is deformed (its vertices move without a
+ * transform changing), so no frame's light may be reused. */
+static uint64_t scene_key(const eng_frame_scene *fs, int *comparable)
+{
+    uint64_t h = 0xcbf29ce484222325ull;
+    *comparable = 1;
+    for (uint32_t i = 0; i < fs->draw_count; i++) {
+        h = fnv64(h, fs->draws[i].world, sizeof fs->draws[i].world);
+        if (fs->draws[i].positions)
+            *comparable = 0;
+    }
+    for (uint32_t i = 0; i < fs->light_count; i++) {
+        const eng_light_pose *l = &fs->lights[i];
+        h = fnv64(h, l->position, sizeof l->position);
+        h = fnv64(h, l->direction, sizeof l->direction);
+        h = fnv64(h, l->radiance_scale, sizeof l->radiance_scale);
+        h = fnv64(h, &l->range, sizeof l->range);
+        h = fnv64(h, &l->inner_cone, sizeof l->inner_cone);
+        h = fnv64(h, &l->outer_cone, sizeof l->outer_cone);
+        h = fnv64(h, &l->radius, sizeof l->radius);
+    }
+    return h;
+}
+
+int fg_reproject(const float vp[16], int w, int h, const float p[3], int *x, int *y)
+{
+    float c[4];
+    for (int r = 0; r < 4; r++)
+        c[r] = vp[r] * p[0] + vp[4 + r] * p[1] + vp[8 + r] * p[2] + vp[12 + r];
+    if (!(c[3] > 0.0f))
+        return 0;
+    const float fx = (c[0] / c[3] * 0.5f + 0.5f) * (float)w, fy = (0.5f - c[1] / c[3] * 0.5f) * (float)h;
+    if (!(fx >= 0.0f && fx < (float)w && fy >= 0.0f && fy < (float)h))
+        return 0;
+    *x = (int)fx;
+    *y = (int)fy;
+    return 1;
+}
+
+int fg_same_surface(const float p[4], const float n[3], const float alb[3], const float mat[4], const float q[4],
+                    const float nq[3], const float albq[3], const float matq[4], float tolerance)
+{
+    if (q[3] == 0.0f || memcmp(alb, albq, 3 * sizeof *alb) != 0 || memcmp(mat, matq, 4 * sizeof *mat) != 0)
+        return 0;
+    if (n[0] * nq[0] + n[1] * nq[1] + n[2] * nq[2] < 0.9f)
+        return 0;
+    const float d[3] = {p[0] - q[0], p[1] - q[1], p[2] - q[2]};
+    return d[0] * d[0] + d[1] * d[1] + d[2] * d[2] <= tolerance * tolerance;
+}
+
+/* A pixel's first age: a hash of the pixel in 0..n-1, so that first gathers expire spread over
+ * n frames. */
+static int first_age(int x, int y, int n)
+{
+    uint32_t h = (uint32_t)x * 0x9e3779b1u ^ (uint32_t)y * 0x85ebca77u;
+    h ^= h >> 15;
+    h *= 0x2c1b3c6du;
+    h ^= h >> 12;
+    return (int)(h % (uint32_t)n);
+}
+
+typedef struct fg_reuse {
+    const fg_state *k;
+    int n;          /* final_gather_reuse */
+    int valid;      /* the previous frame's light may be reused at all */
+    int irradiance;
+    const float *eye;
+    float px_scale; /* world size of a pixel at unit distance */
+} fg_reuse;
+
+/* Pixel (x, y) takes the previous frame's light when the header's test allows it: returns 1
+ * with out/glossy/age filled, else 0 (the pixel gathers). */
+static int fg_reuse_pixel(const fg_reuse *u, int x, int y, float *out, float *glossy, int *age)
+{
+    const fg_state *k = u->k;
+    const glu_gbuffer *gb = &k->c.gb;
+    const int w = gb->width, h = gb->height;
+    const size_t i = (size_t)y * (size_t)w + (size_t)x;
+    const float *p = gb->position + 4 * i, *mat = gb->material + 4 * i;
+    if (!u->valid || p[3] == 0.0f || (!u->irradiance && mat[1] > 0.0f))
+        return 0;
+    int qx, qy;
+    if (!fg_reproject(k->prev_vp, w, h, p, &qx, &qy))
+        return 0;
+    const size_t j = (size_t)qy * (size_t)w + (size_t)qx;
+    if (k->prev_age[j] + 1 >= u->n)
+        return 0;
+    const float *n = gb->normal + 3 * i;
+    const float v[3] = {u->eye[0] - p[0], u->eye[1] - p[1], u->eye[2] - p[2]};
+    const float dist = sqrtf(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+    const float cosv = dist > 0.0f ? fabsf(n[0] * v[0] + n[1] * v[1] + n[2] * v[2]) / dist : 1.0f;
+    const float tol = 1.5f * u->px_scale * dist / fmaxf(cosv, 0.25f);
+    if (!fg_same_surface(p, n, gb->albedo + 3 * i, mat, k->prev_pos + 4 * j, k->prev_nrm + 3 * j,
+                         k->prev_alb + 3 * j, k->prev_mat + 4 * j, tol))
+        return 0;
+    memcpy(out, k->prev_out + 4 * j, 4 * sizeof *out);
+    if (glossy)
+        memcpy(glossy, k->prev_glossy + 4 * j, 4 * sizeof *glossy);
+    *age = k->prev_age[j] + 1;
+    return 1;
+}
+
+/* Grows the reuse arrays to the G-buffer's size (first use). */
+static void reuse_alloc(fg_state *k)
+{
+    if (k->age)
+        return;
+    const size_t n = (size_t)k->c.width * (size_t)k->c.height;
+    k->prev_pos = eng_xmalloc(4 * n * sizeof(float));
+    k->prev_nrm = eng_xmalloc(3 * n * sizeof(float));
+    k->prev_alb = eng_xmalloc(3 * n * sizeof(float));
+    k->prev_mat = eng_xmalloc(4 * n * sizeof(float));
+    k->prev_out = eng_xmalloc(4 * n * sizeof(float));
+    k->prev_glossy = k->c.glossy ? eng_xmalloc(4 * n * sizeof(float)) : NULL;
+    k->age = eng_xmalloc(n * sizeof(int));
+    k->prev_age = eng_xmalloc(n * sizeof(int));
+}
+
+/* Keeps this frame's G-buffer, light, ages and camera for the next frame's reuse. */
+static void reuse_keep(fg_state *k, const float vp[16], uint64_t key)
+{
+    const size_t n = (size_t)k->c.width * (size_t)k->c.height;
+    memcpy(k->prev_pos, k->c.gb.position, 4 * n * sizeof(float));
+    memcpy(k->prev_nrm, k->c.gb.normal, 3 * n * sizeof(float));
+    memcpy(k->prev_alb, k->c.gb.albedo, 3 * n * sizeof(float));
+    memcpy(k->prev_mat, k->c.gb.material, 4 * n * sizeof(float));
+    memcpy(k->prev_out, k->c.out, 4 * n * sizeof(float));
+    if (k->prev_glossy)
+        memcpy(k->prev_glossy, k->c.glossy, 4 * n * sizeof(float));
+    int *t = k->prev_age;
+    k->prev_age = k->age;
+    k->age = t;
+    memcpy(k->prev_vp, vp, sizeof k->prev_vp);
+    k->prev_key = key;
+    k->have_prev = 1;
 }
 
 /* Copies the map's caustic photons and their radii into k->caustic; returns their count. */
@@ -246,18 +455,47 @@ static eng_result fg_run(void *state, const ind_input *in, ind_output *out, eng_
                       log2n,
                       1u << (2 * log2n),
                       k->c.out,
-                      k->c.glossy};
+                      k->c.glossy,
+                      in->s->final_gather_seed == ENG_FG_SEED_SURFACE,
+                      in->s->final_gather_cell};
     const int w = k->c.width, h = k->c.height;
     int threads = in->s->threads > 0 ? in->s->threads : 2;
+    fg_reuse u = {k, in->s->final_gather_reuse, 0, k->c.glossy != NULL, in->fs->camera.eye, 0.0f};
+    int comparable = 1;
+    uint64_t key = 0;
+    if (u.n > 1) {
+        reuse_alloc(k);
+        key = scene_key(in->fs, &comparable);
+        u.valid = k->have_prev && comparable && key == k->prev_key;
+        /* proj[5] = cot(fov_y / 2): a pixel spans 2·d / (proj[5]·h) at distance d. */
+        const float p5 = in->fs->camera.proj[5];
+        u.px_scale = p5 > 0.0f ? 2.0f / (p5 * (float)h) : 0.0f;
+    }
 #pragma omp parallel num_threads(threads)
     {
         eye_scratch sc = {NULL, 0};
 #pragma omp for schedule(dynamic, 1)
         for (int y = 0; y < h; y++)
-            for (int x = 0; x < w; x++)
+            for (int x = 0; x < w; x++) {
+                if (u.n <= 1) {
+                    fg_pixel(&c, x, y, &sc);
+                    continue;
+                }
+                const size_t i = (size_t)y * (size_t)w + (size_t)x;
+                if (fg_reuse_pixel(&u, x, y, k->c.out + 4 * i, k->c.glossy ? k->c.glossy + 4 * i : NULL,
+                                   &k->age[i]))
+                    continue;
+                /* A pixel that had light to reuse but whose age ran out starts again at 0. */
+                int qx, qy;
+                const int expired = u.valid && fg_reproject(k->prev_vp, w, h, k->c.gb.position + 4 * i, &qx, &qy) &&
+                                    k->prev_age[(size_t)qy * (size_t)w + (size_t)qx] + 1 >= u.n;
+                k->age[i] = expired ? 0 : first_age(x, y, u.n);
                 fg_pixel(&c, x, y, &sc);
+            }
         free(sc.list);
     }
+    if (u.n > 1)
+        reuse_keep(k, in->fs->camera.view_proj, comparable ? key : ~key);
     eye_tracer_destroy(t);
     if (have_caustic)
         kd_tree_free(&ctree);
@@ -274,4 +512,6 @@ const ind_method ind_finalgather_method = {
     .run = fg_run,
     .destroy = fg_destroy,
     .traced_gather = 1,
+    .history = fg_history,
+    .reset = fg_reset,
 };

@@ -78,6 +78,12 @@ typedef struct ind_method {
      * kernels evaluated there, so the boundary correction (boundary.h) has nothing to correct
      * and the engine refuses it; 0 for the kernel methods. */
     int traced_gather;
+    /* Optional, NULL for none: 1 when, under settings s, a run's result depends on earlier
+     * frames (the method keeps a history, as temporal accumulation does). The engine then
+     * renders frames in order (rebuilding the history for a frame asked out of order) and calls
+     * reset wherever it restarts the temporal state. */
+    int (*history)(const eng_settings *s);
+    void (*reset)(void *state);
 } ind_method;
 
 /* What the frame loop announces of a method's target (ind_output), <m> its prefix: radiance
@@ -185,6 +191,15 @@ typedef struct splat_bounds {
  * float) is inside the rectangle. */
 int splat_photon_bounds(const float view_proj[16], const float proj[16], const splat_tiles *t, const float x[3],
                         const float n[3], float r_xy, float r_z, splat_bounds *out);
+
+/* The final gather's reuse test (ind_finalgather.c), for its tests. fg_reproject: the pixel of a
+ * w×h image (top row first) onto which view_proj projects world point p; 0 when p is behind the
+ * camera or off the image. fg_same_surface: whether G-buffer samples (position with coverage,
+ * normal, albedo, material) p and q show the same surface: q covered, the same albedo and
+ * material bits, normals within 0.9 and positions within `tolerance` metres. */
+int fg_reproject(const float view_proj[16], int w, int h, const float p[3], int *x, int *y);
+int fg_same_surface(const float p[4], const float n[3], const float alb[3], const float mat[4], const float q[4],
+                    const float nq[3], const float albq[3], const float matq[4], float tolerance);
 
 /* k-d tree gather (ind_kdgather.c), the traditional photon mapping baseline (003_… Appendix A):
  * outgoing indirect radiance at each eye G-buffer pixel from the photons of `map` whose

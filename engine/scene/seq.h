@@ -74,6 +74,11 @@ eng_result seq_load(const char *path, seq_sequence *out, eng_error *err);
 /* Same, from memory; path is only used in messages and to resolve the scene path. */
 eng_result seq_parse(const char *path, const char *json, size_t len, seq_sequence *out, eng_error *err);
 
+/* The settings object (JSON text) that `"preset"` p expands to, or NULL for none (presets.c).
+ * The parser applies it before the sequence's own keys, which override it; the manifest then
+ * records the preset and every setting as expanded. */
+const char *seq_preset_settings(eng_preset p);
+
 /* Loads the sequence's scene (seq->scene_path) as the sequence chooses it: its glTF scene
  * scene_index, only the animations it names (an unknown name or index is ENG_ERR_INVALID),
  * its lights added as root nodes after the glTF's, and a warning when the result has no

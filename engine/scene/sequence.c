@@ -15,7 +15,8 @@
  *               (up to SEQ_MAX_CAMKEYS keys, times strictly increasing; defaults up (0,1,0),
  *               40°, 0.05, 100)
  *   settings    optional; the keys of engine/core/settings.def (docs/settings.md), each
- *               checked as its line says; absent ones get eng_settings_defaults
+ *               checked as its line says; absent ones get eng_settings_defaults. A "preset"
+ *               key applies its bundle (presets.c) first; the other keys override it
  *   capture     optional; 1..SEQ_MAX_CAPTURE fnmatch globs of buffer names; absent means all
  *   scene_index optional; which of the glTF's scenes is played (default: its default scene)
  *   animations  optional; [name or index, ...] of the glTF animations played (default: all)
@@ -248,6 +249,28 @@ static eng_result parse_settings(parser *P, const cJSON *obj, eng_settings *s)
         return bad(P, "settings: expected an object, got %s", show(obj, v, sizeof v));
     if ((r = check_keys(P, obj, "settings", keys)))
         return r;
+    /* A preset's settings first (checked as the sequence's own would be), then the sequence's
+     * own keys over them. */
+    const eng_setting *pd = eng_setting_find("preset");
+    const cJSON *pit = cJSON_GetObjectItemCaseSensitive(obj, "preset");
+    if (pd && pit) {
+        if ((r = parse_setting(P, pd, pit, s)))
+            return r;
+        const char *text = seq_preset_settings(s->preset);
+        cJSON *preset = text ? cJSON_Parse(text) : NULL;
+        if (text && !preset) { /* a programmer error: presets.c's text is not JSON */
+            fprintf(stderr, "ispm: preset %s: not a JSON object\n", pit->valuestring);
+            abort();
+        }
+        for (int i = 0; preset && i < count; i++) {
+            const cJSON *it = cJSON_GetObjectItemCaseSensitive(preset, table[i].key);
+            if (it && (r = parse_setting(P, &table[i], it, s))) {
+                cJSON_Delete(preset);
+                return r;
+            }
+        }
+        cJSON_Delete(preset);
+    }
     for (int i = 0; i < count; i++) {
         const cJSON *it = cJSON_GetObjectItemCaseSensitive(obj, table[i].key);
         if (it && (r = parse_setting(P, &table[i], it, s)))

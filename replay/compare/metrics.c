@@ -123,11 +123,14 @@ void rep_metric_bias(const float *test, const float *ref, int w, int h, const si
     const int B = REP_METRIC_BLOCK;
     const int bw = (w + B - 1) / B, bh = (h + B - 1) / B;
     double *bt = calloc((size_t)bw * bh, sizeof *bt), *br = calloc((size_t)bw * bh, sizeof *br);
-    double *rel = calloc((size_t)bw * bh, sizeof *rel);
-    if (!bt || !br || !rel) {
+    double *rel = calloc((size_t)bw * bh, sizeof *rel), *frel = calloc((size_t)bw * bh, sizeof *frel);
+    unsigned char *edged = calloc((size_t)bw * bh, 1);
+    if (!bt || !br || !rel || !frel || !edged) {
         free(bt);
         free(br);
         free(rel);
+        free(frel);
+        free(edged);
         return;
     }
     for (int y = 0; y < h; y++)
@@ -135,27 +138,39 @@ void rep_metric_bias(const float *test, const float *ref, int w, int h, const si
             size_t i = (size_t)y * (size_t)w + (size_t)x, b = (size_t)(y / B) * bw + (size_t)(x / B);
             bt[b] += ((double)test[3 * i] + test[3 * i + 1] + test[3 * i + 2]) / 3.0;
             br[b] += ((double)ref[3 * i] + ref[3 * i + 1] + ref[3 * i + 2]) / 3.0;
+            if (mask && mask[i] == 1)
+                edged[b] = 1;
         }
     /* Block sums of equal pixel counts compare like block means; the threshold uses means. */
     double mean_r = sr / (double)npix;
-    int nb = 0;
+    int nb = 0, nf = 0;
     for (int by = 0; by < bh; by++)
         for (int bx = 0; bx < bw; bx++) {
             size_t b = (size_t)by * bw + (size_t)bx;
             int pw = (bx * B + B <= w ? B : w - bx * B), ph = (by * B + B <= h ? B : h - by * B);
             double r = br[b] / (pw * ph), t = bt[b] / (pw * ph);
-            if (r > 0.0 && r >= REP_BLOCK_MIN_FRACTION * mean_r)
+            if (r > 0.0 && r >= REP_BLOCK_MIN_FRACTION * mean_r) {
                 rel[nb++] = fabs(t - r) / r;
+                if (!edged[b])
+                    frel[nf++] = fabs(t - r) / r;
+            }
         }
+    /* Nearest rank: the smallest value with at least 90 % of the blocks at or below it. */
     if (nb) {
         qsort(rel, (size_t)nb, sizeof *rel, cmp_dbl);
-        /* Nearest rank: the smallest value with at least 90 % of the blocks at or below it. */
         int k = (int)ceil(0.9 * nb) - 1;
         out->block_p90 = rel[k < 0 ? 0 : k];
+    }
+    if (nf) {
+        qsort(frel, (size_t)nf, sizeof *frel, cmp_dbl);
+        int k = (int)ceil(0.9 * nf) - 1;
+        out->flat_block_p90 = frel[k < 0 ? 0 : k];
     }
     free(bt);
     free(br);
     free(rel);
+    free(frel);
+    free(edged);
 }
 
 void rep_edge_mask(const float *position, const float *normal, int w, int h, const float view_proj[16],

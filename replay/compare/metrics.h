@@ -43,6 +43,8 @@ eng_result rep_metric_compute(const float *test, const float *ref, int w, int h,
  *   block_p90      8×8 blocks: |mean t − mean r| / mean r per block, its 90th percentile over
  *                  the blocks whose mean r is at least REP_BLOCK_MIN_FRACTION of the image's
  *                  mean (black blocks have no relative error)
+ *   flat_block_p90 the same over the blocks away from geometric edges: those with no pixel of
+ *                  the edge mask (mask ≠ 1; = block_p90 without a mask)
  *   edge_*, flat_* the same ratio, and the relative RMSE √(mean (t − r)²) / mean r, over the
  *                  pixels of the edge mask (mask ≠ 0) and over the other surface pixels
  *                  (mask = 0); edge_fraction: the edge pixels over the surface pixels
@@ -52,6 +54,7 @@ eng_result rep_metric_compute(const float *test, const float *ref, int w, int h,
 typedef struct rep_metrics_bias {
     double mean_ratio, block_p90;
     double edge_ratio, edge_rel_rmse, flat_ratio, flat_rel_rmse, edge_fraction;
+    double flat_block_p90;
 } rep_metrics_bias;
 
 void rep_metric_bias(const float *test, const float *ref, int w, int h, const signed char *mask,
