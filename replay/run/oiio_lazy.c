@@ -5,8 +5,10 @@
  * machine although recording never reads or writes an image through it. The
  * C++ shims (oiio_shim.cpp, png_shim.cpp) are therefore a separate module, libispm_oiio.so,
  * which the first call here dlopens (once, thread-safely: replay decodes on several threads).
- * Where: $ISPM_OIIO_MODULE if set, else the path CMake built it at (ISPM_OIIO_MODULE_PATH). A
- * module that cannot be loaded is an ENG_ERR_IO naming the file asked for and the module.
+ * Where: $ISPM_OIIO_MODULE if set, else the path CMake built it at (ISPM_OIIO_MODULE_PATH), else
+ * where `cmake --install` puts it (ISPM_OIIO_MODULE_INSTALLED), so that an installed ispm works
+ * once its build folder is gone. A module that cannot be loaded is an ENG_ERR_IO naming the file
+ * asked for and the module.
  * rep_parts_free only frees C memory and needs no module.
  */
 #define _GNU_SOURCE
@@ -20,6 +22,9 @@
 
 #ifndef ISPM_OIIO_MODULE_PATH
 #error "ISPM_OIIO_MODULE_PATH (the built libispm_oiio.so) must be defined by the build"
+#endif
+#ifndef ISPM_OIIO_MODULE_INSTALLED
+#define ISPM_OIIO_MODULE_INSTALLED ISPM_OIIO_MODULE_PATH
 #endif
 
 typedef eng_result (*read_parts_fn)(const char *, size_t, rep_part **, int *, eng_error *);
@@ -47,6 +52,11 @@ static void load_module(void)
     const char *env = getenv("ISPM_OIIO_MODULE");
     g_mod.where = env && *env ? env : ISPM_OIIO_MODULE_PATH;
     void *h = dlopen(g_mod.where, RTLD_NOW | RTLD_LOCAL);
+    if (!h && !(env && *env)) {
+        h = dlopen(ISPM_OIIO_MODULE_INSTALLED, RTLD_NOW | RTLD_LOCAL);
+        if (h)
+            g_mod.where = ISPM_OIIO_MODULE_INSTALLED;
+    }
     if (!h) {
         copy_why(dlerror());
         return;
