@@ -6,7 +6,9 @@ Run:  scripts/man_pages.py [ISPM] [--check]    (ISPM: default build/cli/ispm)
 
 --check writes nothing and exits 1 when docs/man/ispm.1 differs from what it would write.
 Also:  scripts/man_pages.py --commands FILE    prints the commands listed in a man page (one a
-line), for tests/e2e_docs.sh to compare with `ispm --help`.
+line), for tests/e2e_docs.sh to compare with `ispm --help`;
+       scripts/man_pages.py --exit-codes ISPM    exits 1 when the codes the template's EXIT STATUS
+gives a command differ from those its --help gives (the two places exit codes are written).
 """
 import os
 import re
@@ -97,11 +99,50 @@ def commands_of(path):
     return names
 
 
+CODE = re.compile(r"(?:^|[:;,]\s+|\n)(\d+)(?=[\s;]|$)")
+
+
+def codes_in(text):
+    return sorted({int(c) for c in CODE.findall(text)})
+
+
+def exit_status_codes(path):
+    """{command: [codes]} of a page's EXIT STATUS entries (.TP, .B "a, b", then the text)."""
+    with open(path) as f:
+        text = f.read()
+    m = re.search(r"^\.SH EXIT STATUS\n(.*?)^\.SH ", text, re.S | re.M)
+    out = {}
+    for entry in re.split(r"^\.TP\n", m.group(1) if m else "", flags=re.M)[1:]:
+        head, _, body = entry.partition("\n")
+        body = re.sub(r"^\.\w+ ?", "", body, flags=re.M)
+        for name in head[3:].split(","):
+            out[name.strip()] = codes_in(body)
+    return out
+
+
+def exit_mismatches(ispm):
+    documented = exit_status_codes(os.path.join(ROOT, "docs", "man", "ispm.1.in"))
+    bad = []
+    for name, _ in help_commands(ispm):
+        res = subprocess.run([ispm, name, "--help"], capture_output=True, text=True)
+        m = re.search(r"^exit\b.*", res.stdout, re.S | re.M)
+        helped = codes_in(m.group(0)) if m else []
+        if name not in documented:
+            bad.append("%s: no EXIT STATUS entry in docs/man/ispm.1.in" % name)
+        elif documented[name] != helped:
+            bad.append("%s: EXIT STATUS gives %s, --help gives %s" % (name, documented[name], helped))
+    return bad
+
+
 def main():
     args = sys.argv[1:]
     if args[:1] == ["--commands"] and len(args) == 2:
         print("\n".join(commands_of(args[1])))
         return 0
+    if args[:1] == ["--exit-codes"] and len(args) == 2:
+        bad = exit_mismatches(args[1])
+        print("\n".join(bad) if bad else "exit codes: EXIT STATUS and --help agree")
+        return 1 if bad else 0
     check = "--check" in args
     args = [a for a in args if a != "--check"]
     ispm = args[0] if args else os.path.join(ROOT, "build", "cli", "ispm")

@@ -2,9 +2,10 @@
 # The user documentation can be followed: README.md is short and shows the two commands; the
 # CHANGELOG keeps an Unreleased section; the sequence example equals the CI sequence; no user doc
 # names an issue or a session (and the scan catches one that does); docs/man/ispm.1 is what
-# scripts/man_pages.py makes of today's --help and lists exactly the commands `ispm --help` lists;
-# both man pages render without a warning; `cmake --install` installs the programs and the pages
-# where man finds them; bench/record.sh writes a complete record; every relative link (and #anchor into a Markdown page) resolves.
+# scripts/man_pages.py makes of today's --help, lists exactly the commands `ispm --help` lists and
+# gives each command the exit codes its --help gives; both man pages render without a warning;
+# `cmake --install` installs the programs and the pages where man finds them; bench/record.sh
+# writes a complete record; every relative link (and #anchor into a Markdown page) resolves.
 # usage: e2e_docs.sh ISPM SOURCE_DIR WORK_DIR
 set -u
 ISPM=$1; SRC=$2; WORK=$3
@@ -44,8 +45,9 @@ python3 "$SRC/scripts/man_pages.py" --commands "$SRC/docs/man/ispm.1" > "$WORK/m
 diff "$WORK/help_commands.txt" "$WORK/man_commands.txt" || fail "the commands of ispm.1 differ from ispm --help's"
 for cmd in $(cat "$WORK/help_commands.txt"); do
   grep -q "^\.SS $cmd\$" "$SRC/docs/man/ispm.1" || fail "ispm.1 has no options section for $cmd"
-  grep -q "^\.B $cmd\$" "$SRC/docs/man/ispm.1" || fail "ispm.1 has no EXIT STATUS entry for $cmd"
 done
+# Every command's EXIT STATUS entry gives the codes its --help gives.
+python3 "$SRC/scripts/man_pages.py" --exit-codes "$ISPM" || fail "EXIT STATUS in docs/man/ispm.1.in and --help disagree"
 
 # Both pages render, without a warning.
 for page in ispm.1 ispm-view.1; do
