@@ -3,7 +3,8 @@
 # CHANGELOG keeps an Unreleased section; the sequence example equals the CI sequence; no user doc
 # names an issue or a session (and the scan catches one that does); docs/man/ispm.1 is what
 # scripts/man_pages.py makes of today's --help, lists exactly the commands `ispm --help` lists and
-# gives each command the exit codes its --help gives; both man pages render without a warning;
+# gives each command the exit codes its --help gives; ispm-view.1 documents every option of
+# ispm-view --help; both man pages render without a warning;
 # `cmake --install` installs the programs and the pages where man finds them; bench/record.sh
 # writes a complete record; every relative link (and #anchor into a Markdown page) resolves.
 # usage: e2e_docs.sh ISPM SOURCE_DIR WORK_DIR
@@ -57,6 +58,14 @@ for page in ispm.1 ispm-view.1; do
   [ "$(wc -l < "$WORK/$page.txt")" -ge 40 ] || fail "docs/man/$page renders to too little text"
 done
 grep -q 'EXIT STATUS' "$WORK/ispm.1.txt" || fail "ispm.1 renders without EXIT STATUS"
+# ispm-view(1) (hand-written) documents every option the viewer's --help lists.
+if [ -x "$BUILD/viewer/ispm-view" ]; then
+  "$BUILD/viewer/ispm-view" --help | grep -o -- '--[a-z][a-z-]*' | sort -u > "$WORK/view_options.txt"
+  [ -s "$WORK/view_options.txt" ] || fail "ispm-view --help lists no options"
+  for opt in $(cat "$WORK/view_options.txt"); do
+    grep -qF -- "$opt" "$WORK/ispm-view.1.txt" || fail "ispm-view.1 does not document $opt"
+  done
+fi
 
 # cmake --install: the programs, the module and the pages, where man finds them.
 cmake --install "$BUILD" --prefix "$WORK/prefix" > "$WORK/install.txt" 2>&1 || { cat "$WORK/install.txt"; fail "cmake --install failed"; }
