@@ -1,7 +1,8 @@
 /* ispm.c — the one command-line tool: `record` a sequence into a run (engine + capture),
  * `replay` a run against a golden (replay), `bless` a run as the new golden. Options are
  * parsed with getopt_long; every subcommand has --help. Exit codes are what CI scripts rely
- * on and are listed in usage() and the README. */
+ * on and are listed in each command's usage(), from which docs/man/ispm.1 is generated
+ * (scripts/man_pages.py). */
 #define _POSIX_C_SOURCE 200809L
 #include "cap.h"
 #include "eng.h"

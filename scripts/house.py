@@ -17,10 +17,14 @@ build*/ folders and generated files left out):
   4. header lengths, longest first, flagging those over 350 lines;
   5. settings keys (engine/core/settings.def X-macros, else the keys sequence.c's settings parser
      accepts): how many source files hold each key as a string literal "key";
-  6. comment lines naming an issue, session or stop number (history kept in comments).
+  6. comment lines naming an issue, session or stop number (history kept in comments);
+  7. the same in the user documentation (README.md, CHANGELOG.md, docs/: Markdown and man pages),
+     line by line: user docs say what the tool does, and name a commit where they date a figure.
 A summary ends the report. --json prints the same data as JSON. --check exits 1 when there is any
-cycle, a header over 350 lines, a history reference, "kernel_radius" in more than 2 sources, or no
-build to measure the call graph on; without --check it exits 0.
+cycle, a header over 350 lines, a history reference (comments or user docs), "kernel_radius" in
+more than 2 sources, or no build to measure the call graph on; without --check it exits 0.
+--docs DIR measures item 7 alone, on the checkout at DIR (no build needed; with --check it exits 1
+on any reference).
 Needs Python 3 and binutils' nm only.
 """
 import argparse
@@ -41,6 +45,30 @@ GENERATED = {"gl_loader.h", "glsl_sources.c", "gl_loader.c", "ispm_git_rev.h"}
 HEADER_MAX = 350
 HISTORY = re.compile(r"\b(issue|session|stop)s? ?#?\d+", re.I)
 TOKEN = re.compile(r"""//[^\n]*|/\*.*?\*/|"(?:\\.|[^"\\\n])*"|'(?:\\.|[^'\\\n])*'""", re.S)
+
+
+DOC_EXT = (".md", ".1", ".in")
+
+
+def doc_files(root):
+    """The user documentation: README.md, CHANGELOG.md and docs/ (Markdown, man pages)."""
+    out = [f for f in ("README.md", "CHANGELOG.md") if os.path.isfile(os.path.join(root, f))]
+    for d, dirs, names in os.walk(os.path.join(root, "docs")):
+        dirs.sort()
+        out += [os.path.relpath(os.path.join(d, n), root) for n in sorted(names) if n.endswith(DOC_EXT)]
+    return out
+
+
+def docs_history(root):
+    """'file:line: text' for every line of the user documentation naming an issue, session or
+    stop number."""
+    hits = []
+    for f in doc_files(root):
+        with open(os.path.join(root, f), encoding="utf-8", errors="replace") as fh:
+            for ln, line in enumerate(fh, 1):
+                if HISTORY.search(line):
+                    hits.append("%s:%d: %s" % (f, ln, line.strip()[:100]))
+    return hits
 
 
 def rel(path):
@@ -273,6 +301,8 @@ def measure(build_dir):
                      "spread": {k: v for k, v in key_files.items() if len(v) > 2},
                      "kernel_radius": key_files.get("kernel_radius", [])},
         "history": history,
+        "docs_history": docs_history(ROOT),
+        "docs_files": len(doc_files(ROOT)),
     }
     r["summary"] = {
         "rooms_per_module": {m: sum(1 for k in rooms if k.split("/")[0] == m) for m in MODULES},
@@ -285,6 +315,7 @@ def measure(build_dir):
         "longest_header": {"file": headers[0][0], "lines": headers[0][1]} if headers else None,
         "headers_over_limit": sum(1 for _, n in headers if n > HEADER_MAX),
         "history_refs": len(history),
+        "docs_history_refs": len(r["docs_history"]),
         "kernel_radius_sources": len(r["settings"]["kernel_radius"]),
     }
     return r
@@ -326,6 +357,9 @@ def report(r):
     print("\n== History in comments: %d lines" % len(r["history"]))
     for h in r["history"]:
         print("  " + h)
+    print("\n== History in the user docs (%d files): %d lines" % (r["docs_files"], len(r["docs_history"])))
+    for h in r["docs_history"]:
+        print("  " + h)
     m = r["summary"]
     print("\n== Summary")
     print("  rooms per module:      " + ", ".join("%s %d" % kv for kv in m["rooms_per_module"].items()))
@@ -337,6 +371,7 @@ def report(r):
     print("  longest header:        %s (%d lines); %d over %d" % (
         lh["file"] if lh else "-", lh["lines"] if lh else 0, m["headers_over_limit"], HEADER_MAX))
     print("  history refs:          %d" % m["history_refs"])
+    print("  docs history refs:     %d" % m["docs_history_refs"])
     print("  kernel_radius sources: %d" % m["kernel_radius_sources"])
 
 
@@ -347,6 +382,7 @@ def failing(r):
         (not m["call_graph_measured"], "call graph not measured (no build)"),
         (m["headers_over_limit"], "headers over %d lines" % HEADER_MAX),
         (m["history_refs"], "history references in comments"),
+        (m["docs_history_refs"], "history references in the user docs"),
         (m["kernel_radius_sources"] > 2, "kernel_radius in more than 2 sources")] if bad]
 
 
@@ -356,7 +392,15 @@ def main():
     ap.add_argument("--json", action="store_true", help="print the measures as JSON")
     ap.add_argument("--check", action="store_true", help="exit 1 on cycles, long headers, history refs, "
                     "kernel_radius in more than 2 sources")
+    ap.add_argument("--docs", metavar="DIR", help="only scan the user docs of the checkout at DIR")
     a = ap.parse_args()
+    if a.docs:
+        root = os.path.abspath(a.docs)
+        hits = docs_history(root)
+        print("== History in the user docs (%d files): %d lines" % (len(doc_files(root)), len(hits)))
+        for h in hits:
+            print("  " + h)
+        return 1 if a.check and hits else 0
     r = measure(os.path.abspath(a.build))
     if a.json:
         json.dump(r, sys.stdout, indent=1)

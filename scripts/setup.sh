@@ -11,7 +11,8 @@ PKGS=(build-essential cmake pkg-config git
       chromium libxml2-utils
       clang libclang-rt-14-dev libomp-14-dev valgrind
       libsdl2-dev libsdl2-ttf-dev fonts-dejavu-core xvfb xauth xdotool imagemagick
-      slurm-wlm munge)
+      slurm-wlm munge
+      python3-jsonschema man-db groff-base)
 missing=()
 for p in "${PKGS[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

@@ -1377,8 +1377,8 @@ START_TEST(test_compression)
 }
 END_TEST
 
-/* Issue 22: record writes rle by default; ispm bless recompresses the frame files to zip with
- * cap_recompress_exr: same parts, order, attributes and bits, only the compression changes. */
+/* record writes uncompressed frame files by default (capture_compression "none"); ispm bless
+ * recompresses them to zip with cap_recompress_exr: same parts, order, attributes and bits, only the compression changes. */
 START_TEST(test_recompress)
 {
     char dir[256], run[300], src[400], zip[400], back[400], again[400];

@@ -5,6 +5,7 @@
  * is the run's own flicker about its mean. usage: ispm_test_reference RUN OUT */
 #define _POSIX_C_SOURCE 200809L
 #include <cjson/cJSON.h>
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -64,6 +65,17 @@ int main(int argc, char **argv)
     cJSON *root = cJSON_CreateObject();
     cJSON_AddStringToObject(root, "format", "ispm-run");
     cJSON_AddNumberToObject(root, "format_version", 1);
+    /* The keys docs/schema/manifest.schema.json requires of every run (e2e_manifest_schema
+     * validates the runs the tests leave), named after this tool rather than ispm. */
+    cJSON *tool = cJSON_AddObjectToObject(root, "tool");
+    cJSON_AddStringToObject(tool, "name", "ispm_test_reference");
+    cJSON *seq = cJSON_AddObjectToObject(root, "sequence");
+    char *name = rep_xprintf("%s.reference", run->sequence_name ? run->sequence_name : "run");
+    cJSON_AddStringToObject(seq, "name", name);
+    free(name);
+    cJSON *res = cJSON_AddArrayToObject(root, "resolution");
+    cJSON_AddItemToArray(res, cJSON_CreateNumber(w));
+    cJSON_AddItemToArray(res, cJSON_CreateNumber(h));
     cJSON_AddNumberToObject(root, "frame_count", run->frame_count);
     cJSON *frames = cJSON_AddArrayToObject(root, "frames");
     cJSON *jb = cJSON_CreateArray();
@@ -80,6 +92,11 @@ int main(int argc, char **argv)
         cJSON_AddNumberToObject(b, "height", h);
         cJSON_AddItemToObject(b, "channels", cJSON_CreateStringArray(RGB, 3));
         cJSON_AddStringToObject(b, "digest", dg);
+        int nan = 0, inf = 0;
+        for (size_t x = 0; x < nv; x++)
+            nan += isnan(mean[k][x]) != 0, inf += isinf(mean[k][x]) != 0;
+        cJSON_AddNumberToObject(b, "nan", nan);
+        cJSON_AddNumberToObject(b, "inf", inf);
         cJSON_AddItemToArray(jb, b);
     }
     char *fdir = rep_path_join(argv[2], "frames");
@@ -96,6 +113,7 @@ int main(int argc, char **argv)
         }
         cJSON *f = cJSON_CreateObject();
         cJSON_AddNumberToObject(f, "index", i);
+        cJSON_AddNumberToObject(f, "time", run->frames[i].time);
         cJSON_AddStringToObject(f, "file", file);
         cJSON_AddItemToObject(f, "buffers", cJSON_Duplicate(jb, 1));
         cJSON_AddItemToArray(frames, f);

@@ -5,8 +5,11 @@
  * machine although recording never reads or writes an image through it. The
  * C++ shims (oiio_shim.cpp, png_shim.cpp) are therefore a separate module, libispm_oiio.so,
  * which the first call here dlopens (once, thread-safely: replay decodes on several threads).
- * Where: $ISPM_OIIO_MODULE if set, else the path CMake built it at (ISPM_OIIO_MODULE_PATH). A
- * module that cannot be loaded is an ENG_ERR_IO naming the file asked for and the module.
+ * Where: $ISPM_OIIO_MODULE if set, else the path CMake built it at (ISPM_OIIO_MODULE_PATH), else
+ * where `cmake --install` puts it beside the program (ISPM_OIIO_MODULE_FROM_BIN, relative to the
+ * executable's folder, whatever the install prefix), so that an installed ispm works once its
+ * build folder is gone. A module that cannot be loaded is an ENG_ERR_IO naming the file asked
+ * for and the module.
  * rep_parts_free only frees C memory and needs no module.
  */
 #define _GNU_SOURCE
@@ -17,9 +20,13 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 #ifndef ISPM_OIIO_MODULE_PATH
 #error "ISPM_OIIO_MODULE_PATH (the built libispm_oiio.so) must be defined by the build"
+#endif
+#ifndef ISPM_OIIO_MODULE_FROM_BIN
+#define ISPM_OIIO_MODULE_FROM_BIN "../lib/ispm/libispm_oiio.so"
 #endif
 
 typedef eng_result (*read_parts_fn)(const char *, size_t, rep_part **, int *, eng_error *);
@@ -47,6 +54,22 @@ static void load_module(void)
     const char *env = getenv("ISPM_OIIO_MODULE");
     g_mod.where = env && *env ? env : ISPM_OIIO_MODULE_PATH;
     void *h = dlopen(g_mod.where, RTLD_NOW | RTLD_LOCAL);
+    if (!h && !(env && *env)) {
+        /* The installed layout: bin/ispm and lib.../ispm/libispm_oiio.so under one prefix. */
+        static char installed[4096];
+        ssize_t n = readlink("/proc/self/exe", installed, sizeof installed - 1);
+        char *slash = n > 0 ? memrchr(installed, '/', (size_t)n) : NULL;
+        if (slash && (size_t)(slash + 1 - installed) + sizeof ISPM_OIIO_MODULE_FROM_BIN <= sizeof installed) {
+            memcpy(slash + 1, ISPM_OIIO_MODULE_FROM_BIN, sizeof ISPM_OIIO_MODULE_FROM_BIN);
+            void *hi = dlopen(installed, RTLD_NOW | RTLD_LOCAL);
+            if (hi) {
+                h = hi;
+                g_mod.where = installed;
+            }
+        }
+        if (!h) /* report the first failure: the build's module */
+            h = dlopen(g_mod.where, RTLD_NOW | RTLD_LOCAL);
+    }
     if (!h) {
         copy_why(dlerror());
         return;
