@@ -35,6 +35,8 @@ eng_result cap__fsync_dir(const char *dir, eng_error *err);
  * does (refused when it holds a run unless overwrite; the old manifest unlinked first), and
  * text written to dir/name atomically (name.tmp, fsync, rename, fsync of dir). */
 eng_result cap__prepare_run(const char *run_dir, const char *frames_dir, int overwrite, eng_error *err);
+/* The folders above run_dir, made (the lock beside it, <run>.lock, needs them). */
+eng_result cap__make_parent_dirs(const char *run_dir, eng_error *err);
 eng_result cap__write_atomic(const char *dir, const char *name, const char *text, eng_error *err);
 /* capture.c's JSON helpers: j itself, or the process ends (out of memory); obj[key] as an
  * integer in [lo, hi] (1) or not (0); a tree printed with a trailing newline (free it). */

@@ -95,6 +95,7 @@ typedef struct cap_pending {
 } cap_pending;
 
 struct cap_capture {
+    eng_lock run_lock; /* <run>.lock while the capture lives: one writer per run */
     char *run_dir, *frames_dir;
     const seq_sequence *seq;
     const scn_scene *scene;
@@ -467,6 +468,22 @@ static eng_result prepare_run_dir(const char *run_dir, const char *frames_dir, i
     return r;
 }
 
+eng_result cap__make_parent_dirs(const char *run_dir, eng_error *err)
+{
+    char *parent = cap__xstrdup(run_dir);
+    size_t n = strlen(parent);
+    while (n > 1 && parent[n - 1] == '/')
+        parent[--n] = 0;
+    char *slash = strrchr(parent, '/');
+    eng_result r = ENG_OK;
+    if (slash && slash != parent) {
+        *slash = 0;
+        r = make_dirs(parent, err);
+    }
+    free(parent);
+    return r;
+}
+
 static eng_result write_runinfo(cap_capture *c, eng_error *err);
 static eng_result write_frame_record(cap_capture *c, int frame, eng_error *err);
 static int write_job(void *ctx, void *job);
@@ -505,13 +522,18 @@ eng_result cap_create(const cap_desc *desc, cap_capture **out, eng_error *err)
     }
 
     cap_capture *c = cap__xcalloc(1, sizeof *c);
+    c->run_lock.fd = -1;
     pthread_mutex_init(&c->lock, NULL);
     c->renderer = dup_or_null(desc->renderer);
     c->renderer_settings = renderer_settings;
     c->run_dir = cap__xstrdup(desc->run_dir);
     c->frames_dir = cap__join(desc->run_dir, "frames");
     int resume = desc->resume;
-    eng_result r = prepare_run_dir(c->run_dir, c->frames_dir, desc->overwrite, &resume, 1, err);
+    eng_result r = cap__make_parent_dirs(c->run_dir, err);
+    if (r == ENG_OK)
+        r = eng_lock_take(c->run_dir, "ispm record", &c->run_lock, err);
+    if (r == ENG_OK)
+        r = prepare_run_dir(c->run_dir, c->frames_dir, desc->overwrite, &resume, 1, err);
     if (r != ENG_OK) {
         cap_destroy(c);
         return r;
@@ -598,6 +620,7 @@ void cap_destroy(cap_capture *c)
     free(c->command_line);
     free(c->renderer);
     cJSON_Delete(c->renderer_settings);
+    eng_lock_drop(&c->run_lock);
     free(c->run_dir);
     free(c->frames_dir);
     pthread_mutex_destroy(&c->lock);
@@ -1320,7 +1343,9 @@ static eng_result read_json(const char *path, cJSON **out, eng_error *err)
     *out = NULL;
     char *text = NULL;
     size_t len = 0;
-    eng_result r = eng_read_file(path, (size_t)64 << 20, &text, &len, err);
+    eng_result r = eng_read_input(path, ENG_IN_NOFOLLOW, (size_t)64 << 20, &text, &len, err);
+    if (r == ENG_OK && (r = eng_json_precheck(path, text, len, ENG_JSON_MAX_DEPTH, err)) != ENG_OK)
+        free(text);
     if (r != ENG_OK)
         return r;
     *out = cJSON_ParseWithLength(text, len);

@@ -6,7 +6,9 @@
  * The copy is built beside the target in <golden>.tmp, with the golden's tolerances.json kept
  * if it had one (tolerances are tuned by people and outlive any one blessing) or the default
  * one written, and then swapped in with renames, so an interrupted bless leaves the old golden
- * or the new one, never a mixture. Only manifest.json and the frame files are copied: a
+ * or the new one, never a mixture (killed between the two renames, the next bless puts the old
+ * one back: rep_golden_recover), and one bless at a time holds <golden>.lock. Files inside the
+ * run and the golden are read as inputs that may not be symbolic links. Only manifest.json and the frame files are copied: a
  * replay/ report folder inside the run is not part of a golden.
  *
  * Goldens are committed, so their frame files are ZIP whatever the run was recorded with
@@ -83,13 +85,10 @@ static eng_result make_parent(const char *path, eng_error *err)
  * change; cJSON prints the rest as capture wrote it). */
 static eng_result write_zip_manifest(const rep_run *run, const char *dst, eng_error *err)
 {
-    char *text = NULL;
-    size_t len = 0;
-    eng_result r = eng_read_file(run->manifest_path, REP_MAX_JSON_BYTES, &text, &len, err);
+    cJSON *root = NULL;
+    eng_result r = rep_json_load(run->manifest_path, ENG_IN_NOFOLLOW, &root, err);
     if (r != ENG_OK)
         return r;
-    cJSON *root = cJSON_ParseWithLength(text, len);
-    free(text);
     if (!cJSON_IsObject(root)) {
         cJSON_Delete(root);
         return eng_fail(err, ENG_ERR_PARSE, "%s: not a JSON object", run->manifest_path);
@@ -128,13 +127,13 @@ static eng_result build_tmp(const rep_run *run, const char *golden, const char *
         if (r == ENG_OK)
             r = cap_recompress_exr(run->frames[i].path, dst, CAP_COMPRESSION_ZIP, &rewritten, err);
         if (r == ENG_OK && !rewritten)
-            r = rep_copy_file(run->frames[i].path, dst, err);
+            r = rep_copy_file(run->frames[i].path, ENG_IN_NOFOLLOW, dst, err);
         recompressed |= rewritten;
         free(dst);
     }
     char *dst = rep_path_join(tmp, "manifest.json");
     if (r == ENG_OK)
-        r = recompressed ? write_zip_manifest(run, dst, err) : rep_copy_file(run->manifest_path, dst, err);
+        r = recompressed ? write_zip_manifest(run, dst, err) : rep_copy_file(run->manifest_path, ENG_IN_NOFOLLOW, dst, err);
     free(dst);
     if (r == ENG_OK && recompressed) {
         /* Read back as replay reads it: every frame decodes to its manifest's digests
@@ -149,8 +148,15 @@ static eng_result build_tmp(const rep_run *run, const char *golden, const char *
         return r;
     char *old_tol = rep_path_join(golden, "tolerances.json");
     char *new_tol = rep_path_join(tmp, "tolerances.json");
-    if (rep_is_file(old_tol)) {
-        r = rep_copy_file(old_tol, new_tol, err);
+    struct stat st;
+    if (lstat(old_tol, &st) == 0) {
+        /* Whatever is there is the golden's tolerance file: a link, FIFO or device is refused
+         * (never its target's bytes copied into the golden), and so is one that does not parse. */
+        cJSON *check = NULL;
+        r = rep_json_load(old_tol, ENG_IN_NOFOLLOW, &check, err);
+        cJSON_Delete(check);
+        if (r == ENG_OK)
+            r = rep_copy_file(old_tol, ENG_IN_NOFOLLOW, new_tol, err);
     } else {
         char *text = rep_tol_default_json();
         r = rep_write_atomic(new_tol, text, strlen(text), err);
@@ -182,6 +188,36 @@ static eng_result swap_in(const char *golden, const char *tmp, eng_error *err)
     }
     if (r == ENG_OK)
         r = rep_remove_tree(old, err);
+    char *parent = rep_xstrdup(golden);
+    char *slash = strrchr(parent, '/');
+    if (slash)
+        slash[slash == parent ? 1 : 0] = 0;
+    if (r == ENG_OK)
+        r = rep_sync_dir(slash ? parent : ".", err);
+    free(parent);
+    free(old);
+    return r;
+}
+
+/* A bless ended between swap_in's two renames leaves <golden>.old and no <golden>: the old
+ * golden is renamed back (the new one was never reviewed into place). A <golden>.old beside a
+ * golden is the remains of a finished swap and is removed. Under the golden's lock. */
+static eng_result rep_golden_recover(const char *golden, eng_error *err)
+{
+    char *old = rep_xprintf("%s.old", golden);
+    struct stat st;
+    eng_result r = ENG_OK;
+    if (lstat(old, &st) == 0 && S_ISDIR(st.st_mode)) {
+        if (lstat(golden, &st) != 0) {
+            if (rename(old, golden) != 0)
+                r = eng_fail(err, ENG_ERR_IO, "%s: cannot restore the golden from %s: %s", golden, old,
+                             strerror(errno));
+            else
+                fprintf(stderr, "ispm: %s: an interrupted bless was rolled back (%s restored)\n", golden, old);
+        } else {
+            r = rep_remove_tree(old, err);
+        }
+    }
     free(old);
     return r;
 }
@@ -309,10 +345,20 @@ eng_result rep_bless_reviewed(const rep_bless_options *o, FILE *summary, rep_ble
         return eng_fail(err, ENG_ERR_INVALID, "%s: cannot bless a run onto itself", o->run_dir);
     }
     rep_run *run = NULL;
-    eng_result r = check_target(golden, err);
+    eng_lock lock;
+    eng_result r = make_parent(golden, err);
+    if (r == ENG_OK)
+        r = eng_lock_take(golden, "ispm bless", &lock, err);
+    else
+        lock.fd = -1;
+    if (r == ENG_OK)
+        r = rep_golden_recover(golden, err);
+    if (r == ENG_OK)
+        r = check_target(golden, err);
     if (r == ENG_OK)
         r = verify_run(o->run_dir, &run, err);
     if (r != ENG_OK) {
+        eng_lock_drop(&lock);
         free(golden);
         return r;
     }
@@ -362,6 +408,7 @@ eng_result rep_bless_reviewed(const rep_bless_options *o, FILE *summary, rep_ble
     free(md);
     rep_report_free(&rev);
     free(review_dir);
+    eng_lock_drop(&lock);
     free(golden);
     rep_run_close(run);
     return r;

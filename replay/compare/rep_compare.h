@@ -94,8 +94,10 @@ void rep_tol_builtin(rep_tol *t);
  * or non-finite numbers and rules without "match" are ENG_ERR_INVALID naming the key. */
 eng_result rep_tol_parse(const char *path, const char *json, size_t len, rep_tolerances **out,
                          eng_error *err);
-/* Loads a tolerances file. If missing_ok and the file does not exist, *out holds the built-in
- * defaults (path NULL). */
+/* Loads a tolerances file (an input: regular file, JSON depth and trailing text checked).
+ * missing_ok: the golden's own file, which may not be a symbolic link, and when nothing at all
+ * is at path *out holds the built-in defaults (path NULL); a dangling link, FIFO or device is an
+ * error, never the defaults. */
 eng_result rep_tol_load(const char *path, int missing_ok, rep_tolerances **out, eng_error *err);
 void rep_tol_free(rep_tolerances *t);
 

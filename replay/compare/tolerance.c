@@ -31,11 +31,13 @@
 #include "rep_util.h"
 
 #include <cjson/cJSON.h>
+#include <errno.h>
 #include <fnmatch.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 
 static const char *const KEYS[] = {"warn", "warnrelative", "warnpercent", "hardwarn", "fail", "failrelative",
                                    "failpercent", "hardfail", "rmse_warn", "rmse_fail",
@@ -275,7 +277,10 @@ eng_result rep_tol_parse(const char *path, const char *json, size_t len, rep_tol
 eng_result rep_tol_load(const char *path, int missing_ok, rep_tolerances **out, eng_error *err)
 {
     *out = NULL;
-    if (missing_ok && !rep_is_file(path) && !rep_is_dir(path)) {
+    /* Only a file that is not there at all means the defaults: a link to nothing, a FIFO or a
+     * device is a tolerance file that cannot be read. */
+    struct stat st;
+    if (missing_ok && lstat(path, &st) != 0 && errno == ENOENT) {
         rep_tolerances *t = rep_xcalloc(1, sizeof *t);
         rep_tol_builtin(&t->def);
         t->cross = cross_builtin();
@@ -284,9 +289,13 @@ eng_result rep_tol_load(const char *path, int missing_ok, rep_tolerances **out, 
     }
     char *text = NULL;
     size_t len = 0;
-    eng_result r = eng_read_file(path, REP_MAX_JSON_BYTES, &text, &len, err);
-    if (r != ENG_OK)
+    eng_result r = eng_read_input(path, missing_ok ? ENG_IN_NOFOLLOW : 0, REP_MAX_JSON_BYTES, &text, &len, err);
+    if (r == ENG_OK)
+        r = eng_json_precheck(path, text, len, ENG_JSON_MAX_DEPTH, err);
+    if (r != ENG_OK) {
+        free(text);
         return r;
+    }
     r = rep_tol_parse(path, text, len, out, err);
     free(text);
     return r;

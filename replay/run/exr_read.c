@@ -141,7 +141,8 @@ static eng_result lib_failed(const char *path, int part, exr_result_t rv, eng_er
     return leave(path, part, exr_get_default_error_message(rv), err);
 }
 
-/* The header of part p into *out (name, size, channels in OpenImageIO's order; no pixels). */
+/* The header of part p into *out (name, size, channels in OpenImageIO's order; no pixels, data
+ * NULL). */
 static eng_result read_header(exr_context_t ctxt, const char *path, int p, size_t max_floats, rep_part *out,
                               eng_error *err)
 {
@@ -187,8 +188,7 @@ static eng_result read_header(exr_context_t ctxt, const char *path, int p, size_
     out->channel_count = n;
     for (int c = 0; c < n; c++)
         out->channels[c] = str_dup(ch[c].name);
-    out->data = malloc(w * h * (size_t)n * sizeof(float));
-    if (!out->name || !out->data)
+    if (!out->name)
         return eng_fail(err, ENG_ERR_NOMEM, "%s: part %s: out of memory", path, name);
     for (int c = 0; c < n; c++)
         if (!out->channels[c])
@@ -255,7 +255,8 @@ static int mem_load(const char *path, mem_file *m)
     return 1;
 }
 
-eng_result rep_exr_read_parts(const char *path, size_t max_floats, rep_part **parts, int *count, eng_error *err)
+static eng_result read_parts(const char *path, size_t max_floats, rep_parts_check check, void *user, rep_part **parts,
+                             int *count, eng_error *err)
 {
     *parts = NULL;
     *count = 0;
@@ -299,8 +300,19 @@ eng_result rep_exr_read_parts(const char *path, size_t max_floats, rep_part **pa
     eng_result hres = ENG_OK;
     while (h < n && (hres = read_header(ctxt, path, h, max_floats, &arr[h], &herr)) == ENG_OK)
         h++;
-    exr_result_t *prv = calloc((size_t)(h > 0 ? h : 1), sizeof *prv);
-    if (!prv) {
+    /* Every header before any pixel: the caller's check, then the pixels' memory. */
+    if (check && h == n)
+        r = check(user, path, arr, n, err);
+    for (int p = 0; p < h && r == ENG_OK; p++) {
+        arr[p].data = malloc((size_t)arr[p].width * (size_t)arr[p].height * (size_t)arr[p].channel_count *
+                             sizeof(float));
+        if (!arr[p].data)
+            r = eng_fail(err, ENG_ERR_NOMEM, "%s: part %s: out of memory", path, arr[p].name);
+    }
+    exr_result_t *prv = r == ENG_OK ? calloc((size_t)(h > 0 ? h : 1), sizeof *prv) : NULL;
+    if (r != ENG_OK) {
+        /* the check's refusal, or no memory: nothing decoded */
+    } else if (!prv) {
         r = eng_fail(err, ENG_ERR_NOMEM, "%s: out of memory while reading", path);
     } else {
 #pragma omp taskloop grainsize(1) default(none) shared(ctxt, arr, prv, h)
@@ -327,9 +339,20 @@ eng_result rep_exr_read_parts(const char *path, size_t max_floats, rep_part **pa
     return ENG_OK;
 }
 
+eng_result rep_exr_read_parts(const char *path, size_t max_floats, rep_part **parts, int *count, eng_error *err)
+{
+    return read_parts(path, max_floats, NULL, NULL, parts, count, err);
+}
+
 eng_result rep_read_parts(const char *path, size_t max_floats, rep_part **parts, int *count, eng_error *err)
 {
-    eng_result r = rep_exr_read_parts(path, max_floats, parts, count, err);
+    return rep_read_parts_checked(path, max_floats, NULL, NULL, parts, count, err);
+}
+
+eng_result rep_read_parts_checked(const char *path, size_t max_floats, rep_parts_check check, void *user,
+                                  rep_part **parts, int *count, eng_error *err)
+{
+    eng_result r = read_parts(path, max_floats, check, user, parts, count, err);
     if (r != ENG_ERR_UNSUPPORTED)
         return r; /* the parts, or the header walk's refusal (OpenImageIO's path refuses alike) */
     return rep_oiio_read_parts(path, max_floats, parts, count, err);
