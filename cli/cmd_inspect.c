@@ -204,36 +204,22 @@ static int ends_with(const char *s, const char *suffix)
     return n >= k && strcmp(s + n - k, suffix) == 0;
 }
 
-/* Whether the file at tmp holds what was written: an EXR's one part decodes to b's floats bit
- * for bit, a PNG decodes to rgb (a full disk may leave a writer's file short without a word). */
-static eng_result read_back(const char *tmp, const eng_buffer *b, const unsigned char *rgb, int w, int h,
-                            eng_error *err)
+/* Whether the EXR at tmp holds what was written: its one part decodes to b's floats bit for bit
+ * (OpenImageIO's writer may leave a file short on a full disk without a word). */
+static eng_result read_back(const char *tmp, const eng_buffer *b, eng_error *err)
 {
-    if (!rgb) {
-        rep_part *parts = NULL;
-        int n = 0;
-        eng_error why;
-        if (rep_read_parts(tmp, REP_MAX_FLOATS, &parts, &n, &why) != ENG_OK)
-            return eng_fail(err, ENG_ERR_IO, "%s: the written file does not read back: %s", tmp, why.msg);
-        eng_buffer back = n == 1 ? rep_part_buffer(&parts[0]) : (eng_buffer){0};
-        char d0[40], d1[40];
-        eng_buffer_digest(b, d0);
-        if (n == 1 && back.width == b->width && back.height == b->height && back.channel_count == b->channel_count)
-            eng_buffer_digest(&back, d1);
-        else
-            d1[0] = 0;
-        rep_parts_free(parts, n);
-        return strcmp(d0, d1) == 0 ? ENG_OK : eng_fail(err, ENG_ERR_IO, "%s: the written file reads back different", tmp);
-    }
-    int bw, bh, bn;
-    unsigned char *px = NULL;
-    eng_result r = rep_oiio_read_image8(tmp, &bw, &bh, &bn, &px, err);
-    if (r == ENG_OK && (bw != w || bh != h || bn != 3 || memcmp(px, rgb, (size_t)w * (size_t)h * 3) != 0))
-        r = eng_fail(err, ENG_ERR_IO, "%s: the written file reads back different", tmp);
-    else if (r != ENG_OK)
-        r = eng_fail(err, ENG_ERR_IO, "%s: the written file does not read back", tmp);
-    free(px);
-    return r;
+    rep_part *parts = NULL;
+    int n = 0;
+    eng_error why;
+    if (rep_read_parts(tmp, REP_MAX_FLOATS, &parts, &n, &why) != ENG_OK)
+        return eng_fail(err, ENG_ERR_IO, "%s: the written file does not read back: %s", tmp, why.msg);
+    eng_buffer back = n == 1 ? rep_part_buffer(&parts[0]) : (eng_buffer){0};
+    char d0[40], d1[40] = "";
+    eng_buffer_digest(b, d0);
+    if (n == 1 && back.width == b->width && back.height == b->height && back.channel_count == b->channel_count)
+        eng_buffer_digest(&back, d1);
+    rep_parts_free(parts, n);
+    return strcmp(d0, d1) == 0 ? ENG_OK : eng_fail(err, ENG_ERR_IO, "%s: the written file reads back different", tmp);
 }
 
 /* fsync of a file by name. */
@@ -248,7 +234,7 @@ static eng_result sync_file(const char *path, eng_error *err)
 }
 
 /* Writes buffer b to out (.png mapped for display, .exr float); returns an exit code. The image
- * goes to a temporary name beside out, is read back and flushed, and only then renamed over
+ * goes to a temporary name beside out, is checked (an EXR read back) and flushed, and only then renamed over
  * out: a failure (a full disk) leaves out as it was. */
 static int export_buffer(const eng_buffer *b, const char *out)
 {
@@ -257,17 +243,17 @@ static int export_buffer(const eng_buffer *b, const char *out)
     int exr = ends_with(out, ".exr");
     char *tmp = rep_xprintf("%s.tmp.%ld%s", out, (long)getpid(), exr ? ".exr" : ".png");
     unsigned char *rgb = NULL;
-    int w = 0, h = 0;
+    int w, h;
     if (exr) {
         r = rep_oiio_write_parts(tmp, b, 1, &err);
-    } else {
+        if (r == ENG_OK)
+            r = read_back(tmp, b, &err);
+    } else { /* libpng directly: every short write and the close are checked */
         rep_thumb_map map;
         rep_thumb_map_make(b->name, b, NULL, &map);
         rgb = rep_image_render(b, &map, 0, &w, &h);
-        r = rep_oiio_write_png(tmp, w, h, 3, rgb, &err);
+        r = rep_png_write(tmp, w, h, 3, rgb, &err);
     }
-    if (r == ENG_OK)
-        r = read_back(tmp, b, rgb, w, h, &err);
     if (r == ENG_OK)
         r = sync_file(tmp, &err);
     if (r == ENG_OK && rename(tmp, out) != 0)

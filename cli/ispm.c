@@ -403,8 +403,9 @@ static int cmd_record(int argc, char **argv, const char *command_line)
     r = cap_create(&cd, &cap, &err);
     if (r != ENG_OK) {
         fprintf(stderr, "ispm record: %s\n", err.msg);
-        /* A run --resume cannot continue (another sequence, already complete) is a bad argument. */
-        rc = resume && r == ENG_ERR_INVALID ? EXIT_INPUT : EXIT_RUNTIME;
+        /* A run --resume cannot continue (another sequence, already complete), a run another
+         * process is writing (its lock) and shard frames that do not fit are bad arguments. */
+        rc = r == ENG_ERR_INVALID ? EXIT_INPUT : EXIT_RUNTIME;
         goto done;
     }
     eng_listener l = cap_listener(cap);

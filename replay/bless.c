@@ -8,8 +8,8 @@
  * one written, and then swapped in with renames, so an interrupted bless leaves the old golden
  * or the new one, never a mixture (killed between the two renames, the next bless puts the old
  * one back: rep_golden_recover), and one bless at a time holds <golden>.lock. Files inside the
- * run and the golden are read as inputs that may not be symbolic links. Only manifest.json and the frame files are copied: a
- * replay/ report folder inside the run is not part of a golden.
+ * run and the golden are read as inputs that may not be symbolic links. Only manifest.json and
+ * the frame files are copied: a replay/ report folder inside the run is not part of a golden.
  *
  * Goldens are committed, so their frame files are ZIP whatever the run was recorded with
  * (record writes none by default: no encoding, 70 % larger than zip): a frame file
@@ -201,7 +201,8 @@ static eng_result swap_in(const char *golden, const char *tmp, eng_error *err)
 
 /* A bless ended between swap_in's two renames leaves <golden>.old and no <golden>: the old
  * golden is renamed back (the new one was never reviewed into place). A <golden>.old beside a
- * golden is the remains of a finished swap and is removed. Under the golden's lock. */
+ * golden is the remains of a finished swap, and a <golden>.tmp those of a bless that ended
+ * before its swap: both are removed. Under the golden's lock. */
 static eng_result rep_golden_recover(const char *golden, eng_error *err)
 {
     char *old = rep_xprintf("%s.old", golden);
@@ -218,6 +219,10 @@ static eng_result rep_golden_recover(const char *golden, eng_error *err)
             r = rep_remove_tree(old, err);
         }
     }
+    char *tmp = rep_xprintf("%s.tmp", golden);
+    if (r == ENG_OK)
+        r = rep_remove_tree(tmp, err);
+    free(tmp);
     free(old);
     return r;
 }

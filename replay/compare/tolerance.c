@@ -156,6 +156,9 @@ static eng_result parse_block(const char *path, const char *where, const cJSON *
         if (!cJSON_IsNumber(v) || !isfinite(v->valuedouble) || v->valuedouble < 0)
             return eng_fail(err, ENG_ERR_INVALID, "%s: %s: \"%s\" must be a finite number >= 0", path, where,
                             key);
+        if (strstr(key, "percent") && v->valuedouble > 100)
+            return eng_fail(err, ENG_ERR_INVALID, "%s: %s: \"%s\" is %g, a percentage of pixels (0..100)", path,
+                            where, key, v->valuedouble);
         *field(t, k) = v->valuedouble;
         if (keys_set && k < 8)
             *keys_set |= 1u << k; /* KEYS' first eight are REP_FLAG_*'s order */
@@ -184,6 +187,29 @@ void rep_tol_free(rep_tolerances *t)
     free(t->rules);
     free(t->path);
     free(t);
+}
+
+/* Whether every '[' of a glob has its ']' (fnmatch takes an unclosed '[' as a literal
+ * character, so such a rule silently matches nothing). */
+static int glob_well_formed(const char *g)
+{
+    for (const char *p = g; *p; p++) {
+        if (*p == '\\' && p[1]) {
+            p++;
+        } else if (*p == '[') {
+            const char *q = p + 1;
+            if (*q == '!' || *q == '^')
+                q++;
+            if (*q == ']')
+                q++;
+            while (*q && *q != ']')
+                q++;
+            if (!*q)
+                return 0;
+            p = q;
+        }
+    }
+    return 1;
 }
 
 /* A "cross_renderer" section, or the built-in cross-renderer set where the file has none. */
@@ -215,6 +241,9 @@ static eng_result parse_root(const char *path, const cJSON *root, rep_tolerances
         const cJSON *m = cJSON_GetObjectItemCaseSensitive(jr, "match");
         if (!cJSON_IsString(m) || !m->valuestring[0])
             return eng_fail(err, ENG_ERR_INVALID, "%s: %s: \"match\" must be a non-empty pattern", path, where);
+        if (!glob_well_formed(m->valuestring))
+            return eng_fail(err, ENG_ERR_INVALID, "%s: %s: \"match\" \"%s\" has a '[' without its ']'", path, where,
+                            m->valuestring);
         rep_tol_rule *rule = &t->rules[t->rule_count++];
         rule->match = rep_xstrdup(m->valuestring);
         rule->tol = t->def;

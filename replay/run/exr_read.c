@@ -169,8 +169,13 @@ static eng_result read_header(exr_context_t ctxt, const char *path, int p, size_
         return leave(path, p, "data window not at the origin, or too large", err);
     int n = cl ? cl->num_channels : 0;
     size_t w = (size_t)dw.max.x + 1, h = (size_t)dw.max.y + 1;
-    if (n < 1 || n > ENG_MAX_CHANNELS || w > max_floats || h > max_floats || w * h > max_floats / (size_t)n)
-        return leave(path, p, "channel count or size beyond the limits", err);
+    if (n < 1 || n > ENG_MAX_CHANNELS)
+        return leave(path, p, "channel count beyond the limits", err);
+    /* Over the caller's limit: refused here as OpenImageIO refuses it (same result, same words),
+     * without loading OpenImageIO to say so. */
+    if (w > max_floats || h > max_floats || w * h > max_floats / (size_t)n)
+        return eng_fail(err, ENG_ERR_INVALID, "%s: part %s: %zux%zux%d floats, more than the %zu allowed", path, name,
+                        w, h, n, max_floats);
     chan ch[ENG_MAX_CHANNELS];
     for (int c = 0; c < n; c++) {
         const exr_attr_chlist_entry_t *e = &cl->entries[c];
