@@ -1204,7 +1204,8 @@ static cJSON *manifest_json(const cap_capture *c)
     return root;
 }
 
-/* Writes text to dir/name atomically: name.tmp, fsync, rename, fsync dir. */
+/* Writes text to dir/name atomically: name.tmp, fsync, rename, fsync dir. On failure name.tmp is
+ * removed, and so is dir/name when it was renamed into place but its folder could not be synced. */
 static eng_result write_atomic(const char *dir, const char *name, const char *text, eng_error *err)
 {
     char *path = cap__join(dir, name);
@@ -1232,10 +1233,13 @@ static eng_result write_atomic(const char *dir, const char *name, const char *te
         r = eng_fail(err, ENG_ERR_IO, "%s: %s", path, strerror(errno));
     if (r == ENG_OK && rename(tmp, path) != 0)
         r = eng_fail(err, ENG_ERR_IO, "%s: cannot rename %s into place: %s", path, tmp, strerror(errno));
-    if (r != ENG_OK)
+    if (r != ENG_OK) {
         unlink(tmp);
-    else
-        r = cap__fsync_dir(dir, err);
+    } else if ((r = cap__fsync_dir(dir, err)) != ENG_OK) {
+        /* Renamed but not durable: the file goes, so that no failed write leaves a manifest
+         * that makes the run look complete. */
+        unlink(path);
+    }
 out:
     free(tmp);
     free(path);

@@ -546,23 +546,25 @@ static eng_result write_merged(const shard *const *sorted, int count, const cap_
         r = remove_tree(old, err);
     if (r == ENG_OK)
         r = write_run(sorted, count, d, tmp, err);
+    char *parent = cap__xstrdup(d->run_dir);
+    char *slash = strrchr(parent, '/');
+    if (slash)
+        slash[slash == parent ? 1 : 0] = 0;
     if (r == ENG_OK && rename(d->run_dir, old) != 0)
         r = eng_fail(err, ENG_ERR_IO, "%s: cannot move the old run aside: %s", d->run_dir, strerror(errno));
     else if (r == ENG_OK && rename(tmp, d->run_dir) != 0) {
         r = eng_fail(err, ENG_ERR_IO, "%s: cannot rename %s into place: %s", d->run_dir, tmp, strerror(errno));
         if (rename(old, d->run_dir) != 0)
             fprintf(stderr, "ispm: %s: the old run is left at %s\n", d->run_dir, old);
+    } else if (r == ENG_OK && (r = cap__fsync_dir(slash ? parent : ".", err)) != ENG_OK) {
+        /* not durable: undone, the old run back in place */
+        if (rename(d->run_dir, tmp) != 0 || rename(old, d->run_dir) != 0)
+            fprintf(stderr, "ispm: %s: the swap could not be undone (the old run is at %s)\n", d->run_dir, old);
     }
     if (r == ENG_OK)
-        r = remove_tree(old, err);
+        remove_tree(old, NULL); /* the merged run is in place; what is left of the old one is no run */
     else
         remove_tree(tmp, NULL);
-    char *parent = cap__xstrdup(d->run_dir);
-    char *slash = strrchr(parent, '/');
-    if (slash)
-        slash[slash == parent ? 1 : 0] = 0;
-    if (r == ENG_OK)
-        r = cap__fsync_dir(slash ? parent : ".", err);
     free(parent);
     free(tmp);
     free(old);

@@ -258,12 +258,12 @@ static int export_buffer(const eng_buffer *b, const char *out)
         r = sync_file(tmp, &err);
     if (r == ENG_OK && rename(tmp, out) != 0)
         r = eng_fail(&err, ENG_ERR_IO, "%s: cannot rename %s into place: %s", out, tmp, strerror(errno));
-    if (r == ENG_OK) {
+    if (r == ENG_OK) { /* durable where the folder can be synced; the new image is in place either way */
         char *dir = rep_xstrdup(out);
         char *slash = strrchr(dir, '/');
         if (slash)
             slash[slash == dir ? 1 : 0] = 0;
-        r = rep_sync_dir(slash ? dir : ".", &err);
+        rep_sync_dir(slash ? dir : ".", NULL);
         free(dir);
     } else {
         unlink(tmp);

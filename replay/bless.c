@@ -167,33 +167,31 @@ static eng_result build_tmp(const rep_run *run, const char *golden, const char *
     return r;
 }
 
+/* tmp becomes golden: the old golden (if any) renamed aside to <golden>.old, tmp renamed into
+ * place, the parent folder synced, then the old one removed. A failure before the sync puts the
+ * old golden back; a sync that fails undoes the swap; removing the old golden is the last step
+ * and may be left to the next bless (rep_golden_recover). */
 static eng_result swap_in(const char *golden, const char *tmp, eng_error *err)
 {
-    if (!rep_is_dir(golden)) {
-        eng_result r = make_parent(golden, err);
-        if (r != ENG_OK)
-            return r;
-        if (rename(tmp, golden) != 0)
-            return eng_fail(err, ENG_ERR_IO, "%s: cannot rename %s into place: %s", golden, tmp, strerror(errno));
-        return ENG_OK;
-    }
     char *old = rep_xprintf("%s.old", golden);
-    eng_result r = rep_remove_tree(old, err);
-    if (r == ENG_OK && rename(golden, old) != 0)
-        r = eng_fail(err, ENG_ERR_IO, "%s: cannot move the old golden aside: %s", golden, strerror(errno));
-    if (r == ENG_OK && rename(tmp, golden) != 0) {
-        r = eng_fail(err, ENG_ERR_IO, "%s: cannot rename %s into place: %s", golden, tmp, strerror(errno));
-        if (rename(old, golden) != 0) /* put the old golden back; the message above stands */
-            fprintf(stderr, "ispm: %s: the old golden is left at %s\n", golden, old);
-    }
-    if (r == ENG_OK)
-        r = rep_remove_tree(old, err);
     char *parent = rep_xstrdup(golden);
     char *slash = strrchr(parent, '/');
     if (slash)
         slash[slash == parent ? 1 : 0] = 0;
-    if (r == ENG_OK)
-        r = rep_sync_dir(slash ? parent : ".", err);
+    int had_old = rep_is_dir(golden);
+    eng_result r = had_old ? rep_remove_tree(old, err) : make_parent(golden, err);
+    if (r == ENG_OK && had_old && rename(golden, old) != 0)
+        r = eng_fail(err, ENG_ERR_IO, "%s: cannot move the old golden aside: %s", golden, strerror(errno));
+    if (r == ENG_OK && rename(tmp, golden) != 0) {
+        r = eng_fail(err, ENG_ERR_IO, "%s: cannot rename %s into place: %s", golden, tmp, strerror(errno));
+        if (had_old && rename(old, golden) != 0) /* put the old golden back; the message above stands */
+            fprintf(stderr, "ispm: %s: the old golden is left at %s\n", golden, old);
+    } else if (r == ENG_OK && (r = rep_sync_dir(slash ? parent : ".", err)) != ENG_OK) {
+        if (rename(golden, tmp) != 0 || (had_old && rename(old, golden) != 0))
+            fprintf(stderr, "ispm: %s: the swap could not be undone (the next bless rolls it back)\n", golden);
+    }
+    if (r == ENG_OK && had_old)
+        rep_remove_tree(old, NULL);
     free(parent);
     free(old);
     return r;

@@ -52,8 +52,9 @@ int rep_is_file(const char *path); /* regular file (following links) */
 int rep_is_dir(const char *path);
 /* mkdir -p. */
 eng_result rep_mkdirs(const char *path, eng_error *err);
-/* Writes path.tmp.<pid>, flushes it to disk, renames it over path and flushes the folder:
- * readers see the old file or the new one, never a part; on failure the old file stays. */
+/* Writes path.tmp.<pid>, flushes it to disk, renames it over path and flushes the folder (where
+ * it can: the new file is in place either way): readers see the old file or the new one, never
+ * a part; on failure the old file stays. */
 eng_result rep_write_atomic(const char *path, const char *data, size_t len, eng_error *err);
 /* Copies a regular file's bytes to dst (created or truncated) and flushes them to disk; src is
  * opened as an input with flags (ENG_IN_NOFOLLOW: a symbolic link is refused, never followed). */

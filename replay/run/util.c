@@ -263,12 +263,12 @@ eng_result rep_write_atomic(const char *path, const char *data, size_t len, eng_
     if (r != ENG_OK)
         unlink(tmp);
     free(tmp);
-    if (r == ENG_OK) {
+    if (r == ENG_OK) { /* the rename made durable where the folder can be synced: the new file is in place either way */
         char *dir = rep_xstrdup(path);
         char *slash = strrchr(dir, '/');
         if (slash)
             slash[slash == dir ? 1 : 0] = 0;
-        r = rep_sync_dir(slash ? dir : ".", err);
+        rep_sync_dir(slash ? dir : ".", NULL);
         free(dir);
     }
     return r;
@@ -279,6 +279,7 @@ eng_result rep_sync_dir(const char *dir, eng_error *err)
     int fd = open(dir, O_RDONLY | O_DIRECTORY | O_CLOEXEC);
     if (fd < 0)
         return eng_fail(err, ENG_ERR_IO, "%s: cannot open folder: %s", dir, strerror(errno));
+    /* err may be NULL: eng_fail then only returns the code. */
     int rc = fsync(fd), e = errno;
     close(fd);
     if (rc != 0)
