@@ -122,7 +122,8 @@ static void replay_usage(FILE *f)
             "\n"
             "exit (idiff's convention): 0 ok, 1 warnings (incl. a different sequence, scene or\n"
             "settings), 2 failures (incl. any NaN/Inf not in the golden, missing or extra buffers)\n"
-            "or bad arguments, 3 size mismatch, 4 unreadable run, golden or file\n");
+            "or bad arguments, 3 size mismatch, 4 unreadable run, golden or file, 5 the report\n"
+            "could not be written (read-only or full disk)\n");
 }
 
 static void bless_usage(FILE *f)
@@ -578,7 +579,7 @@ static int cmd_replay(int argc, char **argv)
     o.progress = &prog;
     eng_error err = {{0}};
     rep_exit rc = rep_replay(&o, stdout, &err);
-    if (rc == REP_UNREADABLE)
+    if (rc == REP_UNREADABLE || rc == REP_UNWRITABLE)
         fprintf(stderr, "ispm replay: %s\n", err.msg);
     else {
         char dir[4096];

@@ -7,7 +7,7 @@
 # JSON), lost data (merge onto its own shard, export onto a full disk, a bless killed between
 # its renames), locks (bless and record into a folder in use) and silent fallbacks (tolerance
 # files that are FIFOs, dangling links, out of range or with a bad glob; --pixel that wraps;
-# JSON too deep; a tampered shard merged). Every fixture is made here at run time (sparse files
+# JSON too deep; a report that cannot be written; a tampered shard merged). Every fixture is made here at run time (sparse files
 # and FIFOs cost no disk). Every command runs under `timeout 10` and /usr/bin/time: it must end
 # with the expected exit code, exactly one line on stderr naming the file, and a peak RSS under
 # 1.5 GB. Prints one line per case with its time and peak RSS.
@@ -230,6 +230,9 @@ run_copy rdeep; python3 -c "
 import sys; open(sys.argv[1], 'w').write('{\"frames\": ' + '[' * 300 + ']' * 300 + '}')" "$W/rdeep/manifest.json"
 expect "manifest nested 300 deep" 4 "nested deeper than 256 levels" \
   "$ISPM" replay "$W/rdeep" --golden "$W/gold" --report "$W/rep"
+: > "$W/notdir" # a report that cannot be written is not an unreadable input (root ignores chmod)
+expect "replay whose report cannot be written" 5 "notdir/rep: cannot create folder" \
+  "$ISPM" replay "$W/run" --golden "$W/gold" --report "$W/notdir/rep"
 rm -rf "$W/shardT"; cp -r "$W/shardA" "$W/shardT"
 python3 - "$W/shardT/frames/000000.exr" << 'EOF'
 import sys

@@ -20,7 +20,11 @@
 #include "rep_util.h"
 
 /* idiff-style exit codes; when several apply, the largest wins. */
-typedef enum rep_exit { REP_OK = 0, REP_WARN = 1, REP_FAIL = 2, REP_SIZE = 3, REP_UNREADABLE = 4 } rep_exit;
+/* REP_UNWRITABLE: the comparison ran, but its report could not be written (a read-only or full
+ * disk): not to be taken for an unreadable input. */
+typedef enum rep_exit {
+    REP_OK = 0, REP_WARN = 1, REP_FAIL = 2, REP_SIZE = 3, REP_UNREADABLE = 4, REP_UNWRITABLE = 5
+} rep_exit;
 
 /* idiff-style thresholds given on the command line (ispm replay -fail 0.1 ...): each key whose
  * bit is set replaces the tolerance file's "default" entry, and so every rule that took that
