@@ -7,7 +7,8 @@
 # JSON), lost data (merge onto its own shard, export onto a full disk, a bless killed between
 # its renames), locks (bless and record into a folder in use) and silent fallbacks (tolerance
 # files that are FIFOs, dangling links, out of range or with a bad glob; --pixel that wraps;
-# JSON too deep; a report that cannot be written; a tampered shard merged). Every fixture is made here at run time (sparse files
+# JSON too deep; a sparse count of 2^31; a report that cannot be written; a tampered shard
+# merged). Every fixture is made here at run time (sparse files
 # and FIFOs cost no disk). Every command runs under `timeout 10` and /usr/bin/time: it must end
 # with the expected exit code, exactly one line on stderr naming the file, and a peak RSS under
 # 1.5 GB. Prints one line per case with its time and peak RSS.
@@ -224,6 +225,11 @@ expect "failpercent 1000" 4 "\"failpercent\" is 1000, a percentage" \
 golden gtglob; echo '{"buffers": [{"match": "final.[display", "fail": 1}]}' > "$W/gtglob/tolerances.json"
 expect "a rule's glob with an open [" 4 "has a '[' without its ']'" \
   "$ISPM" replay "$W/run" --golden "$W/gtglob" --report "$W/rep"
+printf '{"asset": {"version": "2.0"}, "accessors": [{"count": 24, "componentType": 5126, "type": "VEC3",
+ "sparse": {"count": 2147483648, "indices": {"bufferView": 0, "componentType": 5125}, "values": {"bufferView": 0}}}]}\n' > "$W/ext/sparse.gltf"
+seq_with "$W/ext/sparse.json" "$W/ext/sparse.gltf"
+expect "glTF sparse.count 2^31" 2 "accessors[0].sparse.count 2147483648 is not an integer in 1..24" \
+  "$ISPM" record "$W/ext/sparse.json" -o "$W/r" --quiet
 expect "lineage --pixel 4294967376,80" 2 "--pixel: '4294967376,80'" \
   "$ISPM" lineage "$W/run" --frame 0 --pixel 4294967376,80
 run_copy rdeep; python3 -c "

@@ -183,6 +183,20 @@ START_TEST(gltf_precheck)
     ck_assert_int_eq(scn_gltf_precheck("h.gltf", huge, strlen(huge), &most, &err), ENG_OK);
     ck_assert_uint_eq(most, SCN_EXTERNAL_MAX);
     ck_assert_int_eq(scn_gltf_precheck("t.gltf", "{} x", 4, &most, &err), ENG_ERR_PARSE);
+    /* Accessor counts tinygltf's int would wrap. */
+    const char *counts[] = {
+        "{\"accessors\": [{\"count\": 24}, {\"count\": 24, \"sparse\": {\"count\": 2147483648}}]}",
+        "{\"accessors\": [{\"count\": 4294967296}]}",
+        "{\"accessors\": [{\"count\": 0}]}",
+        "{\"accessors\": [{\"count\": 2.5}]}",
+        "{\"accessors\": [{\"count\": 3, \"sparse\": {\"count\": 4}}]}",
+    };
+    for (size_t i = 0; i < sizeof counts / sizeof *counts; i++)
+        ck_assert_msg(scn_gltf_precheck("c.gltf", counts[i], strlen(counts[i]), &most, &err) == ENG_ERR_INVALID,
+                      "case %zu", i);
+    ck_assert_ptr_nonnull(strstr(err.msg, "accessors[0].sparse.count 4"));
+    const char *fine = "{\"accessors\": [{\"count\": 2147483647, \"sparse\": {\"count\": 1}}, {}]}";
+    ck_assert_int_eq(scn_gltf_precheck("c.gltf", fine, strlen(fine), &most, &err), ENG_OK);
     /* A .glb whose JSON chunk nests 300 levels. */
     size_t n = 300, json_len = 2 * n, len = 20 + json_len;
     unsigned char *glb = calloc(1, len);

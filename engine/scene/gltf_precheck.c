@@ -2,8 +2,8 @@
  *
  * tinygltf parses JSON with nlohmann::json, which recurses once per nesting level: a 40 KB file
  * of 20,000 nested arrays overflows the stack. So the JSON (a .gltf's text, a .glb's JSON chunk)
- * is held to ENG_JSON_MAX_DEPTH and to nothing after its value before the parser sees it. The
- * same pass gives the largest external file the glTF can need (its largest buffer byteLength),
+ * is held to ENG_JSON_MAX_DEPTH and to nothing after its value before the parser sees it, and
+ * its accessor counts to what tinygltf's int can hold (check_counts). The same pass gives the largest external file the glTF can need (its largest buffer byteLength),
  * which the shim's file reads are held to, so that a huge or sparse .bin is refused from its
  * size, not read whole first. An image's size is read from its PNG or JPEG header, so that the
  * shim can refuse one over SCN_IMAGE_MAX_SIDE before stb_image allocates its pixels.
@@ -24,10 +24,33 @@ static uint32_t be32(const unsigned char *b)
     return (uint32_t)b[0] << 24 | (uint32_t)b[1] << 16 | (uint32_t)b[2] << 8 | (uint32_t)b[3];
 }
 
-/* The largest buffers[i].byteLength (0 when none is readable). */
-static uint64_t largest_buffer(const char *json, size_t len)
+/* Every accessors[i].count an integer in 1..2^31-1 and every sparse.count one in 1..count:
+ * tinygltf 2.7 stores both in an int, so 2^31 would wrap (to a sparse count of 0) unnoticed. */
+static eng_result check_counts(const char *path, const cJSON *root, eng_error *err)
 {
-    cJSON *root = cJSON_ParseWithLength(json, len);
+    const cJSON *accessors = cJSON_GetObjectItemCaseSensitive(root, "accessors");
+    int i = 0;
+    const cJSON *a;
+    cJSON_ArrayForEach(a, accessors)
+    {
+        const cJSON *c = cJSON_GetObjectItemCaseSensitive(a, "count");
+        double count = cJSON_IsNumber(c) ? c->valuedouble : 0;
+        if (c && (!cJSON_IsNumber(c) || count != (double)(int64_t)count || count < 1 || count > 2147483647.0))
+            return eng_fail(err, ENG_ERR_INVALID, "%s: accessors[%d].count %.17g is not an integer in 1..2147483647",
+                            path, i, count);
+        const cJSON *sp = cJSON_GetObjectItemCaseSensitive(cJSON_GetObjectItemCaseSensitive(a, "sparse"), "count");
+        if (sp && (!cJSON_IsNumber(sp) || sp->valuedouble != (double)(int64_t)sp->valuedouble || sp->valuedouble < 1 ||
+                   sp->valuedouble > count))
+            return eng_fail(err, ENG_ERR_INVALID, "%s: accessors[%d].sparse.count %.17g is not an integer in 1..%.17g "
+                            "(the accessor's count)", path, i, cJSON_IsNumber(sp) ? sp->valuedouble : 0, count);
+        i++;
+    }
+    return ENG_OK;
+}
+
+/* The largest buffers[i].byteLength (0 when none is readable). */
+static uint64_t largest_buffer(const cJSON *root)
+{
     uint64_t most = 0;
     const cJSON *buffers = cJSON_GetObjectItemCaseSensitive(root, "buffers");
     const cJSON *b;
@@ -37,7 +60,6 @@ static uint64_t largest_buffer(const char *json, size_t len)
         if (cJSON_IsNumber(bl) && bl->valuedouble > (double)most && bl->valuedouble < 1e18)
             most = (uint64_t)bl->valuedouble;
     }
-    cJSON_Delete(root);
     return most;
 }
 
@@ -57,11 +79,15 @@ eng_result scn_gltf_precheck(const char *path, const char *bytes, size_t len, ui
         json_len = (size_t)chunk;
     }
     eng_result r = eng_json_precheck(path, json, json_len, ENG_JSON_MAX_DEPTH, err);
-    if (r != ENG_OK || !max_external)
+    if (r != ENG_OK)
         return r;
-    uint64_t most = largest_buffer(json, json_len) + 3;
-    *max_external = most < SCN_EXTERNAL_MIN ? SCN_EXTERNAL_MIN : most > SCN_EXTERNAL_MAX ? SCN_EXTERNAL_MAX : most;
-    return ENG_OK;
+    cJSON *root = cJSON_ParseWithLength(json, json_len); /* NULL: tinygltf names the syntax error */
+    r = check_counts(path, root, err);
+    uint64_t most = largest_buffer(root) + 3;
+    cJSON_Delete(root);
+    if (max_external)
+        *max_external = most < SCN_EXTERNAL_MIN ? SCN_EXTERNAL_MIN : most > SCN_EXTERNAL_MAX ? SCN_EXTERNAL_MAX : most;
+    return r;
 }
 
 int scn_image_header_size(const unsigned char *b, size_t len, uint32_t *w, uint32_t *h)

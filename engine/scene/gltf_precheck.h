@@ -20,7 +20,8 @@ extern "C" {
 #define SCN_EXTERNAL_MAX ((uint64_t)1 << 30)
 
 /* The JSON of a .gltf, or the JSON chunk of a .glb, within ENG_JSON_MAX_DEPTH and with nothing
- * after its value (eng_json_precheck); *max_external (may be NULL) gets the largest size an
+ * after its value (eng_json_precheck), every accessor count an integer in 1..2^31-1 and every
+ * sparse count one in 1..count (ENG_ERR_INVALID naming the accessor); *max_external (may be NULL) gets the largest size an
  * external file of this glTF may have: the largest buffer byteLength (+ 3 bytes of padding),
  * within SCN_EXTERNAL_MIN..SCN_EXTERNAL_MAX. */
 eng_result scn_gltf_precheck(const char *path, const char *bytes, size_t len, uint64_t *max_external,
