@@ -191,6 +191,8 @@ done
 golden gkill; echo '{"default": {"warn": 0.25}, "buffers": []}' > "$W/gkill/tolerances.json"
 cp "$W/gkill/tolerances.json" "$W/tuned.json"
 mv "$W/gkill" "$W/gkill.old"; cp -r "$W/gold" "$W/gkill.tmp"
+expect "replay against a golden in an interrupted bless" 4 "an interrupted bless left" \
+  "$ISPM" replay "$W/run" --golden "$W/gkill" --report "$W/rep"
 "$ISPM" bless "$W/run" "$W/gkill" > "$W/out.txt" 2> "$W/err.txt" || { cat "$W/err.txt"; fail "bless after an interrupted bless"; }
 grep -q "rolled back" "$W/err.txt" || fail "the interrupted bless was not named"
 same "$W/gkill/tolerances.json" "$W/tuned.json" || fail "the tuned tolerances were lost"

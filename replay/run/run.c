@@ -306,8 +306,16 @@ static eng_result parse_manifest(rep_run *run, const cJSON *root, eng_error *err
 eng_result rep_run_open(const char *dir, rep_run **out, eng_error *err)
 {
     *out = NULL;
-    if (!rep_is_dir(dir))
+    if (!rep_is_dir(dir)) {
+        /* A bless that ended between its two renames leaves the golden at <dir>.old. */
+        char *old = rep_xprintf("%s.old", dir);
+        int interrupted = rep_is_dir(old);
+        free(old);
+        if (interrupted)
+            return eng_fail(err, ENG_ERR_IO, "%s: missing, an interrupted bless left %s.old (ispm bless puts it back)",
+                            dir, dir);
         return eng_fail(err, ENG_ERR_IO, "%s: run folder does not exist", dir);
+    }
     rep_run *run = rep_xcalloc(1, sizeof *run);
     run->dir = rep_xstrdup(dir);
     run->manifest_path = rep_path_join(dir, "manifest.json");
