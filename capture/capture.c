@@ -96,6 +96,8 @@ typedef struct cap_pending {
 
 struct cap_capture {
     eng_lock run_lock; /* <run>.lock while the capture lives: one writer per run */
+    char *final_dir;   /* build_aside: the run that run_dir replaces at cap_finish, else NULL */
+    int swapped;       /* ... and has replaced */
     char *run_dir, *frames_dir;
     const seq_sequence *seq;
     const scn_scene *scene;
@@ -532,6 +534,16 @@ eng_result cap_create(const cap_desc *desc, cap_capture **out, eng_error *err)
     eng_result r = cap__make_parent_dirs(c->run_dir, err);
     if (r == ENG_OK)
         r = eng_lock_take(c->run_dir, "ispm record", &c->run_lock, err);
+    char *old_manifest = cap__join(c->run_dir, MANIFEST_NAME);
+    if (r == ENG_OK && desc->build_aside && desc->overwrite && !resume && path_exists(old_manifest)) {
+        c->final_dir = c->run_dir;
+        c->run_dir = cap__xmalloc(strlen(c->final_dir) + 16);
+        sprintf(c->run_dir, "%s.recording", c->final_dir);
+        free(c->frames_dir);
+        c->frames_dir = cap__join(c->run_dir, "frames");
+        r = cap__remove_tree(c->run_dir, err);
+    }
+    free(old_manifest);
     if (r == ENG_OK)
         r = prepare_run_dir(c->run_dir, c->frames_dir, desc->overwrite, &resume, 1, err);
     if (r != ENG_OK) {
@@ -620,11 +632,19 @@ void cap_destroy(cap_capture *c)
     free(c->command_line);
     free(c->renderer);
     cJSON_Delete(c->renderer_settings);
+    if (c->final_dir && !c->swapped)
+        cap__remove_tree(c->run_dir, NULL); /* a recording that did not finish: the old run stays */
     eng_lock_drop(&c->run_lock);
+    free(c->final_dir);
     free(c->run_dir);
     free(c->frames_dir);
     pthread_mutex_destroy(&c->lock);
     free(c);
+}
+
+int cap_builds_aside(const cap_capture *c)
+{
+    return c && c->final_dir && !c->swapped;
 }
 
 int cap_frame_done(const cap_capture *c, int frame)
@@ -1280,6 +1300,10 @@ eng_result cap_finish(cap_capture *c, eng_error *err)
     cJSON_free(text);
     r = write_atomic(c->run_dir, MANIFEST_NAME, doc, err);
     free(doc);
+    if (r == ENG_OK && c->final_dir) {
+        r = cap__swap_run(c->run_dir, c->final_dir, err);
+        c->swapped = r == ENG_OK;
+    }
     return r;
 }
 

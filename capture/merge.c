@@ -487,25 +487,6 @@ static eng_result write_run(const shard *const *sorted, int count, const cap_mer
     return r;
 }
 
-static int remove_one(const char *path, const struct stat *st, int flag, struct FTW *ftw)
-{
-    (void)st;
-    (void)ftw;
-    int rc = flag == FTW_DP ? rmdir(path) : unlink(path);
-    return rc != 0 && errno != ENOENT ? -1 : 0;
-}
-
-/* rm -rf, never following a symbolic link; a missing path is no error. */
-static eng_result remove_tree(const char *path, eng_error *err)
-{
-    struct stat st;
-    if (lstat(path, &st) != 0)
-        return errno == ENOENT ? ENG_OK : eng_fail(err, ENG_ERR_IO, "%s: %s", path, strerror(errno));
-    if (nftw(path, remove_one, 32, FTW_DEPTH | FTW_PHYS) != 0)
-        return eng_fail(err, ENG_ERR_IO, "%s: cannot remove: %s", path, strerror(errno));
-    return ENG_OK;
-}
-
 /* The run folder must not be one of the shards, nor inside one, nor hold one. */
 static eng_result check_output(const cap_merge_desc *d, eng_error *err)
 {
@@ -538,36 +519,16 @@ static eng_result write_merged(const shard *const *sorted, int count, const cap_
         return write_run(sorted, count, d, d->run_dir, err);
     if (!d->overwrite)
         return eng_fail(err, ENG_ERR_IO, "%s: already holds a run (use --force)", d->run_dir);
-    char *tmp = cap__xmalloc(strlen(d->run_dir) + 16), *old = cap__xmalloc(strlen(d->run_dir) + 16);
+    char *tmp = cap__xmalloc(strlen(d->run_dir) + 16);
     sprintf(tmp, "%s.merging", d->run_dir);
-    sprintf(old, "%s.replaced", d->run_dir);
-    eng_result r = remove_tree(tmp, err);
-    if (r == ENG_OK)
-        r = remove_tree(old, err);
+    eng_result r = cap__remove_tree(tmp, err);
     if (r == ENG_OK)
         r = write_run(sorted, count, d, tmp, err);
-    char *parent = cap__xstrdup(d->run_dir);
-    char *slash = strrchr(parent, '/');
-    if (slash)
-        slash[slash == parent ? 1 : 0] = 0;
-    if (r == ENG_OK && rename(d->run_dir, old) != 0)
-        r = eng_fail(err, ENG_ERR_IO, "%s: cannot move the old run aside: %s", d->run_dir, strerror(errno));
-    else if (r == ENG_OK && rename(tmp, d->run_dir) != 0) {
-        r = eng_fail(err, ENG_ERR_IO, "%s: cannot rename %s into place: %s", d->run_dir, tmp, strerror(errno));
-        if (rename(old, d->run_dir) != 0)
-            fprintf(stderr, "ispm: %s: the old run is left at %s\n", d->run_dir, old);
-    } else if (r == ENG_OK && (r = cap__fsync_dir(slash ? parent : ".", err)) != ENG_OK) {
-        /* not durable: undone, the old run back in place */
-        if (rename(d->run_dir, tmp) != 0 || rename(old, d->run_dir) != 0)
-            fprintf(stderr, "ispm: %s: the swap could not be undone (the old run is at %s)\n", d->run_dir, old);
-    }
     if (r == ENG_OK)
-        remove_tree(old, NULL); /* the merged run is in place; what is left of the old one is no run */
+        r = cap__swap_run(tmp, d->run_dir, err);
     else
-        remove_tree(tmp, NULL);
-    free(parent);
+        cap__remove_tree(tmp, NULL);
     free(tmp);
-    free(old);
     return r;
 }
 

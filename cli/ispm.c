@@ -397,7 +397,7 @@ static int cmd_record(int argc, char **argv, const char *command_line)
         .gl_version = eng_gl_version(eng), .gl_renderer = eng_gl_renderer(eng),
         .gl_backend = eng_gl_backend(eng), .gl_where = eng_gl_where(eng),
         .tool_version = ISPM_VERSION, .git_revision = ISPM_GIT_REV,
-        .command_line = command_line, .overwrite = force,
+        .command_line = command_line, .overwrite = force, .build_aside = force,
         .determinism = eng_determinism_info(), .resume = resume, .shard = shard ? &sh : NULL,
         .writers = 1, /* frame N is encoded and written while frame N+1 renders */
     };
@@ -442,7 +442,8 @@ static int cmd_record(int argc, char **argv, const char *command_line)
                 fprintf(stderr, "ispm record: %s\n", cerr.msg);
             else
                 fprintf(stderr, "ispm record: %s\n", err.msg);
-            fprintf(stderr, "ispm record: run %s is incomplete (no manifest written)\n", out);
+            if (!cap_builds_aside(cap)) /* else the old run in out is kept as it was */
+                fprintf(stderr, "ispm record: run %s is incomplete (no manifest written)\n", out);
             rc = EXIT_RUNTIME;
             goto done;
         }
@@ -456,7 +457,8 @@ static int cmd_record(int argc, char **argv, const char *command_line)
     r = cap_finish(cap, &err);
     if (r != ENG_OK) {
         fprintf(stderr, "ispm record: %s\n", err.msg);
-        fprintf(stderr, "ispm record: run %s is incomplete (no manifest written)\n", out);
+        if (!cap_builds_aside(cap))
+            fprintf(stderr, "ispm record: run %s is incomplete (no manifest written)\n", out);
         rc = EXIT_RUNTIME;
         goto done;
     }

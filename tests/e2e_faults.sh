@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Fault injection in the style of SQLite's: every call that writes (open to create, write,
-# fsync, rename, link, mkdir, ...; tests/tool_fault.c, preloaded) of record, bless (a new golden
+# fsync, rename, link, mkdir, ...; tests/tool_fault.c, preloaded) of record (a new run and
+# --force onto one), bless (a new golden
 # and --accept onto one), merge (a new run and --force onto one) and export (.png, .exr onto an
 # existing file) is made to fail in turn, and the state after each is checked: the command
 # either succeeded with a valid result (the failed call was one it may survive) or failed and
@@ -73,6 +74,14 @@ rec_setup() { rm -rf "$W/r" "$W/r.lock"; }
 rec_ok() { replays "$W/r" "$W/gold"; }
 rec_failed() { [ ! -e "$W/r/manifest.json" ]; }
 trial "record" rec_setup rec_ok rec_failed "$ISPM" record "$W/tiny.json" -o "$W/r" --quiet
+
+# record --force onto a complete run (run2): the new run, or run2 as it was.
+rforce_setup() {
+  rm -rf "$W/r" "$W/r.recording" "$W/r.replaced" "$W/r.lock"; cp -r "$W/run2" "$W/r"
+  [ -n "${R_SUM:-}" ] || R_SUM=$(tree_sum "$W/r")
+}
+rforce_failed() { [ "$(tree_sum "$W/r")" = "$R_SUM" ] && [ ! -e "$W/r.recording" ]; }
+trial "record --force" rforce_setup rec_ok rforce_failed "$ISPM" record "$W/tiny.json" -o "$W/r" --force --quiet
 
 # bless a new golden: a golden the run replays against, or none.
 bnew_setup() { rm -rf "$W/g" "$W/g.tmp" "$W/g.old" "$W/g.lock"; }

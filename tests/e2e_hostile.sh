@@ -8,7 +8,7 @@
 # its renames), locks (bless and record into a folder in use) and silent fallbacks (tolerance
 # files that are FIFOs, dangling links, out of range or with a bad glob; --pixel that wraps;
 # JSON too deep; a sparse count of 2^31; a report that cannot be written; a tampered shard
-# merged). Every fixture is made here at run time (sparse files
+# merged), and record --force and merge --force onto a complete run on a full disk. Every fixture is made here at run time (sparse files
 # and FIFOs cost no disk). Every command runs under `timeout 10` and /usr/bin/time: it must end
 # with the expected exit code, exactly one line on stderr naming the file, and a peak RSS under
 # 1.5 GB. Prints one line per case with its time and peak RSS.
@@ -178,6 +178,11 @@ expect "merge --force onto a run, disk full" 1 "merged.merging/run.json" \
 [ ! -e "$W/merged.merging" ] || fail "merge --force left its temporary run"
 "$ISPM" merge "$W/shardA" "$W/shardB" -o "$W/merged" --force > /dev/null || fail "merge --force onto a complete run"
 "$ISPM" replay "$W/merged" --golden "$W/gold" --report "$W/rep" > /dev/null || fail "the merged run (--force) does not replay"
+run_copy rforce; sha_r=$(cat "$W/rforce/manifest.json" "$W/rforce/frames/"* | sha256sum)
+expect "record --force onto a run, disk full" 1 "rforce.recording/frames/000000.exr" \
+  bash -c 'trap "" XFSZ; ulimit -f 20; exec "$@"' - "$ISPM" record "$W/tiny.json" -o "$W/rforce" --force --quiet
+[ "$(cat "$W/rforce/manifest.json" "$W/rforce/frames/"* | sha256sum)" = "$sha_r" ] || fail "record --force: the old run changed"
+[ ! -e "$W/rforce.recording" ] || fail "record --force left its temporary run"
 for ext in png exr; do
   "$ISPM" export "$W/run" --frame 0 --buffer final.display -o "$W/out.$ext" > /dev/null || fail "export .$ext"
   cp "$W/out.$ext" "$W/out.$ext.before"
