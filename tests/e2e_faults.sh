@@ -7,7 +7,7 @@
 # either succeeded with a valid result (the failed call was one it may survive) or failed and
 # left the previous state as it was — no run or golden that looks complete, the old golden, run
 # or image byte for byte. Each command's calls are first counted; then every STEP-th is failed,
-# STEP chosen so that each command is tried about FAULT_TRIALS times (12: about two minutes on
+# STEP chosen so that each command is tried about FAULT_TRIALS times (10: about two minutes on
 # two cores; FAULT_TRIALS=0 fails every call). Prints per command the calls, the faults injected
 # and how many ended in failure (state intact) or success (result valid).
 # usage: e2e_faults.sh ISPM SOURCE_DIR WORK_DIR
@@ -16,7 +16,7 @@ ISPM=$(realpath "$1"); SRC=$(realpath "$2"); WORK=$3
 SHIM=$(dirname "$ISPM")/../tests/libispm_fault.so
 fail() { echo "FAIL: $*"; exit 1; }
 [ -f "$SHIM" ] || { echo "SKIP: $SHIM not built"; exit 77; }
-TRIALS=${FAULT_TRIALS:-12}
+TRIALS=${FAULT_TRIALS:-10}
 rm -rf "$WORK"; mkdir -p "$WORK"
 W=$WORK
 printf '{"scene": "%s", "frames": 2, "fps": 8, "resolution": [32, 24], "camera": {"node": "Camera"},
