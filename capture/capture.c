@@ -534,6 +534,8 @@ eng_result cap_create(const cap_desc *desc, cap_capture **out, eng_error *err)
     eng_result r = cap__make_parent_dirs(c->run_dir, err);
     if (r == ENG_OK)
         r = eng_lock_take(c->run_dir, "ispm record", &c->run_lock, err);
+    if (r == ENG_OK)
+        r = cap__recover_run(c->run_dir, err);
     char *old_manifest = cap__join(c->run_dir, MANIFEST_NAME);
     if (r == ENG_OK && desc->build_aside && desc->overwrite && !resume && path_exists(old_manifest)) {
         c->final_dir = c->run_dir;

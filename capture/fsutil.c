@@ -115,3 +115,23 @@ eng_result cap__swap_run(const char *tmp, const char *run_dir, eng_error *err)
     free(old);
     return r;
 }
+
+eng_result cap__recover_run(const char *run_dir, eng_error *err)
+{
+    char *old = cap__xmalloc(strlen(run_dir) + 16);
+    sprintf(old, "%s.replaced", run_dir);
+    struct stat st;
+    eng_result r = ENG_OK;
+    if (lstat(old, &st) == 0 && S_ISDIR(st.st_mode)) {
+        if (lstat(run_dir, &st) != 0) {
+            if (rename(old, run_dir) != 0)
+                r = eng_fail(err, ENG_ERR_IO, "%s: cannot restore the run from %s: %s", run_dir, old, strerror(errno));
+            else
+                fprintf(stderr, "ispm: %s: an interrupted replacement was rolled back (%s restored)\n", run_dir, old);
+        } else {
+            r = cap__remove_tree(old, err);
+        }
+    }
+    free(old);
+    return r;
+}

@@ -572,6 +572,8 @@ eng_result cap_merge(const cap_merge_desc *d, eng_error *err)
     if (r == ENG_OK)
         r = eng_lock_take(d->run_dir, "ispm merge", &lock, err);
     if (r == ENG_OK)
+        r = cap__recover_run(d->run_dir, err);
+    if (r == ENG_OK)
         r = write_merged(sorted, count, d, err);
     eng_lock_drop(&lock);
     for (int i = 0; i < count; i++)

@@ -183,6 +183,16 @@ expect "record --force onto a run, disk full" 1 "rforce.recording/frames/000000.
   bash -c 'trap "" XFSZ; ulimit -f 20; exec "$@"' - "$ISPM" record "$W/tiny.json" -o "$W/rforce" --force --quiet
 [ "$(cat "$W/rforce/manifest.json" "$W/rforce/frames/"* | sha256sum)" = "$sha_r" ] || fail "record --force: the old run changed"
 [ ! -e "$W/rforce.recording" ] || fail "record --force left its temporary run"
+# A record --force killed between its swap's renames: RUN.replaced, no RUN.
+run_copy rswap; mv "$W/rswap" "$W/rswap.replaced"; sha_s=$(cat "$W/rswap.replaced/manifest.json" | sha256sum)
+expect "replay of a run in an interrupted swap" 4 "an interrupted record or merge --force left" \
+  "$ISPM" replay "$W/rswap" --golden "$W/gold" --report "$W/rep"
+# The next writer puts it back (and, without --force, then refuses to replace it).
+"$ISPM" merge "$W/shardA" "$W/shardB" -o "$W/rswap" > /dev/null 2> "$W/err.txt"
+grep -q "an interrupted replacement was rolled back" "$W/err.txt" || { cat "$W/err.txt"; fail "no roll-back named"; }
+[ "$(cat "$W/rswap/manifest.json" | sha256sum)" = "$sha_s" ] && [ ! -e "$W/rswap.replaced" ] || \
+  fail "the interrupted swap was not rolled back"
+CASES=$((CASES + 1)); echo "merge into a run in an interrupted swap: rolled back"
 for ext in png exr; do
   "$ISPM" export "$W/run" --frame 0 --buffer final.display -o "$W/out.$ext" > /dev/null || fail "export .$ext"
   cp "$W/out.$ext" "$W/out.$ext.before"

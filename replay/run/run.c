@@ -307,12 +307,18 @@ eng_result rep_run_open(const char *dir, rep_run **out, eng_error *err)
 {
     *out = NULL;
     if (!rep_is_dir(dir)) {
-        /* A bless that ended between its two renames leaves the golden at <dir>.old. */
-        char *old = rep_xprintf("%s.old", dir);
-        int interrupted = rep_is_dir(old);
+        /* A bless that ended between its two renames leaves the golden at <dir>.old; a record or
+         * merge --force, the run at <dir>.replaced. */
+        char *old = rep_xprintf("%s.old", dir), *replaced = rep_xprintf("%s.replaced", dir);
+        int bless = rep_is_dir(old), swap = rep_is_dir(replaced);
         free(old);
-        if (interrupted)
+        free(replaced);
+        if (bless)
             return eng_fail(err, ENG_ERR_IO, "%s: missing, an interrupted bless left %s.old (ispm bless puts it back)",
+                            dir, dir);
+        if (swap)
+            return eng_fail(err, ENG_ERR_IO,
+                            "%s: missing, an interrupted record or merge --force left %s.replaced (either puts it back)",
                             dir, dir);
         return eng_fail(err, ENG_ERR_IO, "%s: run folder does not exist", dir);
     }
