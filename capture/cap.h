@@ -36,6 +36,11 @@ typedef struct cap_desc {
     const char *git_revision;     /* e.g. "abc123" or "unknown" */
     const char *command_line;     /* recorded verbatim, may be NULL */
     int overwrite;                /* allow an existing non-empty run_dir (its manifest is removed first) */
+    /* With overwrite, onto a complete run (one with manifest.json): the new run is recorded in
+     * <run_dir>.recording and renamed over run_dir by cap_finish (the old run at
+     * <run_dir>.replaced until the rename is synced), so that a recording that fails or is
+     * killed leaves the old run as it was. A live view of run_dir sees the old run meanwhile. */
+    int build_aside;
     /* NULL-terminated key, value, key, value, ... list recorded as "determinism" in the
      * manifest (pass eng_determinism_info()); may be NULL. Copied by cap_create. */
     const char *const *determinism;
@@ -98,6 +103,10 @@ eng_result cap_create(const cap_desc *desc, cap_capture **out, eng_error *err);
  * (with writers, frame_end queues the frame and a writer does this). Errors are sticky: after
  * one callback or write failed, every later callback and cap_finish fail with the same error. */
 eng_listener cap_listener(cap_capture *c);
+
+/* Whether c records beside a complete run that it replaces only at cap_finish (build_aside):
+ * then a failure leaves that run as it was. */
+int cap_builds_aside(const cap_capture *c);
 
 /* Was frame already captured (by this capture, or by the interrupted run it resumes)?
  * A resumed recording skips such frames. */

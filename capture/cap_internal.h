@@ -36,6 +36,18 @@ eng_result cap__fsync_dir(const char *dir, eng_error *err);
  * does (refused when it holds a run unless overwrite; the old manifest unlinked first), and
  * text written to dir/name atomically (name.tmp, fsync, rename, fsync of dir). */
 eng_result cap__prepare_run(const char *run_dir, const char *frames_dir, int overwrite, eng_error *err);
+/* rm -rf that never follows a symbolic link; a missing path is no error (err may be NULL). */
+eng_result cap__remove_tree(const char *path, eng_error *err);
+/* A complete run built beside run_dir (in tmp) takes its place: run_dir renamed to
+ * <run_dir>.replaced, tmp to run_dir, the parent folder synced (else the swap is undone and
+ * the old run is back), then the old one removed. On failure run_dir is the old run. */
+eng_result cap__swap_run(const char *tmp, const char *run_dir, eng_error *err);
+/* A swap that ended between its two renames leaves <run_dir>.replaced and no run_dir: the old
+ * run is renamed back (one line on stderr); a <run_dir>.replaced beside a run is removed.
+ * Under the run's lock. */
+eng_result cap__recover_run(const char *run_dir, eng_error *err);
+/* The folders above run_dir, made (the lock beside it, <run>.lock, needs them). */
+eng_result cap__make_parent_dirs(const char *run_dir, eng_error *err);
 eng_result cap__write_atomic(const char *dir, const char *name, const char *text, eng_error *err);
 /* capture.c's JSON helpers: j itself, or the process ends (out of memory); obj[key] as an
  * integer in [lo, hi] (1) or not (0); a tree printed with a trailing newline (free it). */

@@ -95,6 +95,9 @@ typedef struct cap_pending {
 } cap_pending;
 
 struct cap_capture {
+    eng_lock run_lock; /* <run>.lock while the capture lives: one writer per run */
+    char *final_dir;   /* build_aside: the run that run_dir replaces at cap_finish, else NULL */
+    int swapped;       /* ... and has replaced */
     char *run_dir, *frames_dir;
     const seq_sequence *seq;
     const scn_scene *scene;
@@ -467,6 +470,22 @@ static eng_result prepare_run_dir(const char *run_dir, const char *frames_dir, i
     return r;
 }
 
+eng_result cap__make_parent_dirs(const char *run_dir, eng_error *err)
+{
+    char *parent = cap__xstrdup(run_dir);
+    size_t n = strlen(parent);
+    while (n > 1 && parent[n - 1] == '/')
+        parent[--n] = 0;
+    char *slash = strrchr(parent, '/');
+    eng_result r = ENG_OK;
+    if (slash && slash != parent) {
+        *slash = 0;
+        r = make_dirs(parent, err);
+    }
+    free(parent);
+    return r;
+}
+
 static eng_result write_runinfo(cap_capture *c, eng_error *err);
 static eng_result write_frame_record(cap_capture *c, int frame, eng_error *err);
 static int write_job(void *ctx, void *job);
@@ -505,13 +524,30 @@ eng_result cap_create(const cap_desc *desc, cap_capture **out, eng_error *err)
     }
 
     cap_capture *c = cap__xcalloc(1, sizeof *c);
+    c->run_lock.fd = -1;
     pthread_mutex_init(&c->lock, NULL);
     c->renderer = dup_or_null(desc->renderer);
     c->renderer_settings = renderer_settings;
     c->run_dir = cap__xstrdup(desc->run_dir);
     c->frames_dir = cap__join(desc->run_dir, "frames");
     int resume = desc->resume;
-    eng_result r = prepare_run_dir(c->run_dir, c->frames_dir, desc->overwrite, &resume, 1, err);
+    eng_result r = cap__make_parent_dirs(c->run_dir, err);
+    if (r == ENG_OK)
+        r = eng_lock_take(c->run_dir, "ispm record", &c->run_lock, err);
+    if (r == ENG_OK)
+        r = cap__recover_run(c->run_dir, err);
+    char *old_manifest = cap__join(c->run_dir, MANIFEST_NAME);
+    if (r == ENG_OK && desc->build_aside && desc->overwrite && !resume && path_exists(old_manifest)) {
+        c->final_dir = c->run_dir;
+        c->run_dir = cap__xmalloc(strlen(c->final_dir) + 16);
+        sprintf(c->run_dir, "%s.recording", c->final_dir);
+        free(c->frames_dir);
+        c->frames_dir = cap__join(c->run_dir, "frames");
+        r = cap__remove_tree(c->run_dir, err);
+    }
+    free(old_manifest);
+    if (r == ENG_OK)
+        r = prepare_run_dir(c->run_dir, c->frames_dir, desc->overwrite, &resume, 1, err);
     if (r != ENG_OK) {
         cap_destroy(c);
         return r;
@@ -598,10 +634,19 @@ void cap_destroy(cap_capture *c)
     free(c->command_line);
     free(c->renderer);
     cJSON_Delete(c->renderer_settings);
+    if (c->final_dir && !c->swapped)
+        cap__remove_tree(c->run_dir, NULL); /* a recording that did not finish: the old run stays */
+    eng_lock_drop(&c->run_lock);
+    free(c->final_dir);
     free(c->run_dir);
     free(c->frames_dir);
     pthread_mutex_destroy(&c->lock);
     free(c);
+}
+
+int cap_builds_aside(const cap_capture *c)
+{
+    return c && c->final_dir && !c->swapped;
 }
 
 int cap_frame_done(const cap_capture *c, int frame)
@@ -1181,7 +1226,8 @@ static cJSON *manifest_json(const cap_capture *c)
     return root;
 }
 
-/* Writes text to dir/name atomically: name.tmp, fsync, rename, fsync dir. */
+/* Writes text to dir/name atomically: name.tmp, fsync, rename, fsync dir. On failure name.tmp is
+ * removed, and so is dir/name when it was renamed into place but its folder could not be synced. */
 static eng_result write_atomic(const char *dir, const char *name, const char *text, eng_error *err)
 {
     char *path = cap__join(dir, name);
@@ -1209,10 +1255,13 @@ static eng_result write_atomic(const char *dir, const char *name, const char *te
         r = eng_fail(err, ENG_ERR_IO, "%s: %s", path, strerror(errno));
     if (r == ENG_OK && rename(tmp, path) != 0)
         r = eng_fail(err, ENG_ERR_IO, "%s: cannot rename %s into place: %s", path, tmp, strerror(errno));
-    if (r != ENG_OK)
+    if (r != ENG_OK) {
         unlink(tmp);
-    else
-        r = cap__fsync_dir(dir, err);
+    } else if ((r = cap__fsync_dir(dir, err)) != ENG_OK) {
+        /* Renamed but not durable: the file goes, so that no failed write leaves a manifest
+         * that makes the run look complete. */
+        unlink(path);
+    }
 out:
     free(tmp);
     free(path);
@@ -1253,6 +1302,10 @@ eng_result cap_finish(cap_capture *c, eng_error *err)
     cJSON_free(text);
     r = write_atomic(c->run_dir, MANIFEST_NAME, doc, err);
     free(doc);
+    if (r == ENG_OK && c->final_dir) {
+        r = cap__swap_run(c->run_dir, c->final_dir, err);
+        c->swapped = r == ENG_OK;
+    }
     return r;
 }
 
@@ -1320,7 +1373,9 @@ static eng_result read_json(const char *path, cJSON **out, eng_error *err)
     *out = NULL;
     char *text = NULL;
     size_t len = 0;
-    eng_result r = eng_read_file(path, (size_t)64 << 20, &text, &len, err);
+    eng_result r = eng_read_input(path, ENG_IN_NOFOLLOW, (size_t)64 << 20, &text, &len, err);
+    if (r == ENG_OK && (r = eng_json_precheck(path, text, len, ENG_JSON_MAX_DEPTH, err)) != ENG_OK)
+        free(text);
     if (r != ENG_OK)
         return r;
     *out = cJSON_ParseWithLength(text, len);

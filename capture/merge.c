@@ -8,8 +8,11 @@
  * after the frames' directory entries are fsynced — so a merge killed at any moment leaves a
  * folder that replay refuses (no manifest), never a complete-looking run. Frame files are
  * hard-linked from the shards (a run's files are never rewritten in place: each appears by
- * rename), copied where the shards lie on another file system. */
-#define _POSIX_C_SOURCE 200809L
+ * rename), copied where the shards lie on another file system; a shard's frame that is not a
+ * regular file inside it (a symbolic link) is refused. A complete run in the way (--force) is
+ * replaced only once the merged one is complete beside it (write_merged), and the output may
+ * not be a shard. */
+#define _XOPEN_SOURCE 700
 
 #include "cap_internal.h"
 #include "merge.h"
@@ -18,6 +21,8 @@
 
 #include <errno.h>
 #include <fcntl.h>
+#include <ftw.h>
+#include <limits.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -120,7 +125,8 @@ static eng_result load_shard(const char *dir, shard *s, eng_error *err)
                      "still recording) or not a run", dir);
         goto out;
     }
-    if ((r = eng_read_file(path, MAX_MANIFEST_BYTES, &text, &len, err)) != ENG_OK)
+    if ((r = eng_read_input(path, ENG_IN_NOFOLLOW, MAX_MANIFEST_BYTES, &text, &len, err)) != ENG_OK ||
+        (r = eng_json_precheck(path, text, len, ENG_JSON_MAX_DEPTH, err)) != ENG_OK)
         goto out;
     s->manifest = cJSON_ParseWithLength(text, len);
     const cJSON *m = s->manifest, *sh = cJSON_GetObjectItemCaseSensitive(m, "shard");
@@ -409,11 +415,12 @@ static void replace(cJSON *o, const char *key, cJSON *item)
         cJSON_AddItemToObject(o, key, cap__jok(item));
 }
 
-static eng_result write_run(const shard *const *sorted, int count, const cap_merge_desc *d, eng_error *err)
+static eng_result write_run(const shard *const *sorted, int count, const cap_merge_desc *d, const char *run_dir,
+                            eng_error *err)
 {
     const int n = sorted[0]->seq_frames;
-    char *frames_dir = cap__join(d->run_dir, "frames");
-    eng_result r = cap__prepare_run(d->run_dir, frames_dir, d->overwrite, err);
+    char *frames_dir = cap__join(run_dir, "frames");
+    eng_result r = cap__prepare_run(run_dir, frames_dir, d->overwrite, err);
 
     /* The merged manifest, built first: run.json is taken from it, as capture does. */
     cJSON *m = cap__jok(cJSON_Duplicate(sorted[0]->manifest, 1));
@@ -440,7 +447,7 @@ static eng_result write_run(const shard *const *sorted, int count, const cap_mer
             const cJSON *v = cJSON_GetObjectItemCaseSensitive(m, info_keys[i]);
             cJSON_AddItemToObject(info, info_keys[i], cap__jok(v ? cJSON_Duplicate(v, 1) : cJSON_CreateNull()));
         }
-        r = write_json(d->run_dir, "run.json", info, err);
+        r = write_json(run_dir, "run.json", info, err);
         cJSON_Delete(info);
     }
     for (int k = 0; r == ENG_OK && k < count; k++)
@@ -453,7 +460,11 @@ static eng_result write_run(const shard *const *sorted, int count, const cap_mer
             char *tmp = cap__xmalloc(strlen(dst) + 5);
             sprintf(tmp, "%s.tmp", dst);
             unlink(tmp);
-            r = link_or_copy(src, tmp, err);
+            /* A shard's frame is a regular file inside it: link() would link a symbolic link
+             * itself, whatever it points to. */
+            r = eng_check_input(src, ENG_IN_NOFOLLOW, UINT64_MAX, NULL, err);
+            if (r == ENG_OK)
+                r = link_or_copy(src, tmp, err);
             if (r == ENG_OK && rename(tmp, dst) != 0)
                 r = eng_fail(err, ENG_ERR_IO, "%s: cannot rename %s into place: %s", dst, tmp, strerror(errno));
             if (r != ENG_OK)
@@ -470,9 +481,54 @@ static eng_result write_run(const shard *const *sorted, int count, const cap_mer
     if (r == ENG_OK)
         r = cap__fsync_dir(frames_dir, err);
     if (r == ENG_OK)
-        r = write_json(d->run_dir, "manifest.json", m, err);
+        r = write_json(run_dir, "manifest.json", m, err);
     cJSON_Delete(m);
     free(frames_dir);
+    return r;
+}
+
+/* The run folder must not be one of the shards, nor inside one, nor hold one. */
+static eng_result check_output(const cap_merge_desc *d, eng_error *err)
+{
+    char out[PATH_MAX];
+    if (!realpath(d->run_dir, out))
+        return ENG_OK; /* not there yet: no shard can be it */
+    size_t no = strlen(out);
+    for (int i = 0; i < d->shard_count; i++) {
+        char in[PATH_MAX];
+        if (!realpath(d->shards[i], in))
+            continue;
+        size_t ni = strlen(in);
+        size_t k = no < ni ? no : ni;
+        if (strncmp(out, in, k) == 0 && (no == ni || (no > ni ? out[ni] : in[no]) == '/'))
+            return eng_fail(err, ENG_ERR_INVALID, "%s: the output is the shard %s or overlaps it: refusing to write "
+                            "into an input", d->run_dir, d->shards[i]);
+    }
+    return ENG_OK;
+}
+
+/* Writes the merged run. Onto a complete run (--force), the new one is built beside it in
+ * <run>.merging and swapped in by rename, so that a failure leaves the old run as it was. */
+static eng_result write_merged(const shard *const *sorted, int count, const cap_merge_desc *d, eng_error *err)
+{
+    char *manifest = cap__join(d->run_dir, "manifest.json");
+    struct stat st;
+    int complete = lstat(manifest, &st) == 0;
+    free(manifest);
+    if (!complete)
+        return write_run(sorted, count, d, d->run_dir, err);
+    if (!d->overwrite)
+        return eng_fail(err, ENG_ERR_IO, "%s: already holds a run (use --force)", d->run_dir);
+    char *tmp = cap__xmalloc(strlen(d->run_dir) + 16);
+    sprintf(tmp, "%s.merging", d->run_dir);
+    eng_result r = cap__remove_tree(tmp, err);
+    if (r == ENG_OK)
+        r = write_run(sorted, count, d, tmp, err);
+    if (r == ENG_OK)
+        r = cap__swap_run(tmp, d->run_dir, err);
+    else
+        cap__remove_tree(tmp, NULL);
+    free(tmp);
     return r;
 }
 
@@ -509,7 +565,17 @@ eng_result cap_merge(const cap_merge_desc *d, eng_error *err)
     for (int k = 1; r == ENG_OK && k < count; k++)
         r = check_overlap(sorted, k, err);
     if (r == ENG_OK)
-        r = write_run(sorted, count, d, err);
+        r = check_output(d, err);
+    eng_lock lock = {.fd = -1};
+    if (r == ENG_OK)
+        r = cap__make_parent_dirs(d->run_dir, err);
+    if (r == ENG_OK)
+        r = eng_lock_take(d->run_dir, "ispm merge", &lock, err);
+    if (r == ENG_OK)
+        r = cap__recover_run(d->run_dir, err);
+    if (r == ENG_OK)
+        r = write_merged(sorted, count, d, err);
+    eng_lock_drop(&lock);
     for (int i = 0; i < count; i++)
         cJSON_Delete(shards[i].manifest);
     free(shards);

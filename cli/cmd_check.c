@@ -132,9 +132,10 @@ int cmd_check(int argc, char **argv)
         o.provenance_fail = prov_fail;
         eng_error err = {{0}};
         rep_exit x = rep_replay(&o, stdout, &err);
-        if (x == REP_UNREADABLE)
+        if (x == REP_UNREADABLE || x == REP_UNWRITABLE)
             fprintf(stderr, "ispm check: %s\n", err.msg);
-        verdict = x == REP_OK || x == REP_WARN ? CHECK_GOOD : x == REP_UNREADABLE ? CHECK_SKIP : CHECK_BAD;
+        verdict = x == REP_OK || x == REP_WARN ? CHECK_GOOD
+                  : x == REP_UNREADABLE || x == REP_UNWRITABLE ? CHECK_SKIP : CHECK_BAD;
     }
     printf("check: %s — %s against %s\n", verdict == CHECK_GOOD ? "GOOD" : verdict == CHECK_BAD ? "BAD" : "CANNOT JUDGE",
            seq_path, golden);

@@ -3,7 +3,8 @@
  *   `ispm export RUN --frame F --buffer NAME -o FILE.png|.exr`: one buffer of one frame as an
  *   image, with the display mapping of the replay report's thumbnails (PNG) or as float (EXR);
  *   without --buffer, the whole frame as one multi-part EXR (a frame file, also of a golden whose
- *   buffers are stored as objects, for oiiotool and tev). */
+ *   buffers are stored as objects, for oiiotool and tev). Every output is written beside its
+ *   final name, read back and renamed into place. */
 #define _POSIX_C_SOURCE 200809L
 #include "eng.h"
 #include "rep_compare.h"
@@ -11,11 +12,14 @@
 #include "rep_util.h"
 
 #include <cjson/cJSON.h>
+#include <errno.h>
+#include <fcntl.h>
 #include <getopt.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 enum { INS_OK = 0, INS_RUNTIME = 1, INS_INPUT = 2 };
 
@@ -51,13 +55,10 @@ static void export_usage(FILE *f)
 
 static cJSON *load_json(const char *path)
 {
-    char *text = NULL;
-    size_t len = 0;
+    cJSON *j = NULL;
     eng_error err;
-    if (eng_read_file(path, REP_MAX_JSON_BYTES, &text, &len, &err) != ENG_OK)
+    if (rep_json_load(path, ENG_IN_NOFOLLOW, &j, &err) != ENG_OK)
         return NULL;
-    cJSON *j = cJSON_ParseWithLength(text, len);
-    free(text);
     return j;
 }
 
@@ -208,21 +209,72 @@ static int ends_with(const char *s, const char *suffix)
     return n >= k && strcmp(s + n - k, suffix) == 0;
 }
 
-/* Writes buffer b to out (.png mapped for display, .exr float); returns an exit code. */
+/* Whether the EXR at tmp holds what was written: its one part decodes to b's floats bit for bit
+ * (OpenImageIO's writer may leave a file short on a full disk without a word). */
+static eng_result read_back(const char *tmp, const eng_buffer *b, eng_error *err)
+{
+    rep_part *parts = NULL;
+    int n = 0;
+    eng_error why;
+    if (rep_read_parts(tmp, REP_MAX_FLOATS, &parts, &n, &why) != ENG_OK)
+        return eng_fail(err, ENG_ERR_IO, "%s: the written file does not read back: %s", tmp, why.msg);
+    eng_buffer back = n == 1 ? rep_part_buffer(&parts[0]) : (eng_buffer){0};
+    char d0[40], d1[40] = "";
+    eng_buffer_digest(b, d0);
+    if (n == 1 && back.width == b->width && back.height == b->height && back.channel_count == b->channel_count)
+        eng_buffer_digest(&back, d1);
+    rep_parts_free(parts, n);
+    return strcmp(d0, d1) == 0 ? ENG_OK : eng_fail(err, ENG_ERR_IO, "%s: the written file reads back different", tmp);
+}
+
+/* fsync of a file by name. */
+static eng_result sync_file(const char *path, eng_error *err)
+{
+    int fd = open(path, O_RDONLY | O_CLOEXEC);
+    if (fd < 0)
+        return eng_fail(err, ENG_ERR_IO, "%s: cannot open: %s", path, strerror(errno));
+    int rc = fsync(fd), e = errno;
+    close(fd);
+    return rc == 0 ? ENG_OK : eng_fail(err, ENG_ERR_IO, "%s: cannot sync: %s", path, strerror(e));
+}
+
+/* Writes buffer b to out (.png mapped for display, .exr float); returns an exit code. The image
+ * goes to a temporary name beside out, is checked (an EXR read back) and flushed, and only then renamed over
+ * out: a failure (a full disk) leaves out as it was. */
 static int export_buffer(const eng_buffer *b, const char *out)
 {
     eng_error err = {{0}};
     eng_result r;
-    if (ends_with(out, ".exr")) {
-        r = rep_oiio_write_parts(out, b, 1, &err);
-    } else {
+    int exr = ends_with(out, ".exr");
+    char *tmp = rep_xprintf("%s.tmp.%ld%s", out, (long)getpid(), exr ? ".exr" : ".png");
+    unsigned char *rgb = NULL;
+    int w, h;
+    if (exr) {
+        r = rep_oiio_write_parts(tmp, b, 1, &err);
+        if (r == ENG_OK)
+            r = read_back(tmp, b, &err);
+    } else { /* libpng directly: every short write and the close are checked */
         rep_thumb_map map;
         rep_thumb_map_make(b->name, b, NULL, &map);
-        int w, h;
-        unsigned char *rgb = rep_image_render(b, &map, 0, &w, &h);
-        r = rep_oiio_write_png(out, w, h, 3, rgb, &err);
-        free(rgb);
+        rgb = rep_image_render(b, &map, 0, &w, &h);
+        r = rep_png_write(tmp, w, h, 3, rgb, &err);
     }
+    if (r == ENG_OK)
+        r = sync_file(tmp, &err);
+    if (r == ENG_OK && rename(tmp, out) != 0)
+        r = eng_fail(&err, ENG_ERR_IO, "%s: cannot rename %s into place: %s", out, tmp, strerror(errno));
+    if (r == ENG_OK) { /* durable where the folder can be synced; the new image is in place either way */
+        char *dir = rep_xstrdup(out);
+        char *slash = strrchr(dir, '/');
+        if (slash)
+            slash[slash == dir ? 1 : 0] = 0;
+        rep_sync_dir(slash ? dir : ".", NULL);
+        free(dir);
+    } else {
+        unlink(tmp);
+    }
+    free(rgb);
+    free(tmp);
     if (r != ENG_OK) {
         fprintf(stderr, "ispm export: %s\n", err.msg);
         return INS_RUNTIME;

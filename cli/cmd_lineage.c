@@ -11,6 +11,7 @@
 #include "rep_util.h"
 
 #include <cjson/cJSON.h>
+#include <errno.h>
 #include <getopt.h>
 #include <math.h>
 #include <stdio.h>
@@ -371,11 +372,19 @@ int cmd_lineage(int argc, char **argv)
             break;
         }
         case 'p': {
-            char tail;
-            if (sscanf(optarg, "%d,%d%c", &x, &y, &tail) != 2 || x < 0 || y < 0) {
-                fprintf(stderr, "ispm lineage: --pixel: '%s' is not X,Y\n", optarg);
+            /* Each coordinate in 0..65535 (strtol, not sscanf's %d, which wraps what it cannot
+             * hold): the run then says whether the pixel is in the frame. */
+            char *end, *end2 = NULL;
+            errno = 0;
+            long px = strtol(optarg, &end, 10), py = -1;
+            if (end != optarg && *end == ',' && end[1] >= '0' && end[1] <= '9')
+                py = strtol(end + 1, &end2, 10);
+            if (errno || !end2 || *end2 || optarg[0] < '0' || optarg[0] > '9' || px > 65535 || py < 0 || py > 65535) {
+                fprintf(stderr, "ispm lineage: --pixel: '%s' is not X,Y (each 0..65535)\n", optarg);
                 return LIN_INPUT;
             }
+            x = (int)px;
+            y = (int)py;
             break;
         }
         case 'J': json = 1; break;

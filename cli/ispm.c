@@ -130,7 +130,8 @@ static void replay_usage(FILE *f)
             "\n"
             "exit (idiff's convention): 0 ok, 1 warnings (incl. a different sequence, scene or\n"
             "settings), 2 failures (incl. any NaN/Inf not in the golden, missing or extra buffers)\n"
-            "or bad arguments, 3 size mismatch, 4 unreadable run, golden or file\n");
+            "or bad arguments, 3 size mismatch, 4 unreadable run, golden or file, 5 the report\n"
+            "could not be written (read-only or full disk)\n");
 }
 
 static void bless_usage(FILE *f)
@@ -408,15 +409,16 @@ static int cmd_record(int argc, char **argv, const char *command_line)
         .gl_version = eng_gl_version(eng), .gl_renderer = eng_gl_renderer(eng),
         .gl_backend = eng_gl_backend(eng), .gl_where = eng_gl_where(eng),
         .tool_version = ISPM_VERSION, .git_revision = ISPM_GIT_REV,
-        .command_line = command_line, .overwrite = force,
+        .command_line = command_line, .overwrite = force, .build_aside = force,
         .determinism = eng_determinism_info(), .resume = resume, .shard = shard ? &sh : NULL,
         .writers = 1, /* frame N is encoded and written while frame N+1 renders */
     };
     r = cap_create(&cd, &cap, &err);
     if (r != ENG_OK) {
         fprintf(stderr, "ispm record: %s\n", err.msg);
-        /* A run --resume cannot continue (another sequence, already complete) is a bad argument. */
-        rc = resume && r == ENG_ERR_INVALID ? EXIT_INPUT : EXIT_RUNTIME;
+        /* A run --resume cannot continue (another sequence, already complete), a run another
+         * process is writing (its lock) and shard frames that do not fit are bad arguments. */
+        rc = r == ENG_ERR_INVALID ? EXIT_INPUT : EXIT_RUNTIME;
         goto done;
     }
     eng_listener l = cap_listener(cap);
@@ -452,7 +454,8 @@ static int cmd_record(int argc, char **argv, const char *command_line)
                 fprintf(stderr, "ispm record: %s\n", cerr.msg);
             else
                 fprintf(stderr, "ispm record: %s\n", err.msg);
-            fprintf(stderr, "ispm record: run %s is incomplete (no manifest written)\n", out);
+            if (!cap_builds_aside(cap)) /* else the old run in out is kept as it was */
+                fprintf(stderr, "ispm record: run %s is incomplete (no manifest written)\n", out);
             rc = EXIT_RUNTIME;
             goto done;
         }
@@ -466,7 +469,8 @@ static int cmd_record(int argc, char **argv, const char *command_line)
     r = cap_finish(cap, &err);
     if (r != ENG_OK) {
         fprintf(stderr, "ispm record: %s\n", err.msg);
-        fprintf(stderr, "ispm record: run %s is incomplete (no manifest written)\n", out);
+        if (!cap_builds_aside(cap))
+            fprintf(stderr, "ispm record: run %s is incomplete (no manifest written)\n", out);
         rc = EXIT_RUNTIME;
         goto done;
     }
@@ -599,7 +603,7 @@ static int cmd_replay(int argc, char **argv)
     o.progress = &prog;
     eng_error err = {{0}};
     rep_exit rc = rep_replay(&o, stdout, &err);
-    if (rc == REP_UNREADABLE)
+    if (rc == REP_UNREADABLE || rc == REP_UNWRITABLE)
         fprintf(stderr, "ispm replay: %s\n", err.msg);
     else {
         char dir[4096];

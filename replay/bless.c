@@ -6,8 +6,10 @@
  * The copy is built beside the target in <golden>.tmp, with the golden's tolerances.json kept
  * if it had one (tolerances are tuned by people and outlive any one blessing) or the default
  * one written, and then swapped in with renames, so an interrupted bless leaves the old golden
- * or the new one, never a mixture. Only manifest.json and the frame files are copied: a
- * replay/ report folder inside the run is not part of a golden.
+ * or the new one, never a mixture (killed between the two renames, the next bless puts the old
+ * one back: rep_golden_recover), and one bless at a time holds <golden>.lock. Files inside the
+ * run and the golden are read as inputs that may not be symbolic links. Only manifest.json and
+ * the frame files are copied: a replay/ report folder inside the run is not part of a golden.
  *
  * Goldens are committed, so their frame files are ZIP whatever the run was recorded with
  * (record writes none by default: no encoding, 70 % larger than zip): a frame file
@@ -128,13 +130,13 @@ static eng_result build_tmp(const rep_run *run, const char *golden, const char *
             if (r == ENG_OK)
                 r = cap_recompress_exr(run->frames[i].path, dst, CAP_COMPRESSION_ZIP, &rewritten, err);
             if (r == ENG_OK && !rewritten)
-                r = rep_copy_file(run->frames[i].path, dst, err);
+                r = rep_copy_file(run->frames[i].path, ENG_IN_NOFOLLOW, dst, err);
             recompressed |= rewritten;
             free(dst);
         }
         char *dst = rep_path_join(tmp, "manifest.json");
         if (r == ENG_OK)
-            r = recompressed ? rep_store_write_manifest(run, dst, NULL, err) : rep_copy_file(run->manifest_path, dst, err);
+            r = recompressed ? rep_store_write_manifest(run, dst, NULL, err) : rep_copy_file(run->manifest_path, ENG_IN_NOFOLLOW, dst, err);
         free(dst);
         if (r == ENG_OK && recompressed) {
             /* Read back as replay reads it: every frame decodes to its manifest's digests
@@ -148,12 +150,21 @@ static eng_result build_tmp(const rep_run *run, const char *golden, const char *
     }
     if (r != ENG_OK)
         return r;
+    /* The golden's own tolerance file when anything is there (a renderer set's may be absent:
+     * then the canonical set's, tol_from). */
     char *golden_tol = rep_path_join(golden, "tolerances.json");
-    char *old_tol = rep_path_join(rep_is_file(golden_tol) ? golden : tol_from, "tolerances.json");
+    struct stat lst;
+    char *old_tol = rep_path_join(lstat(golden_tol, &lst) == 0 ? golden : tol_from, "tolerances.json");
     free(golden_tol);
     char *new_tol = rep_path_join(tmp, "tolerances.json");
-    if (rep_is_file(old_tol)) {
-        r = rep_copy_file(old_tol, new_tol, err);
+    if (lstat(old_tol, &lst) == 0) {
+        /* Whatever is there is the golden's tolerance file: a link, FIFO or device is refused
+         * (never its target's bytes copied into the golden), and so is one that does not parse. */
+        cJSON *check = NULL;
+        r = rep_json_load(old_tol, ENG_IN_NOFOLLOW, &check, err);
+        cJSON_Delete(check);
+        if (r == ENG_OK)
+            r = rep_copy_file(old_tol, ENG_IN_NOFOLLOW, new_tol, err);
     } else {
         char *text = rep_tol_default_json();
         r = rep_write_atomic(new_tol, text, strlen(text), err);
@@ -162,8 +173,8 @@ static eng_result build_tmp(const rep_run *run, const char *golden, const char *
     free(old_tol);
     free(new_tol);
     char *old_x = rep_path_join(golden, "expectations.json"), *new_x = rep_path_join(tmp, "expectations.json");
-    if (r == ENG_OK && rep_is_file(old_x)) /* the known failures stay with the golden, as its tolerances do */
-        r = rep_copy_file(old_x, new_x, err);
+    if (r == ENG_OK && lstat(old_x, &lst) == 0) /* the known failures stay with the golden, as its tolerances do */
+        r = rep_copy_file(old_x, ENG_IN_NOFOLLOW, new_x, err);
     free(old_x);
     free(new_x);
     return r;
@@ -317,19 +328,41 @@ eng_result rep_bless_reviewed(const rep_bless_options *o, FILE *summary, rep_ble
         return eng_fail(err, ENG_ERR_INVALID, "%s: cannot bless a run onto itself", o->run_dir);
     }
     rep_run *run = NULL;
-    eng_result r = check_target(golden, err);
+    eng_lock lock;
+    eng_result r = make_parent(golden, err);
+    if (r == ENG_OK)
+        r = eng_lock_take(golden, "ispm bless", &lock, err);
+    else
+        lock.fd = -1;
+    if (r == ENG_OK)
+        r = rep_golden_recover(golden, err);
+    if (r == ENG_OK)
+        r = check_target(golden, err);
     if (r == ENG_OK)
         r = verify_run(o->run_dir, &run, err);
     if (r != ENG_OK) {
+        eng_lock_drop(&lock);
         free(golden);
         return r;
     }
     /* A run from another renderer than the canonical golden's goes into its renderer's set. */
     char *canonical = golden, *slug = NULL;
     golden = renderer_target(canonical, run, &slug);
-    if (golden != canonical && (r = check_target(golden, err)) != ENG_OK) {
+    /* The shared object store is locked too (ispm golden gc takes the same lock), so that no
+     * collection removes an object between its write here and the swap that lists it. */
+    eng_lock slock = {.fd = -1};
+    char *srel = NULL, *store = rep_store_find(golden, &srel);
+    free(srel);
+    if (golden != canonical)
+        r = check_target(golden, err);
+    if (r == ENG_OK && store)
+        r = eng_lock_take(store, "ispm bless", &slock, err);
+    free(store);
+    if (r != ENG_OK) {
+        eng_lock_drop(&lock);
+        if (golden != canonical)
+            free(canonical);
         free(golden);
-        free(canonical);
         free(slug);
         rep_run_close(run);
         return r;
@@ -393,6 +426,8 @@ eng_result rep_bless_reviewed(const rep_bless_options *o, FILE *summary, rep_ble
     free(slug);
     free(golden);
     rep_run_close(run);
+    eng_lock_drop(&slock);
+    eng_lock_drop(&lock);
     return r;
 }
 

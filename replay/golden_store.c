@@ -91,32 +91,64 @@ static eng_result make_parent(const char *path, eng_error *err)
 
 eng_result rep_swap_in(const char *golden, const char *tmp, eng_error *err)
 {
-    if (!rep_is_dir(golden)) {
-        eng_result r = make_parent(golden, err);
-        if (r != ENG_OK)
-            return r;
-        if (rename(tmp, golden) != 0)
-            return eng_fail(err, ENG_ERR_IO, "%s: cannot rename %s into place: %s", golden, tmp, strerror(errno));
-        return ENG_OK;
-    }
     char *old = rep_xprintf("%s.old", golden);
-    eng_result r = rep_remove_tree(old, err);
-    if (r == ENG_OK && rename(golden, old) != 0)
+    char *parent = rep_xstrdup(golden);
+    char *slash = strrchr(parent, '/');
+    if (slash)
+        slash[slash == parent ? 1 : 0] = 0;
+    int had_old = rep_is_dir(golden);
+    eng_result r = had_old ? rep_remove_tree(old, err) : make_parent(golden, err);
+    if (r == ENG_OK && had_old && rename(golden, old) != 0)
         r = eng_fail(err, ENG_ERR_IO, "%s: cannot move the old golden aside: %s", golden, strerror(errno));
     if (r == ENG_OK && rename(tmp, golden) != 0) {
         r = eng_fail(err, ENG_ERR_IO, "%s: cannot rename %s into place: %s", golden, tmp, strerror(errno));
-        if (rename(old, golden) != 0) /* put the old golden back; the message above stands */
+        if (had_old && rename(old, golden) != 0) /* put the old golden back; the message above stands */
             fprintf(stderr, "ispm: %s: the old golden is left at %s\n", golden, old);
+    } else if (r == ENG_OK && (r = rep_sync_dir(slash ? parent : ".", err)) != ENG_OK) {
+        if (rename(golden, tmp) != 0 || (had_old && rename(old, golden) != 0))
+            fprintf(stderr, "ispm: %s: the swap could not be undone (the next bless rolls it back)\n", golden);
     }
-    if (r == ENG_OK) { /* the renderer sets stay with the golden: they are blessed on their own */
+    if (r == ENG_OK && had_old) { /* the renderer sets stay with the golden: they are blessed on their own */
         char *sets = rep_path_join(old, "renderers"), *dst = rep_path_join(golden, "renderers");
         if (rep_is_dir(sets) && !rep_is_dir(dst) && rename(sets, dst) != 0)
             r = eng_fail(err, ENG_ERR_IO, "%s: cannot keep the renderer sets: %s", sets, strerror(errno));
         free(sets);
         free(dst);
     }
+    if (r == ENG_OK && had_old)
+        rep_remove_tree(old, NULL); /* a leftover <golden>.old is removed by the next rep_golden_recover */
+    free(parent);
+    free(old);
+    return r;
+}
+
+eng_result rep_golden_recover(const char *golden, eng_error *err)
+{
+    char *old = rep_xprintf("%s.old", golden);
+    struct stat st;
+    eng_result r = ENG_OK;
+    if (lstat(old, &st) == 0 && S_ISDIR(st.st_mode)) {
+        if (lstat(golden, &st) != 0) {
+            if (rename(old, golden) != 0)
+                r = eng_fail(err, ENG_ERR_IO, "%s: cannot restore the golden from %s: %s", golden, old,
+                             strerror(errno));
+            else
+                fprintf(stderr, "ispm: %s: an interrupted bless was rolled back (%s restored)\n", golden, old);
+        } else {
+            /* a finished swap: keep the renderer sets if the move above did not happen yet */
+            char *sets = rep_path_join(old, "renderers"), *dst = rep_path_join(golden, "renderers");
+            if (rep_is_dir(sets) && !rep_is_dir(dst) && rename(sets, dst) != 0)
+                r = eng_fail(err, ENG_ERR_IO, "%s: cannot keep the renderer sets: %s", sets, strerror(errno));
+            free(sets);
+            free(dst);
+            if (r == ENG_OK)
+                r = rep_remove_tree(old, err);
+        }
+    }
+    char *tmp = rep_xprintf("%s.tmp", golden);
     if (r == ENG_OK)
-        r = rep_remove_tree(old, err);
+        r = rep_remove_tree(tmp, err);
+    free(tmp);
     free(old);
     return r;
 }
@@ -155,13 +187,10 @@ eng_result rep_store_put(const char *store, const rep_buffer_info *b, const rep_
 
 eng_result rep_store_write_manifest(const rep_run *run, const char *dst, const char *objects_rel, eng_error *err)
 {
-    char *text = NULL;
-    size_t len = 0;
-    eng_result r = eng_read_file(run->manifest_path, REP_MAX_JSON_BYTES, &text, &len, err);
+    cJSON *root = NULL;
+    eng_result r = rep_json_load(run->manifest_path, ENG_IN_NOFOLLOW, &root, err);
     if (r != ENG_OK)
         return r;
-    cJSON *root = cJSON_ParseWithLength(text, len);
-    free(text);
     if (!cJSON_IsObject(root)) {
         cJSON_Delete(root);
         return eng_fail(err, ENG_ERR_PARSE, "%s: not a JSON object", run->manifest_path);
@@ -274,7 +303,7 @@ static eng_result copy_extras(const char *golden, const char *tmp, eng_error *er
         if (lstat(src, &st) != 0 || !S_ISREG(st.st_mode))
             r = eng_fail(err, ENG_ERR_INVALID, "%s: not a regular file: migrate keeps only a golden's files", src);
         else
-            r = rep_copy_file(src, dst, err);
+            r = rep_copy_file(src, ENG_IN_NOFOLLOW, dst, err);
         free(src);
         free(dst);
     }
@@ -288,11 +317,17 @@ eng_result rep_golden_migrate(const char *golden_dir, FILE *out, eng_error *err)
     for (size_t n = strlen(golden); n > 1 && golden[n - 1] == '/'; n--)
         golden[n - 1] = 0;
     rep_run *old = NULL;
-    eng_result r = rep_run_open(golden, &old, err);
+    eng_lock lock = {.fd = -1}, slock = {.fd = -1};
+    eng_result r = eng_lock_take(golden, "ispm golden migrate", &lock, err);
+    if (r == ENG_OK)
+        r = rep_golden_recover(golden, err);
+    if (r == ENG_OK)
+        r = rep_run_open(golden, &old, err);
     if (r == ENG_OK && old->format_version == 2) {
         if (out)
             fprintf(out, "migrate: %s already stores its buffers as objects: nothing to do\n", golden);
         rep_run_close(old);
+        eng_lock_drop(&lock);
         free(golden);
         return ENG_OK;
     }
@@ -307,6 +342,8 @@ eng_result rep_golden_migrate(const char *golden_dir, FILE *out, eng_error *err)
     }
     rep_store_stats st;
     memset(&st, 0, sizeof st);
+    if (r == ENG_OK) /* against a concurrent gc, as bless */
+        r = eng_lock_take(store, "ispm golden migrate", &slock, err);
     if (r == ENG_OK)
         r = rep_store_put_run(old, store, &st, err);
     if (r == ENG_OK && (r = rep_remove_tree(tmp, err)) == ENG_OK && (r = rep_mkdirs(tmp, err)) == ENG_OK)
@@ -335,6 +372,8 @@ eng_result rep_golden_migrate(const char *golden_dir, FILE *out, eng_error *err)
                 golden, old->frame_count, checked, store, st.objects_new, (unsigned long long)st.bytes_new,
                 st.objects_had);
     rep_run_close(old);
+    eng_lock_drop(&slock);
+    eng_lock_drop(&lock);
     free(tmp);
     free(store);
     free(rel);
@@ -357,14 +396,9 @@ eng_result rep_golden_unpack(const char *golden, const char *dst, FILE *out, eng
     r = rep_mkdirs(frames, err);
     free(frames);
     cJSON *root = NULL;
-    char *text = NULL;
-    size_t len = 0;
-    if (r == ENG_OK && (r = eng_read_file(g->manifest_path, REP_MAX_JSON_BYTES, &text, &len, err)) == ENG_OK) {
-        root = cJSON_ParseWithLength(text, len);
-        if (!cJSON_IsObject(root))
-            r = eng_fail(err, ENG_ERR_PARSE, "%s: not a JSON object", g->manifest_path);
-    }
-    free(text);
+    if (r == ENG_OK && (r = rep_json_load(g->manifest_path, ENG_IN_NOFOLLOW, &root, err)) == ENG_OK &&
+        !cJSON_IsObject(root))
+        r = eng_fail(err, ENG_ERR_PARSE, "%s: not a JSON object", g->manifest_path);
     cJSON *jf = root ? cJSON_GetObjectItemCaseSensitive(root, "frames") : NULL;
     jf = jf ? jf->child : NULL;
     for (int i = 0; r == ENG_OK && i < g->frame_count; i++, jf = jf->next) {
@@ -403,7 +437,7 @@ eng_result rep_golden_unpack(const char *golden, const char *dst, FILE *out, eng
     }
     char *tol = rep_path_join(golden, "tolerances.json"), *tol_dst = rep_path_join(dst, "tolerances.json");
     if (r == ENG_OK && rep_is_file(tol))
-        r = rep_copy_file(tol, tol_dst, err);
+        r = rep_copy_file(tol, ENG_IN_NOFOLLOW, tol_dst, err);
     free(tol);
     free(tol_dst);
     if (r == ENG_OK) { /* read back: the frame files decode to the digests */
@@ -501,8 +535,12 @@ eng_result rep_golden_gc(const char *root, int dry_run, rep_gc_stats *st, eng_er
         free(store);
         return r;
     }
+    /* One collection at a time, and none while a bless or migrate writes into the store. */
+    eng_lock lock = {.fd = -1};
+    eng_result r = dry_run ? ENG_OK : eng_lock_take(store, "ispm golden gc", &lock, err);
     digest_set s = {0};
-    eng_result r = collect(root, real, 4, &s, &st->goldens, err);
+    if (r == ENG_OK)
+        r = collect(root, real, 4, &s, &st->goldens, err);
     if (r == ENG_OK)
         qsort(s.d, s.n, sizeof *s.d, cmp_digest);
     DIR *d = r == ENG_OK ? opendir(store) : NULL;
@@ -548,5 +586,6 @@ eng_result rep_golden_gc(const char *root, int dry_run, rep_gc_stats *st, eng_er
         closedir(d);
     free(s.d);
     free(store);
+    eng_lock_drop(&lock);
     return r;
 }

@@ -583,6 +583,13 @@ rep_exit rep_replay_report(const rep_options *o, rep_report *r, eng_error *err)
     /* An unreadable run folder that does not exist gets no report folder created inside it. */
     char *dir = o->report_dir ? rep_xstrdup(o->report_dir) : rep_path_join(o->run_dir, "replay");
     int writable = !o->no_files && (o->report_dir || rep_is_dir(o->run_dir));
+    /* A report folder that cannot be made is said before anything is compared, as what it is. */
+    if (writable && rep_mkdirs(dir, err) != ENG_OK) {
+        r->exit = REP_UNWRITABLE;
+        r->error = *err;
+        free(dir);
+        return r->exit;
+    }
     eng_result res = walk(o, writable ? dir : NULL, r, err);
     if (res != ENG_OK) {
         r->exit = REP_UNREADABLE;
@@ -594,7 +601,7 @@ rep_exit rep_replay_report(const rep_options *o, rep_report *r, eng_error *err)
     if (writable) {
         eng_error werr;
         if (rep_report_write(r, dir, &werr) != ENG_OK && r->exit != REP_UNREADABLE) {
-            r->exit = REP_UNREADABLE;
+            r->exit = REP_UNWRITABLE;
             r->error = werr;
             *err = werr;
         }

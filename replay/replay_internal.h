@@ -16,6 +16,12 @@ rep_exit rep_replay_report(const rep_options *o, rep_report *r, eng_error *err);
 /* golden_store.c: moves the finished tmp folder into golden's place (the old golden aside, then
  * removed), so a reader sees the old golden or the new one. */
 eng_result rep_swap_in(const char *golden, const char *tmp, eng_error *err);
+/* A bless or migrate ended between rep_swap_in's two renames leaves <golden>.old and no
+ * <golden>: the old golden is renamed back (the new one was never reviewed into place). A
+ * <golden>.old beside a golden is the remains of a finished swap (its renderer sets kept), and a
+ * <golden>.tmp those of a command that ended before its swap: both are removed. Called under the
+ * golden's lock. */
+eng_result rep_golden_recover(const char *golden, eng_error *err);
 
 /* ---------------------------------------------------------------- golden_store.c */
 

@@ -72,7 +72,7 @@ static void land_exr(int i)
     snprintf(rel, sizeof rel, "frames/%06d.exr", i);
     char *src = rep_path_join(GOLDEN, rel), *dst = rep_path_join(g_tmp, rel);
     eng_error err;
-    ck_assert_int_eq(rep_copy_file(src, dst, &err), ENG_OK);
+    ck_assert_int_eq(rep_copy_file(src, 0, dst, &err), ENG_OK);
     free(src);
     free(dst);
 }

@@ -60,6 +60,8 @@ eng_result bench_config_load(const char *path, bench_config *c, eng_error *err)
     char *text = NULL;
     size_t len = 0;
     eng_result r = eng_read_file(path, (size_t)1 << 20, &text, &len, err);
+    if (r == ENG_OK && (r = eng_json_precheck(path, text, len, ENG_JSON_MAX_DEPTH, err)) != ENG_OK)
+        free(text);
     if (r != ENG_OK)
         return r;
     const char *end = NULL;

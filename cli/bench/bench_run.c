@@ -86,6 +86,8 @@ eng_result bench_points_make(const bench_config *c, bench_point **out, int *out_
     /* The sequence file as JSON, to derive each point's sequence from. */
     size_t len = 0;
     eng_result r = eng_read_file(c->sequence, (size_t)16 << 20, &seq_text, &len, err);
+    if (r == ENG_OK)
+        r = eng_json_precheck(c->sequence, seq_text, len, ENG_JSON_MAX_DEPTH, err);
     if (r == ENG_OK && !(seq_root = cJSON_ParseWithLength(seq_text, len)))
         r = eng_fail(err, ENG_ERR_PARSE, "%s: not valid JSON", c->sequence);
     /* Every grid point's settings validated before anything is rendered. */
@@ -241,7 +243,8 @@ static void reference_pixel(const char *dir, bench_reference *ref)
     size_t len = 0;
     eng_error err;
     cJSON *root = NULL;
-    if (eng_read_file(path, (size_t)64 << 20, &text, &len, &err) == ENG_OK &&
+    if (eng_read_input(path, ENG_IN_NOFOLLOW, (size_t)64 << 20, &text, &len, &err) == ENG_OK &&
+        eng_json_precheck(path, text, len, ENG_JSON_MAX_DEPTH, &err) == ENG_OK &&
         (root = cJSON_ParseWithLength(text, len))) {
         const cJSON *rd = cJSON_GetObjectItemCaseSensitive(root, "renderer");
         const cJSON *name = cJSON_GetObjectItemCaseSensitive(rd, "name");

@@ -1,6 +1,6 @@
 /* core.c — the engine's file-free, GL-free helpers that every module may link: error
- * formatting, content digests (XXH3-128 from libxxhash), non-finite counting, whole-file
- * reads with a size cap. Replay and the viewer link this (through
+ * formatting, content digests (XXH3-128 from libxxhash), non-finite counting (file reads are
+ * files.c's). Replay and the viewer link this (through
  * the ispm_core target) without pulling in OSMesa or Embree. */
 #define _DEFAULT_SOURCE /* sbrk, madvise */
 #include "eng_core.h"
@@ -155,46 +155,6 @@ void eng_buffer_nonfinite(const eng_buffer *b, uint64_t *nan_count, uint64_t *in
     if (inf_count) *inf_count = ni;
     if (first_x) *first_x = fx;
     if (first_y) *first_y = fy;
-}
-
-eng_result eng_read_file(const char *path, size_t max_bytes, char **data, size_t *len, eng_error *err)
-{
-    *data = NULL;
-    if (len) *len = 0;
-    FILE *f = fopen(path, "rb");
-    if (!f)
-        return eng_fail(err, ENG_ERR_IO, "%s: cannot open: %s", path, strerror(errno));
-    if (fseek(f, 0, SEEK_END) != 0) {
-        fclose(f);
-        return eng_fail(err, ENG_ERR_IO, "%s: cannot seek: %s", path, strerror(errno));
-    }
-    long size = ftell(f);
-    if (size < 0) {
-        fclose(f);
-        return eng_fail(err, ENG_ERR_IO, "%s: cannot read: %s", path, strerror(errno));
-    }
-    if ((unsigned long)size > max_bytes) {
-        fclose(f);
-        return eng_fail(err, ENG_ERR_INVALID, "%s: file is %ld bytes, more than the %zu allowed",
-                        path, size, max_bytes);
-    }
-    rewind(f);
-    char *buf = malloc((size_t)size + 1);
-    if (!buf) {
-        fclose(f);
-        return eng_fail(err, ENG_ERR_NOMEM, "%s: out of memory reading %ld bytes", path, size);
-    }
-    size_t got = fread(buf, 1, (size_t)size, f);
-    int rerr = ferror(f);
-    fclose(f);
-    if (got != (size_t)size || rerr) {
-        free(buf);
-        return eng_fail(err, ENG_ERR_IO, "%s: short read (%zu of %ld bytes)", path, got, size);
-    }
-    buf[size] = 0;
-    *data = buf;
-    if (len) *len = (size_t)size;
-    return ENG_OK;
 }
 
 /* The heap, tuned for frames (record, replay). glibc only; a no-op elsewhere and where the

@@ -196,9 +196,40 @@ void eng_buffer_digest(const eng_buffer *b, char out[40]);
 void eng_buffer_nonfinite(const eng_buffer *b, uint64_t *nan_count, uint64_t *inf_count,
                           int *first_x, int *first_y);
 
-/* Reads a whole file (NUL-terminated; *len excludes the NUL). Caller frees. Refuses files
- * over max_bytes with ENG_ERR_INVALID. */
+/* ---------------------------------------------------------------- inputs (files.c)
+ * The one way a tool opens a file it reads (docs/inputs.md): without blocking, regular files
+ * only (a FIFO, device, socket or folder is ENG_ERR_INVALID naming what it is), the size
+ * checked against max_bytes before any byte is read (ENG_ERR_INVALID). ENG_IN_NOFOLLOW: for
+ * files inside a run or golden, a symbolic link as the last component is refused. */
+#define ENG_IN_NOFOLLOW 1u
+/* The deepest JSON nesting an input may have (manifests need ~6, glTF ~10). */
+#define ENG_JSON_MAX_DEPTH 256
+
+/* Opens path (the descriptor blocking again, close-on-exec) and gives its size. */
+eng_result eng_open_input(const char *path, unsigned flags, uint64_t max_bytes, int *fd, uint64_t *size,
+                          eng_error *err);
+/* eng_open_input's checks alone (size may be NULL). */
+eng_result eng_check_input(const char *path, unsigned flags, uint64_t max_bytes, uint64_t *size, eng_error *err);
+/* Reads a whole input (NUL-terminated; *len excludes the NUL). Caller frees. */
+eng_result eng_read_input(const char *path, unsigned flags, size_t max_bytes, char **data, size_t *len,
+                          eng_error *err);
+/* eng_read_input without flags. */
 eng_result eng_read_file(const char *path, size_t max_bytes, char **data, size_t *len, eng_error *err);
+/* An advisory lock on a folder a tool writes: <dir>.lock beside it, flock'd, holding the
+ * holder's words ("ispm bless") and pid. Taken: ENG_OK; held elsewhere: ENG_ERR_INVALID
+ * "<dir>: in use by <holder>, process <pid> (lock <dir>.lock)". Dropped (and the file
+ * removed) by eng_lock_drop or the process's end (then the file stays, unlocked). */
+typedef struct eng_lock {
+    int fd;
+    char path[4096];
+} eng_lock;
+eng_result eng_lock_take(const char *dir, const char *holder, eng_lock *lk, eng_error *err);
+void eng_lock_drop(eng_lock *lk); /* accepts NULL and a lock not taken */
+
+/* Before a JSON parser sees text: nesting deeper than max_depth is ENG_ERR_INVALID, anything
+ * but whitespace after the first value ENG_ERR_PARSE, both naming path and the byte. Malformed
+ * text passes (the parser names it). */
+eng_result eng_json_precheck(const char *path, const char *text, size_t len, int max_depth, eng_error *err);
 
 /* Process-wide, once: freed memory stays in the heap for reuse, every thread allocates from
  * one heap, and a range of it is advised for transparent huge pages (fewer page faults; see

@@ -30,6 +30,7 @@
  *   - the digest covers the file and each external buffer, in buffer order.
  * The scene owns every array it points to; scn_destroy frees it whole. */
 #include "scn.h"
+#include "gltf_precheck.h"
 #include "gltf_shim.h"
 
 #include <math.h>
@@ -1829,7 +1830,10 @@ static eng_result load_bytes(const char *path, const char *bytes, size_t len, in
     eng_result r;
     gls_model *m;
     char msg[800];
-    gls_status st = gls_load(path, bytes, len, &m, msg, sizeof msg);
+    uint64_t max_external;
+    if ((r = scn_gltf_precheck(path, bytes, len, &max_external, err)) != ENG_OK)
+        return r;
+    gls_status st = gls_load(path, bytes, len, max_external, &m, msg, sizeof msg);
     if (st != GLS_OK) {
         switch (st) {
         case GLS_ERR_IO: return eng_fail(err, ENG_ERR_IO, "%s: %s", path, msg);

@@ -25,12 +25,14 @@
  *   - every exception stops here.
  * The gls_impl owns the tinygltf::Model and the C arrays that point into it. */
 #include "gltf_shim.h"
+#include "gltf_precheck.h"
 
 #include <tiny_gltf.h>
 #include <draco/compression/decode.h>
 #include <nlohmann/json.hpp>
 
 #include <sys/stat.h>
+#include <unistd.h>
 
 #include <cerrno>
 #include <algorithm>
@@ -91,6 +93,7 @@ struct fs_scope {
     std::string real_prefix; /* realpath(folder) + "/" ("" if it cannot be resolved) */
     std::string error;       /* the first URI refused, in one line */
     gls_status status;
+    uint64_t max_external;   /* the largest external file read (gltf_precheck.h) */
 };
 
 void refuse(fs_scope *scope, gls_status status, const std::string &text)
@@ -159,9 +162,57 @@ bool exists_in_folder(const std::string &abs, void *user)
 
 std::string expand(const std::string &p, void *) { return tinygltf::ExpandFilePath(p, nullptr); }
 
-bool read_whole(std::vector<unsigned char> *out, std::string *err, const std::string &p, void *)
+/* An external file, opened as every input is (eng_open_input) and refused over the largest
+ * size the glTF's buffers can need before a byte is read. */
+bool read_whole(std::vector<unsigned char> *out, std::string *err, const std::string &p, void *user)
 {
-    return tinygltf::ReadWholeFile(out, err, p, nullptr);
+    fs_scope *scope = static_cast<fs_scope *>(user);
+    eng_error e;
+    int fd;
+    uint64_t size;
+    if (eng_open_input(p.c_str(), 0, scope->max_external, &fd, &size, &e) != ENG_OK) {
+        refuse(scope, GLS_ERR_GLTF, e.msg);
+        if (err)
+            *err = e.msg;
+        return false;
+    }
+    out->resize(static_cast<size_t>(size));
+    size_t got = 0;
+    while (got < size) {
+        ssize_t n = ::read(fd, out->data() + got, static_cast<size_t>(size) - got);
+        if (n < 0 && errno == EINTR)
+            continue;
+        if (n <= 0)
+            break;
+        got += static_cast<size_t>(n);
+    }
+    ::close(fd);
+    if (got != size) {
+        refuse(scope, GLS_ERR_IO, p + ": short read");
+        if (err)
+            *err = p + ": short read";
+        return false;
+    }
+    return true;
+}
+
+/* stb_image allocates an image's pixels from its header's size: a side over
+ * SCN_IMAGE_MAX_SIDE is refused from the header, before decoding. */
+bool load_image_capped(tinygltf::Image *image, const int image_idx, std::string *err, std::string *warn, int req_width,
+                       int req_height, const unsigned char *bytes, int size, void *user)
+{
+    uint32_t w, h;
+    if (size > 0 && scn_image_header_size(bytes, static_cast<size_t>(size), &w, &h) &&
+        (w > SCN_IMAGE_MAX_SIDE || h > SCN_IMAGE_MAX_SIDE)) {
+        std::string why = "image " + std::to_string(image_idx) + " is " + std::to_string(w) + "x" +
+                          std::to_string(h) + ", over the limit of " + std::to_string(SCN_IMAGE_MAX_SIDE) +
+                          " texels a side";
+        refuse(static_cast<fs_scope *>(user), GLS_ERR_GLTF, why);
+        if (err)
+            *err = why;
+        return false;
+    }
+    return tinygltf::LoadImageData(image, image_idx, err, warn, req_width, req_height, bytes, size, nullptr);
 }
 
 bool write_whole(std::string *err, const std::string &p, const std::vector<unsigned char> &c, void *)
@@ -801,7 +852,7 @@ void draco_decode(tinygltf::Model &m, const std::vector<int> &patched)
                 decode_primitive(m, mi, pi);
         }
 }
-gls_status load(const char *path, const void *bytes, size_t len, gls_model **out, char *msg,
+gls_status load(const char *path, const void *bytes, size_t len, uint64_t max_external, gls_model **out, char *msg,
                 size_t msg_size)
 {
     if (len > UINT_MAX) {
@@ -816,6 +867,7 @@ gls_status load(const char *path, const void *bytes, size_t len, gls_model **out
     if (slash == 0) /* a file in / */
         folder = "/", scope.prefix = "/";
     scope.status = GLS_OK;
+    scope.max_external = max_external;
     if (char *real = realpath(folder.c_str(), nullptr)) {
         scope.real_prefix = real;
         if (scope.real_prefix.empty() || scope.real_prefix.back() != '/')
@@ -827,7 +879,7 @@ gls_status load(const char *path, const void *bytes, size_t len, gls_model **out
     tinygltf::TinyGLTF loader;
     tinygltf::FsCallbacks fs = {&exists_in_folder, &expand, &read_whole, &write_whole, &scope};
     loader.SetFsCallbacks(fs);
-    loader.SetImageLoader(&tinygltf::LoadImageData, nullptr); /* stb_image, RGBA 8 or 16 bits */
+    loader.SetImageLoader(&load_image_capped, &scope); /* stb_image, RGBA 8 or 16 bits */
 
     std::string err, warn;
     const unsigned char *b = static_cast<const unsigned char *>(bytes);
@@ -880,14 +932,14 @@ gls_status load(const char *path, const void *bytes, size_t len, gls_model **out
 
 } // namespace
 
-extern "C" gls_status gls_load(const char *path, const void *bytes, size_t len, gls_model **out,
-                               char *msg, size_t msg_size)
+extern "C" gls_status gls_load(const char *path, const void *bytes, size_t len, uint64_t max_external,
+                               gls_model **out, char *msg, size_t msg_size)
 {
     *out = nullptr;
     if (msg && msg_size)
         msg[0] = 0;
     try {
-        return load(path, bytes, len, out, msg, msg_size);
+        return load(path, bytes, len, max_external, out, msg, msg_size);
     } catch (const std::bad_alloc &) {
         set_msg(msg, msg_size, "out of memory");
         return GLS_ERR_NOMEM;

@@ -234,10 +234,11 @@ typedef struct gls_model {
 } gls_model;
 
 /* Parses a glTF from memory: .glb when bytes start with the GLB magic, JSON otherwise.
- * path is the file the bytes came from; external buffers are looked up in its folder only.
+ * path is the file the bytes came from; external buffers are looked up in its folder only, and
+ * one larger than max_external bytes is refused before it is read (gltf_precheck.h).
  * Images are decoded to RGBA (8 or 16 bits) by tinygltf's stb_image loader. On failure *out is NULL and msg holds tinygltf's one-line
  * complaint. Never throws. */
-gls_status gls_load(const char *path, const void *bytes, size_t len, gls_model **out,
+gls_status gls_load(const char *path, const void *bytes, size_t len, uint64_t max_external, gls_model **out,
                     char *msg, size_t msg_size);
 
 /* Frees everything the model owns; accepts NULL. */

@@ -655,6 +655,9 @@ eng_result seq_parse(const char *path, const char *json, size_t len, seq_sequenc
     memset(out, 0, sizeof *out);
     if (strlen(path) >= sizeof out->path)
         return eng_fail(err, ENG_ERR_INVALID, "%.200s...: path longer than %zu bytes", path, sizeof out->path - 1);
+    eng_result pr = eng_json_precheck(path, json, len, ENG_JSON_MAX_DEPTH, err);
+    if (pr != ENG_OK && pr != ENG_ERR_PARSE) /* text after the value: named below by line and column */
+        return pr;
     const char *end = NULL;
     cJSON *root = cJSON_ParseWithLengthOpts(json, len, &end, 0);
     size_t stop = root ? (size_t)(end - json) : (end ? (size_t)(end - json) : 0);

@@ -36,17 +36,9 @@ eng_result lin_manifest_read(const char *run_dir, lin_manifest *m, eng_error *er
 {
     memset(m, 0, sizeof *m);
     char *path = rep_path_join(run_dir, "manifest.json");
-    char *text = NULL;
-    size_t len = 0;
-    eng_result r = eng_read_file(path, REP_MAX_JSON_BYTES, &text, &len, err);
+    cJSON *j = NULL;
+    eng_result r = rep_json_load(path, ENG_IN_NOFOLLOW, &j, err);
     if (r != ENG_OK) {
-        free(path);
-        return r;
-    }
-    cJSON *j = cJSON_ParseWithLength(text, len);
-    free(text);
-    if (!j) {
-        r = eng_fail(err, ENG_ERR_PARSE, "%s: not JSON", path);
         free(path);
         return r;
     }

@@ -165,15 +165,7 @@ static void timing(rep_prov *p, const cJSON *ra, const cJSON *ga, double timing_
 static eng_result load(const char *dir, cJSON **out, eng_error *err)
 {
     char *path = rep_path_join(dir, "manifest.json");
-    char *text = NULL;
-    size_t len = 0;
-    eng_result r = eng_read_file(path, REP_MAX_JSON_BYTES, &text, &len, err);
-    if (r == ENG_OK) {
-        *out = cJSON_ParseWithLength(text, len);
-        if (!*out)
-            r = eng_fail(err, ENG_ERR_PARSE, "%s: not valid JSON", path);
-    }
-    free(text);
+    eng_result r = rep_json_load(path, ENG_IN_NOFOLLOW, out, err);
     free(path);
     return r;
 }

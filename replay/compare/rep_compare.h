@@ -20,7 +20,11 @@
 #include "rep_util.h"
 
 /* idiff-style exit codes; when several apply, the largest wins. */
-typedef enum rep_exit { REP_OK = 0, REP_WARN = 1, REP_FAIL = 2, REP_SIZE = 3, REP_UNREADABLE = 4 } rep_exit;
+/* REP_UNWRITABLE: the comparison ran, but its report could not be written (a read-only or full
+ * disk): not to be taken for an unreadable input. */
+typedef enum rep_exit {
+    REP_OK = 0, REP_WARN = 1, REP_FAIL = 2, REP_SIZE = 3, REP_UNREADABLE = 4, REP_UNWRITABLE = 5
+} rep_exit;
 
 /* idiff-style thresholds given on the command line (ispm replay -fail 0.1 ...): each key whose
  * bit is set replaces the tolerance file's "default" entry, and so every rule that took that
@@ -106,8 +110,10 @@ void rep_tol_builtin(rep_tol *t);
  * or non-finite numbers and rules without "match" are ENG_ERR_INVALID naming the key. */
 eng_result rep_tol_parse(const char *path, const char *json, size_t len, rep_tolerances **out,
                          eng_error *err);
-/* Loads a tolerances file. If missing_ok and the file does not exist, *out holds the built-in
- * defaults (path NULL). */
+/* Loads a tolerances file (an input: regular file, JSON depth and trailing text checked).
+ * missing_ok: the golden's own file, which may not be a symbolic link, and when nothing at all
+ * is at path *out holds the built-in defaults (path NULL); a dangling link, FIFO or device is an
+ * error, never the defaults. */
 eng_result rep_tol_load(const char *path, int missing_ok, rep_tolerances **out, eng_error *err);
 void rep_tol_free(rep_tolerances *t);
 

@@ -35,11 +35,13 @@
 #include "rep_util.h"
 
 #include <cjson/cJSON.h>
+#include <errno.h>
 #include <fnmatch.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 
 static const char *const KEYS[] = {"warn", "warnrelative", "warnpercent", "hardwarn", "fail", "failrelative",
                                    "failpercent", "hardfail", "rmse_warn", "rmse_fail",
@@ -179,6 +181,9 @@ static eng_result parse_block(const char *path, const char *where, const cJSON *
         if (!cJSON_IsNumber(v) || !isfinite(v->valuedouble) || v->valuedouble < 0)
             return eng_fail(err, ENG_ERR_INVALID, "%s: %s: \"%s\" must be a finite number >= 0", path, where,
                             key);
+        if (strstr(key, "percent") && v->valuedouble > 100)
+            return eng_fail(err, ENG_ERR_INVALID, "%s: %s: \"%s\" is %g, a percentage of pixels (0..100)", path,
+                            where, key, v->valuedouble);
         *field(t, k) = v->valuedouble;
         if (keys_set && k < 8)
             *keys_set |= 1u << k; /* KEYS' first eight are REP_FLAG_*'s order */
@@ -207,6 +212,29 @@ void rep_tol_free(rep_tolerances *t)
     free(t->rules);
     free(t->path);
     free(t);
+}
+
+/* Whether every '[' of a glob has its ']' (fnmatch takes an unclosed '[' as a literal
+ * character, so such a rule silently matches nothing). */
+static int glob_well_formed(const char *g)
+{
+    for (const char *p = g; *p; p++) {
+        if (*p == '\\' && p[1]) {
+            p++;
+        } else if (*p == '[') {
+            const char *q = p + 1;
+            if (*q == '!' || *q == '^')
+                q++;
+            if (*q == ']')
+                q++;
+            while (*q && *q != ']')
+                q++;
+            if (!*q)
+                return 0;
+            p = q;
+        }
+    }
+    return 1;
 }
 
 /* A "cross_renderer" section, or the built-in cross-renderer set where the file has none. */
@@ -238,6 +266,9 @@ static eng_result parse_root(const char *path, const cJSON *root, rep_tolerances
         const cJSON *m = cJSON_GetObjectItemCaseSensitive(jr, "match");
         if (!cJSON_IsString(m) || !m->valuestring[0])
             return eng_fail(err, ENG_ERR_INVALID, "%s: %s: \"match\" must be a non-empty pattern", path, where);
+        if (!glob_well_formed(m->valuestring))
+            return eng_fail(err, ENG_ERR_INVALID, "%s: %s: \"match\" \"%s\" has a '[' without its ']'", path, where,
+                            m->valuestring);
         rep_tol_rule *rule = &t->rules[t->rule_count++];
         rule->match = rep_xstrdup(m->valuestring);
         rule->tol = t->def;
@@ -300,7 +331,10 @@ eng_result rep_tol_parse(const char *path, const char *json, size_t len, rep_tol
 eng_result rep_tol_load(const char *path, int missing_ok, rep_tolerances **out, eng_error *err)
 {
     *out = NULL;
-    if (missing_ok && !rep_is_file(path) && !rep_is_dir(path)) {
+    /* Only a file that is not there at all means the defaults: a link to nothing, a FIFO or a
+     * device is a tolerance file that cannot be read. */
+    struct stat st;
+    if (missing_ok && lstat(path, &st) != 0 && errno == ENOENT) {
         rep_tolerances *t = rep_xcalloc(1, sizeof *t);
         rep_tol_builtin(&t->def);
         t->cross = cross_builtin();
@@ -309,9 +343,13 @@ eng_result rep_tol_load(const char *path, int missing_ok, rep_tolerances **out, 
     }
     char *text = NULL;
     size_t len = 0;
-    eng_result r = eng_read_file(path, REP_MAX_JSON_BYTES, &text, &len, err);
-    if (r != ENG_OK)
+    eng_result r = eng_read_input(path, missing_ok ? ENG_IN_NOFOLLOW : 0, REP_MAX_JSON_BYTES, &text, &len, err);
+    if (r == ENG_OK)
+        r = eng_json_precheck(path, text, len, ENG_JSON_MAX_DEPTH, err);
+    if (r != ENG_OK) {
+        free(text);
         return r;
+    }
     r = rep_tol_parse(path, text, len, out, err);
     free(text);
     return r;

@@ -373,6 +373,7 @@ static const char *exit_class(rep_exit x)
     case REP_FAIL: return "fail";
     case REP_SIZE: return "size";
     case REP_UNREADABLE: return "unreadable";
+    case REP_UNWRITABLE: return "unwritable";
     }
     return "unreadable";
 }

@@ -102,6 +102,7 @@ const char *rep_exit_word(rep_exit x)
     case REP_FAIL: return "FAIL";
     case REP_SIZE: return "SIZE MISMATCH";
     case REP_UNREADABLE: return "UNREADABLE";
+    case REP_UNWRITABLE: return "REPORT NOT WRITTEN";
     }
     return "UNREADABLE";
 }

@@ -153,7 +153,8 @@ static eng_result lib_failed(const char *path, int part, exr_result_t rv, eng_er
     return leave(path, part, exr_get_default_error_message(rv), err);
 }
 
-/* The header of part p into *out (name, size, channels in OpenImageIO's order; no pixels). */
+/* The header of part p into *out (name, size, channels in OpenImageIO's order; no pixels, data
+ * NULL). */
 static eng_result read_header(exr_context_t ctxt, const char *path, int p, size_t max_floats, rep_part *out,
                               eng_error *err)
 {
@@ -180,8 +181,13 @@ static eng_result read_header(exr_context_t ctxt, const char *path, int p, size_
         return leave(path, p, "data window not at the origin, or too large", err);
     int n = cl ? cl->num_channels : 0;
     size_t w = (size_t)dw.max.x + 1, h = (size_t)dw.max.y + 1;
-    if (n < 1 || n > ENG_MAX_CHANNELS || w > max_floats || h > max_floats || w * h > max_floats / (size_t)n)
-        return leave(path, p, "channel count or size beyond the limits", err);
+    if (n < 1 || n > ENG_MAX_CHANNELS)
+        return leave(path, p, "channel count beyond the limits", err);
+    /* Over the caller's limit: refused here as OpenImageIO refuses it (same result, same words),
+     * without loading OpenImageIO to say so. */
+    if (w > max_floats || h > max_floats || w * h > max_floats / (size_t)n)
+        return eng_fail(err, ENG_ERR_INVALID, "%s: part %s: %zux%zux%d floats, more than the %zu allowed", path, name,
+                        w, h, n, max_floats);
     chan ch[ENG_MAX_CHANNELS];
     for (int c = 0; c < n; c++) {
         const exr_attr_chlist_entry_t *e = &cl->entries[c];
@@ -199,8 +205,7 @@ static eng_result read_header(exr_context_t ctxt, const char *path, int p, size_
     out->channel_count = n;
     for (int c = 0; c < n; c++)
         out->channels[c] = str_dup(ch[c].name);
-    out->data = malloc(w * h * (size_t)n * sizeof(float));
-    if (!out->name || !out->data)
+    if (!out->name)
         return eng_fail(err, ENG_ERR_NOMEM, "%s: part %s: out of memory", path, name);
     for (int c = 0; c < n; c++)
         if (!out->channels[c])
@@ -267,7 +272,8 @@ static int mem_load(const char *path, mem_file *m)
     return 1;
 }
 
-eng_result rep_exr_read_parts(const char *path, size_t max_floats, rep_part **parts, int *count, eng_error *err)
+static eng_result read_parts(const char *path, size_t max_floats, rep_parts_check check, void *user, rep_part **parts,
+                             int *count, eng_error *err)
 {
     *parts = NULL;
     *count = 0;
@@ -311,8 +317,19 @@ eng_result rep_exr_read_parts(const char *path, size_t max_floats, rep_part **pa
     eng_result hres = ENG_OK;
     while (h < n && (hres = read_header(ctxt, path, h, max_floats, &arr[h], &herr)) == ENG_OK)
         h++;
-    exr_result_t *prv = calloc((size_t)(h > 0 ? h : 1), sizeof *prv);
-    if (!prv) {
+    /* Every header before any pixel: the caller's check, then the pixels' memory. */
+    if (check && h == n)
+        r = check(user, path, arr, n, err);
+    for (int p = 0; p < h && r == ENG_OK; p++) {
+        arr[p].data = malloc((size_t)arr[p].width * (size_t)arr[p].height * (size_t)arr[p].channel_count *
+                             sizeof(float));
+        if (!arr[p].data)
+            r = eng_fail(err, ENG_ERR_NOMEM, "%s: part %s: out of memory", path, arr[p].name);
+    }
+    exr_result_t *prv = r == ENG_OK ? calloc((size_t)(h > 0 ? h : 1), sizeof *prv) : NULL;
+    if (r != ENG_OK) {
+        /* the check's refusal, or no memory: nothing decoded */
+    } else if (!prv) {
         r = eng_fail(err, ENG_ERR_NOMEM, "%s: out of memory while reading", path);
     } else {
 #pragma omp taskloop grainsize(1) default(none) shared(ctxt, arr, prv, h)
@@ -339,9 +356,20 @@ eng_result rep_exr_read_parts(const char *path, size_t max_floats, rep_part **pa
     return ENG_OK;
 }
 
+eng_result rep_exr_read_parts(const char *path, size_t max_floats, rep_part **parts, int *count, eng_error *err)
+{
+    return read_parts(path, max_floats, NULL, NULL, parts, count, err);
+}
+
 eng_result rep_read_parts(const char *path, size_t max_floats, rep_part **parts, int *count, eng_error *err)
 {
-    eng_result r = rep_exr_read_parts(path, max_floats, parts, count, err);
+    return rep_read_parts_checked(path, max_floats, NULL, NULL, parts, count, err);
+}
+
+eng_result rep_read_parts_checked(const char *path, size_t max_floats, rep_parts_check check, void *user,
+                                  rep_part **parts, int *count, eng_error *err)
+{
+    eng_result r = read_parts(path, max_floats, check, user, parts, count, err);
     if (r != ENG_ERR_UNSUPPORTED)
         return r; /* the parts, or the header walk's refusal (OpenImageIO's path refuses alike) */
     return rep_oiio_read_parts(path, max_floats, parts, count, err);

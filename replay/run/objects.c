@@ -141,6 +141,19 @@ static int same_names(const rep_part *p, const rep_buffer_info *b)
     return 1;
 }
 
+/* rep_parts_check for an object: one part of the buffer's size and channel count. */
+static eng_result check_head(void *user, const char *path, const rep_part *heads, int count, eng_error *err)
+{
+    const rep_buffer_info *b = user;
+    if (count != 1)
+        return eng_fail(err, ENG_ERR_INVALID, "%s: object holds %d parts, expected 1", path, count);
+    if (heads[0].width != b->width || heads[0].height != b->height || heads[0].channel_count != b->channel_count)
+        return eng_fail(err, ENG_ERR_INVALID, "%s: object is %dx%d with %d channels, buffer %s is %dx%d with %d", path,
+                        heads[0].width, heads[0].height, heads[0].channel_count, b->name, b->width, b->height,
+                        b->channel_count);
+    return ENG_OK;
+}
+
 eng_result rep_object_read(const char *store, const rep_buffer_info *b, const char *mf, rep_part *out, eng_error *err)
 {
     memset(out, 0, sizeof *out);
@@ -150,7 +163,14 @@ eng_result rep_object_read(const char *store, const rep_buffer_info *b, const ch
     char *path = rep_object_path(store, b->digest);
     rep_part *parts = NULL;
     int count = 0;
-    r = rep_read_parts(path, REP_MAX_FLOATS, &parts, &count, err);
+    /* Bounded like a frame file: a regular file no larger than its buffer uncompressed (plus
+     * headers and chunk tables), its one part's header matching the buffer before any pixel is
+     * decoded, so a hostile object costs no more memory than the manifest promises. */
+    const uint64_t floats = (uint64_t)b->width * (uint64_t)b->height * (uint64_t)b->channel_count;
+    r = eng_check_input(path, ENG_IN_NOFOLLOW, floats * 4 + (uint64_t)b->height * 16 + 65536 + (1u << 20), NULL,
+                        err);
+    if (r == ENG_OK)
+        r = rep_read_parts_checked(path, floats ? (size_t)floats : 1, check_head, (void *)b, &parts, &count, err);
     if (r == ENG_OK && count != 1)
         r = eng_fail(err, ENG_ERR_INVALID, "%s: object holds %d parts, expected 1", path, count);
     else if (r == ENG_OK && (parts[0].width != b->width || parts[0].height != b->height ||

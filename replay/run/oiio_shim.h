@@ -54,6 +54,15 @@ void rep_part_clear(rep_part *p);
  * reader every tool and replay use for frame files. */
 eng_result rep_read_parts(const char *path, size_t max_floats, rep_part **parts, int *count, eng_error *err);
 
+/* A check of a frame's parts from their headers alone (names, sizes, channels; data NULL),
+ * before any pixel is decoded or its memory taken: non-OK stops the read with that result. */
+typedef eng_result (*rep_parts_check)(void *user, const char *path, const rep_part *heads, int count,
+                                      eng_error *err);
+/* rep_read_parts with check run on the OpenEXR C API reader's headers (a file that reader leaves
+ * goes to OpenImageIO unchecked, within max_floats a part). */
+eng_result rep_read_parts_checked(const char *path, size_t max_floats, rep_parts_check check, void *user,
+                                  rep_part **parts, int *count, eng_error *err);
+
 /* The OpenEXR C API reader alone: ENG_OK with the parts as above; ENG_ERR_UNSUPPORTED (err says
  * why) for a file it leaves to OpenImageIO (tiled, deep, non-float, subsampled or offset parts,
  * limits exceeded, or an error while decoding); or rep_exr_check_header's refusal. */

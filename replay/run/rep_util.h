@@ -42,15 +42,25 @@ void rep_sb_printf(rep_sb *sb, const char *fmt, ...)
 #endif
     ;
 
+/* A JSON input (eng_read_input with flags, ENG_IN_NOFOLLOW inside a run or golden, within
+ * REP_MAX_JSON_BYTES) checked by eng_json_precheck and parsed: ENG_ERR_PARSE "not valid JSON"
+ * naming the byte. Caller frees *root with cJSON_Delete. */
+struct cJSON;
+eng_result rep_json_load(const char *path, unsigned flags, struct cJSON **root, eng_error *err);
+
 int rep_is_file(const char *path); /* regular file (following links) */
 int rep_is_dir(const char *path);
 /* mkdir -p. */
 eng_result rep_mkdirs(const char *path, eng_error *err);
-/* Writes path.tmp.<pid>, flushes it to disk, renames it over path: readers see the old file or the
- * new one, never a part. */
+/* Writes path.tmp.<pid>, flushes it to disk, renames it over path and flushes the folder (where
+ * it can: the new file is in place either way): readers see the old file or the new one, never
+ * a part; on failure the old file stays. */
 eng_result rep_write_atomic(const char *path, const char *data, size_t len, eng_error *err);
-/* Copies a regular file's bytes to dst (created or truncated) and flushes them to disk. */
-eng_result rep_copy_file(const char *src, const char *dst, eng_error *err);
+/* Copies a regular file's bytes to dst (created or truncated) and flushes them to disk; src is
+ * opened as an input with flags (ENG_IN_NOFOLLOW: a symbolic link is refused, never followed). */
+eng_result rep_copy_file(const char *src, unsigned flags, const char *dst, eng_error *err);
+/* fsync of a folder (after a rename into it). */
+eng_result rep_sync_dir(const char *dir, eng_error *err);
 /* rm -rf without following symbolic links; a missing path is not an error. */
 eng_result rep_remove_tree(const char *path, eng_error *err);
 

@@ -7,7 +7,10 @@
  * bounded (a lying width × height × channels could otherwise ask for terabytes). A decoded
  * frame must hold exactly the listed parts, with the listed sizes and channel sets, and each
  * part's content digest (eng_buffer_digest over the decoded floats) must equal the manifest's:
- * a mismatch is a corrupt or tampered file. Keys the reader does not use (tool, settings, gl,
+ * a mismatch is a corrupt or tampered file. Before a frame file is decoded it must be a regular
+ * file inside the run (not a symbolic link), OpenEXR by its magic number and no larger than its
+ * buffers can take, and its parts' headers must match the manifest (check_heads): a hostile
+ * frame costs its header walk, not its pixels. Keys the reader does not use (tool, settings, gl,
  * ...) are left alone so the capture module can grow the manifest. rep_run owns every string
  * it holds and is freed whole by rep_run_close.
  */
@@ -19,6 +22,9 @@
 #include "run_internal.h"
 
 #include <cjson/cJSON.h>
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -328,35 +334,101 @@ static eng_result parse_manifest(rep_run *run, const cJSON *root, eng_error *err
 eng_result rep_run_open(const char *dir, rep_run **out, eng_error *err)
 {
     *out = NULL;
-    if (!rep_is_dir(dir))
+    if (!rep_is_dir(dir)) {
+        /* A bless that ended between its two renames leaves the golden at <dir>.old; a record or
+         * merge --force, the run at <dir>.replaced. */
+        char *old = rep_xprintf("%s.old", dir), *replaced = rep_xprintf("%s.replaced", dir);
+        int bless = rep_is_dir(old), swap = rep_is_dir(replaced);
+        free(old);
+        free(replaced);
+        if (bless)
+            return eng_fail(err, ENG_ERR_IO, "%s: missing, an interrupted bless left %s.old (ispm bless puts it back)",
+                            dir, dir);
+        if (swap)
+            return eng_fail(err, ENG_ERR_IO,
+                            "%s: missing, an interrupted record or merge --force left %s.replaced (either puts it back)",
+                            dir, dir);
         return eng_fail(err, ENG_ERR_IO, "%s: run folder does not exist", dir);
+    }
     rep_run *run = rep_xcalloc(1, sizeof *run);
     run->dir = rep_xstrdup(dir);
     run->manifest_path = rep_path_join(dir, "manifest.json");
-    char *text = NULL;
-    size_t len = 0;
-    eng_result r = eng_read_file(run->manifest_path, REP_MAX_JSON_BYTES, &text, &len, err);
-    if (r != ENG_OK) {
-        if (!rep_is_file(run->manifest_path))
-            r = eng_fail(err, ENG_ERR_IO, "%s: missing: the run is incomplete or not a run", run->manifest_path);
+    cJSON *root = NULL;
+    struct stat st;
+    if (lstat(run->manifest_path, &st) != 0) {
+        eng_result r = eng_fail(err, ENG_ERR_IO, "%s: missing: the run is incomplete or not a run", run->manifest_path);
         rep_run_close(run);
         return r;
     }
-    const char *end = NULL;
-    cJSON *root = cJSON_ParseWithLengthOpts(text, len, &end, 0);
-    if (!root) {
-        size_t at = end && end >= text ? (size_t)(end - text) : 0;
-        r = eng_fail(err, ENG_ERR_PARSE, "%s: byte %zu: not valid JSON", run->manifest_path, at);
-    } else {
+    eng_result r = rep_json_load(run->manifest_path, ENG_IN_NOFOLLOW, &root, err);
+    if (r == ENG_OK)
         r = parse_manifest(run, root, err);
-    }
     cJSON_Delete(root);
-    free(text);
     if (r != ENG_OK) {
         rep_run_close(run);
         return r;
     }
     *out = run;
+    return ENG_OK;
+}
+
+typedef struct frame_check {
+    const rep_run *run;
+    const rep_frame_info *f;
+} frame_check;
+
+/* The parts' headers against the manifest (rep_parts_check): the same count, every name listed
+ * once, each part's size and channels the manifest's. */
+static eng_result check_heads(void *user, const char *path, const rep_part *heads, int count, eng_error *err)
+{
+    const frame_check *fc = user;
+    const rep_frame_info *f = fc->f;
+    if (count != f->buffer_count)
+        return eng_fail(err, ENG_ERR_INVALID, "%s: holds %d parts, %s lists %d", path, count,
+                        fc->run->manifest_path, f->buffer_count);
+    eng_result r = ENG_OK;
+    int *seen = rep_xcalloc((size_t)count, sizeof *seen);
+    for (int k = 0; k < count && r == ENG_OK; k++) {
+        int j = rep_frame_find(f, heads[k].name);
+        if (j < 0)
+            r = eng_fail(err, ENG_ERR_INVALID, "%s: part %s is not listed in %s", path, heads[k].name,
+                         fc->run->manifest_path);
+        else if (seen[j]++)
+            r = eng_fail(err, ENG_ERR_INVALID, "%s: part %s appears twice", path, heads[k].name);
+        else if (heads[k].width != f->buffers[j].width || heads[k].height != f->buffers[j].height)
+            r = eng_fail(err, ENG_ERR_INVALID, "%s: part %s: %dx%d in the file, %dx%d in the manifest", path,
+                         heads[k].name, heads[k].width, heads[k].height, f->buffers[j].width, f->buffers[j].height);
+        else if (!rep_run_same_channels(&heads[k], &f->buffers[j]))
+            r = eng_fail(err, ENG_ERR_INVALID, "%s: part %s: channels differ from the manifest's", path,
+                         heads[k].name);
+    }
+    free(seen);
+    return r;
+}
+
+/* The frame file before any library reads it: a regular file inside the run (not a link), an
+ * OpenEXR file by its magic number, no larger than its buffers uncompressed with a generous
+ * allowance for headers and chunk tables. *largest gets the floats of its largest buffer. */
+static eng_result check_frame_file(const rep_frame_info *f, size_t *largest, eng_error *err)
+{
+    uint64_t bound = 1 << 20;
+    *largest = 1;
+    for (int j = 0; j < f->buffer_count; j++) {
+        const rep_buffer_info *b = &f->buffers[j];
+        uint64_t floats = (uint64_t)b->width * (uint64_t)b->height * (uint64_t)b->channel_count;
+        bound += floats * 4 + (uint64_t)b->height * 16 + 65536;
+        if (floats > *largest)
+            *largest = (size_t)floats;
+    }
+    int fd;
+    eng_result r = eng_open_input(f->path, ENG_IN_NOFOLLOW, bound, &fd, NULL, err);
+    if (r != ENG_OK)
+        return r;
+    unsigned char magic[4] = {0};
+    ssize_t got = read(fd, magic, sizeof magic);
+    close(fd);
+    if (got != 4 || magic[0] != 0x76 || magic[1] != 0x2f || magic[2] != 0x31 || magic[3] != 0x01)
+        return eng_fail(err, ENG_ERR_INVALID, "%s: not an OpenEXR file (no EXR magic number)", f->path);
     return ENG_OK;
 }
 
@@ -368,7 +440,13 @@ eng_result rep_run_read_frame(const rep_run *run, int frame, rep_part **out, eng
     const rep_frame_info *f = &run->frames[frame];
     rep_part *parts = NULL;
     int count = 0;
-    eng_result r = rep_read_parts(f->path, REP_MAX_FLOATS, &parts, &count, err);
+    size_t largest;
+    eng_result r = check_frame_file(f, &largest, err);
+    if (r != ENG_OK)
+        return r;
+    frame_check fc = {run, f};
+    r = rep_read_parts_checked(f->path, largest < REP_MAX_FLOATS ? largest : REP_MAX_FLOATS, check_heads, &fc,
+                               &parts, &count, err);
     if (r != ENG_OK)
         return r;
     rep_part *sorted = rep_xcalloc((size_t)f->buffer_count, sizeof *sorted);
@@ -404,20 +482,7 @@ eng_result rep_run_read_frame(const rep_run *run, int frame, rep_part **out, eng
 
 static eng_result load_json(const char *path, cJSON **root, eng_error *err)
 {
-    char *text = NULL;
-    size_t len = 0;
-    *root = NULL;
-    eng_result r = eng_read_file(path, REP_MAX_JSON_BYTES, &text, &len, err);
-    if (r != ENG_OK)
-        return r;
-    const char *end = NULL;
-    *root = cJSON_ParseWithLengthOpts(text, len, &end, 0);
-    if (!*root) {
-        size_t at = end && end >= text ? (size_t)(end - text) : 0;
-        r = eng_fail(err, ENG_ERR_PARSE, "%s: byte %zu: not valid JSON", path, at);
-    }
-    free(text);
-    return r;
+    return rep_json_load(path, ENG_IN_NOFOLLOW, root, err);
 }
 
 /* Adds the frames from run->frame_count on whose EXR and record both exist. */

@@ -6,6 +6,9 @@
 
 /* The decoded part p (read from path) against the manifest's record b: size, channel set,
  * digest and non-finite counts. */
+/* Does the decoded part (or a part header) have exactly the manifest's channel set, by name? */
+int rep_run_same_channels(const rep_part *p, const rep_buffer_info *b);
+
 eng_result rep_run_verify_part(const char *path, const rep_part *p, const rep_buffer_info *b, eng_error *err);
 
 /* The object store that a format-2 manifest mf (in folder dir) names with rel: "objects", or

@@ -7,6 +7,8 @@
 
 #include "rep_util.h"
 
+#include <cjson/cJSON.h>
+
 #include <errno.h>
 #include <fcntl.h>
 #include <ftw.h>
@@ -163,6 +165,26 @@ void rep_sb_printf(rep_sb *sb, const char *fmt, ...)
     free(p);
 }
 
+eng_result rep_json_load(const char *path, unsigned flags, cJSON **root, eng_error *err)
+{
+    char *text = NULL;
+    size_t len = 0;
+    *root = NULL;
+    eng_result r = eng_read_input(path, flags, REP_MAX_JSON_BYTES, &text, &len, err);
+    if (r == ENG_OK)
+        r = eng_json_precheck(path, text, len, ENG_JSON_MAX_DEPTH, err);
+    if (r == ENG_OK) {
+        const char *end = NULL;
+        *root = cJSON_ParseWithLengthOpts(text, len, &end, 0);
+        if (!*root) {
+            size_t at = end && end >= text ? (size_t)(end - text) : 0;
+            r = eng_fail(err, ENG_ERR_PARSE, "%s: byte %zu: not valid JSON", path, at);
+        }
+    }
+    free(text);
+    return r;
+}
+
 int rep_is_file(const char *path)
 {
     struct stat st;
@@ -241,14 +263,36 @@ eng_result rep_write_atomic(const char *path, const char *data, size_t len, eng_
     if (r != ENG_OK)
         unlink(tmp);
     free(tmp);
+    if (r == ENG_OK) { /* the rename made durable where the folder can be synced: the new file is in place either way */
+        char *dir = rep_xstrdup(path);
+        char *slash = strrchr(dir, '/');
+        if (slash)
+            slash[slash == dir ? 1 : 0] = 0;
+        rep_sync_dir(slash ? dir : ".", NULL);
+        free(dir);
+    }
     return r;
 }
 
-eng_result rep_copy_file(const char *src, const char *dst, eng_error *err)
+eng_result rep_sync_dir(const char *dir, eng_error *err)
 {
-    int in = open(src, O_RDONLY);
-    if (in < 0)
-        return eng_fail(err, ENG_ERR_IO, "%s: cannot open: %s", src, strerror(errno));
+    int fd = open(dir, O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+    if (fd < 0)
+        return eng_fail(err, ENG_ERR_IO, "%s: cannot open folder: %s", dir, strerror(errno));
+    /* err may be NULL: eng_fail then only returns the code. */
+    int rc = fsync(fd), e = errno;
+    close(fd);
+    if (rc != 0)
+        return eng_fail(err, ENG_ERR_IO, "%s: cannot sync folder: %s", dir, strerror(e));
+    return ENG_OK;
+}
+
+eng_result rep_copy_file(const char *src, unsigned flags, const char *dst, eng_error *err)
+{
+    int in;
+    eng_result r = eng_open_input(src, flags, UINT64_MAX, &in, NULL, err);
+    if (r != ENG_OK)
+        return r;
     int out = open(dst, O_WRONLY | O_CREAT | O_TRUNC, 0666);
     if (out < 0) {
         int e = errno;

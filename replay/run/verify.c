@@ -8,7 +8,7 @@
 #include <string.h>
 
 /* Does the decoded part have exactly the manifest's channel set? */
-static int same_channels(const rep_part *p, const rep_buffer_info *b)
+int rep_run_same_channels(const rep_part *p, const rep_buffer_info *b)
 {
     if (p->channel_count != b->channel_count)
         return 0;
@@ -27,7 +27,7 @@ eng_result rep_run_verify_part(const char *path, const rep_part *p, const rep_bu
     if (p->width != b->width || p->height != b->height)
         return eng_fail(err, ENG_ERR_INVALID, "%s: part %s: %dx%d in the file, %dx%d in the manifest", path,
                         p->name, p->width, p->height, b->width, b->height);
-    if (!same_channels(p, b))
+    if (!rep_run_same_channels(p, b))
         return eng_fail(err, ENG_ERR_INVALID, "%s: part %s: channels differ from the manifest's", path, p->name);
     eng_buffer view = rep_part_buffer(p);
     char dg[40];
