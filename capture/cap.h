@@ -99,6 +99,16 @@ eng_result cap_create(const cap_desc *desc, cap_capture **out, eng_error *err);
  * one callback or write failed, every later callback and cap_finish fail with the same error. */
 eng_listener cap_listener(cap_capture *c);
 
+/* A frame whose final.display is all black (no channel of any pixel reaches
+ * CAP_DISPLAY_BLACK, half of one 8-bit step) or has more than CAP_DISPLAY_CLIP_FRACTION of its
+ * pixels at 1 in some channel gets a warning: printed on stderr, written as the frame
+ * record's "display_warning", shown by replay and the report. cap_display_warning writes it
+ * (one line, no newline) and returns 1, or returns 0 with out "". */
+#define CAP_DISPLAY_BLACK (0.5f / 255.0f)
+#define CAP_DISPLAY_CLIP_FRACTION 0.02
+#define CAP_DISPLAY_WARNING_MAX 200
+int cap_display_warning(const eng_buffer *display, char *out, size_t size);
+
 /* Was frame already captured (by this capture, or by the interrupted run it resumes)?
  * A resumed recording skips such frames. */
 int cap_frame_done(const cap_capture *c, int frame);

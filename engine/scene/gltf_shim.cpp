@@ -29,10 +29,12 @@
 #include <tiny_gltf.h>
 #include <draco/compression/decode.h>
 #include <nlohmann/json.hpp>
+#include <webp/decode.h>
 
 #include <sys/stat.h>
 
 #include <cerrno>
+#include <deque>
 #include <algorithm>
 #include <climits>
 #include <iterator>
@@ -73,9 +75,13 @@ struct gls_impl {
     std::vector<gls_light> lights;
     std::vector<gls_material> materials;
     std::vector<gls_image> images;
+    std::vector<std::vector<unsigned char>> image_bytes; /* encoded, as the file stores them */
+    std::vector<int> image_state;                        /* 0 not tried, 1 decoded, -1 failed */
+    std::vector<tinygltf::Image> decoded;                /* pixels of the decoded images */
+    std::vector<std::string> image_error;                /* why an image failed */
     std::vector<gls_texture> textures;
     std::vector<gls_tex_sampler> tex_samplers;
-    std::vector<std::vector<double>> numbers; /* KHR_texture_transform arrays */
+    std::deque<std::vector<double>> numbers; /* extension arrays (a deque: never moves them) */
     std::vector<std::vector<gls_channel>> channels;
     std::vector<std::vector<gls_sampler>> samplers;
     std::vector<gls_animation> animations;
@@ -92,6 +98,11 @@ struct fs_scope {
     std::string error;       /* the first URI refused, in one line */
     gls_status status;
 };
+
+bool starts_with_data(const std::string &uri)
+{
+    return uri.compare(0, 5, "data:") == 0;
+}
 
 void refuse(fs_scope *scope, gls_status status, const std::string &text)
 {
@@ -111,6 +122,8 @@ bool exists_in_folder(const std::string &abs, void *user)
     if (abs.compare(0, scope->prefix.size(), scope->prefix) != 0)
         return false;
     const std::string uri = abs.substr(scope->prefix.size());
+    if (starts_with_data(uri))
+        return true; /* a data URI tinygltf does not know (read_whole decodes it) */
     const std::string shown = "URI \"" + (uri.size() > 120 ? uri.substr(0, 120) + "..." : uri) + "\"";
     if (uri.empty()) {
         refuse(scope, GLS_ERR_GLTF, "an empty URI");
@@ -159,8 +172,47 @@ bool exists_in_folder(const std::string &abs, void *user)
 
 std::string expand(const std::string &p, void *) { return tinygltf::ExpandFilePath(p, nullptr); }
 
-bool read_whole(std::vector<unsigned char> *out, std::string *err, const std::string &p, void *)
+/* A base64 data URI of a media type tinygltf does not list (data:image/webp, ...) reaches the
+ * file callbacks as "<folder>/data:...", %-decoded, its '+' turned into ' '. Decodes its
+ * payload; false where it is not base64. */
+bool decode_data_uri(const std::string &uri, std::vector<unsigned char> *out)
 {
+    const size_t comma = uri.find(',');
+    if (comma == std::string::npos || comma < 7 || uri.compare(comma - 7, 7, ";base64") != 0)
+        return false;
+    uint32_t acc = 0;
+    int bits = 0;
+    size_t k = comma + 1;
+    for (; k < uri.size() && uri[k] != '='; k++) {
+        const char c = uri[k] == ' ' ? '+' : uri[k];
+        int v = c >= 'A' && c <= 'Z' ? c - 'A' : c >= 'a' && c <= 'z' ? c - 'a' + 26 : c >= '0' && c <= '9' ? c - '0' + 52
+              : c == '+' ? 62 : c == '/' ? 63 : -1;
+        if (v < 0)
+            return false;
+        acc = (acc << 6) | static_cast<uint32_t>(v);
+        bits += 6;
+        if (bits >= 8) {
+            bits -= 8;
+            out->push_back(static_cast<unsigned char>(acc >> bits));
+        }
+    }
+    for (; k < uri.size(); k++)
+        if (uri[k] != '=')
+            return false;
+    return true;
+}
+
+bool read_whole(std::vector<unsigned char> *out, std::string *err, const std::string &p, void *user)
+{
+    const fs_scope *scope = static_cast<const fs_scope *>(user);
+    if (p.compare(0, scope->prefix.size(), scope->prefix) == 0 && starts_with_data(p.substr(scope->prefix.size()))) {
+        out->clear();
+        if (decode_data_uri(p.substr(scope->prefix.size()), out))
+            return true;
+        if (err)
+            *err += "a data URI that is not base64\n";
+        return false;
+    }
     return tinygltf::ReadWholeFile(out, err, p, nullptr);
 }
 
@@ -258,6 +310,64 @@ gls_texinfo texinfo(gls_impl &g, int index, int texcoord, const tinygltf::Extens
         t.scale = ext_vec(g, it->second, "scale");
     }
     return t;
+}
+
+/* The ExtensionMap form of a textureInfo's "extensions" member kept as a Value. */
+tinygltf::ExtensionMap extension_map(const tinygltf::Value &obj)
+{
+    tinygltf::ExtensionMap map;
+    if (obj.IsObject() && obj.Has("extensions") && obj.Get("extensions").IsObject()) {
+        const tinygltf::Value &e = obj.Get("extensions");
+        for (const std::string &k : e.Keys())
+            map[k] = e.Get(k);
+    }
+    return map;
+}
+
+/* The extension object ext_name of an extension map, or nullptr. */
+const tinygltf::Value *ext_object(const tinygltf::ExtensionMap &ext, const char *ext_name)
+{
+    auto it = ext.find(ext_name);
+    return it == ext.end() ? nullptr : &it->second;
+}
+
+/* obj.member as a textureInfo (index, texCoord, KHR_texture_transform): index -1 where
+ * absent, -2 where the member is not an object with an integer index. */
+gls_texinfo ext_texinfo(gls_impl &g, const tinygltf::Value *obj, const char *member)
+{
+    gls_texinfo t;
+    std::memset(&t, 0, sizeof t);
+    t.index = -1;
+    t.strength = 1.0;
+    if (!obj || !obj->IsObject() || !obj->Has(member))
+        return t;
+    const tinygltf::Value &v = obj->Get(member);
+    if (!v.IsObject() || !v.Has("index") || !v.Get("index").IsInt() || v.Get("index").GetNumberAsInt() < 0) {
+        t.index = -2;
+        return t;
+    }
+    int texcoord = 0;
+    if (v.Has("texCoord") && v.Get("texCoord").IsInt())
+        texcoord = v.Get("texCoord").GetNumberAsInt();
+    else if (v.Has("texCoord"))
+        texcoord = -1;
+    return texinfo(g, v.Get("index").GetNumberAsInt(), texcoord, extension_map(v));
+}
+
+/* tinygltf's image callback: keeps the encoded bytes; gls_decode_image decodes on demand, so
+ * an image no drawn material uses is never decoded and cannot fail the load. */
+bool keep_image(tinygltf::Image *image, const int index, std::string *, std::string *, int, int,
+                const unsigned char *bytes, int size, void *user)
+{
+    gls_impl *g = static_cast<gls_impl *>(user);
+    if (index < 0)
+        return false;
+    const size_t i = static_cast<size_t>(index);
+    if (g->image_bytes.size() <= i)
+        g->image_bytes.resize(i + 1);
+    g->image_bytes[i].assign(bytes, bytes + (size > 0 ? size : 0));
+    image->image.clear();
+    return true;
 }
 
 gls_status classify(const std::string &err)
@@ -383,7 +493,6 @@ void build_view(gls_impl &g)
                             l.spot.innerConeAngle, l.spot.outerConeAngle,
                             extras_number(l.extras, "ispm", "radius"),
                             extras_number(l.extras, "ispm", "angular_radius")});
-    g.numbers.reserve(m.materials.size() * 10); /* no reallocation under a pointer */
     for (const tinygltf::Material &mat : m.materials) {
         gls_material c;
         c.name = mat.name.c_str();
@@ -412,22 +521,33 @@ void build_view(gls_impl &g)
         c.ior = ext_number(mat.extensions, "KHR_materials_ior", "ior", nullptr);
         c.emissive_strength = ext_number(mat.extensions, "KHR_materials_emissive_strength", "emissiveStrength",
                                          nullptr);
+        c.transmission_texture =
+            ext_texinfo(g, ext_object(mat.extensions, "KHR_materials_transmission"), "transmissionTexture");
+        c.unlit = ext_object(mat.extensions, "KHR_materials_unlit") != nullptr;
+        const tinygltf::Value *sg = ext_object(mat.extensions, "KHR_materials_pbrSpecularGlossiness");
+        c.spec_gloss = sg != nullptr;
+        c.diffuse_factor = sg ? ext_vec(g, *sg, "diffuseFactor") : gls_doubles{0, nullptr};
+        c.specular_factor = sg ? ext_vec(g, *sg, "specularFactor") : gls_doubles{0, nullptr};
+        c.glossiness = sg ? member_number(*sg, "glossinessFactor") : gls_number{GLS_NUM_ABSENT, 0.0};
+        c.diffuse_texture = ext_texinfo(g, sg, "diffuseTexture");
+        c.spec_gloss_texture = ext_texinfo(g, sg, "specularGlossinessTexture");
         g.materials.push_back(c);
     }
 
-    for (const tinygltf::Image &im : m.images) {
-        gls_image c = {0, 0, 0, nullptr};
-        if (im.width > 0 && im.height > 0 && im.component == 4 && (im.bits == 8 || im.bits == 16) &&
-            im.image.size() == static_cast<size_t>(im.width) * static_cast<size_t>(im.height) * 4 * (im.bits / 8)) {
-            c.width = im.width;
-            c.height = im.height;
-            c.bits = im.bits;
-            c.rgba = im.image.data();
-        }
-        g.images.push_back(c);
+    g.image_bytes.resize(m.images.size());
+    g.image_state.assign(m.images.size(), 0);
+    g.decoded.resize(m.images.size());
+    g.image_error.resize(m.images.size());
+    for (size_t i = 0; i < m.images.size(); i++)
+        g.images.push_back({m.images[i].uri.c_str(), m.images[i].mimeType.c_str(), !g.image_bytes[i].empty()});
+    for (const tinygltf::Texture &t : m.textures) {
+        int webp = -1;
+        if (const tinygltf::Value *w = ext_object(t.extensions, "EXT_texture_webp"))
+            webp = w->IsObject() && w->Has("source") && w->Get("source").IsInt() && w->Get("source").GetNumberAsInt() >= 0
+                       ? w->Get("source").GetNumberAsInt()
+                       : -2;
+        g.textures.push_back({t.source, t.sampler, webp});
     }
-    for (const tinygltf::Texture &t : m.textures)
-        g.textures.push_back({t.source, t.sampler});
     for (const tinygltf::Sampler &t : m.samplers)
         g.tex_samplers.push_back({t.magFilter, t.minFilter, t.wrapS, t.wrapT});
 
@@ -827,7 +947,7 @@ gls_status load(const char *path, const void *bytes, size_t len, gls_model **out
     tinygltf::TinyGLTF loader;
     tinygltf::FsCallbacks fs = {&exists_in_folder, &expand, &read_whole, &write_whole, &scope};
     loader.SetFsCallbacks(fs);
-    loader.SetImageLoader(&tinygltf::LoadImageData, nullptr); /* stb_image, RGBA 8 or 16 bits */
+    loader.SetImageLoader(&keep_image, g.get()); /* kept encoded; gls_decode_image decodes */
 
     std::string err, warn;
     const unsigned char *b = static_cast<const unsigned char *>(bytes);
@@ -898,6 +1018,128 @@ extern "C" gls_status gls_load(const char *path, const void *bytes, size_t len, 
         set_msg(msg, msg_size, "unknown exception in tinygltf");
         return GLS_ERR_GLTF;
     }
+}
+
+namespace {
+
+/* The format the bytes' signature shows: "png", "jpeg", "webp", ... or "unknown". */
+const char *sniff(const std::vector<unsigned char> &b)
+{
+    const unsigned char *p = b.data();
+    const size_t n = b.size();
+    if (n >= 8 && std::memcmp(p, "\x89PNG\r\n\x1a\n", 8) == 0)
+        return "png";
+    if (n >= 3 && p[0] == 0xFF && p[1] == 0xD8 && p[2] == 0xFF)
+        return "jpeg";
+    if (n >= 12 && std::memcmp(p, "RIFF", 4) == 0 && std::memcmp(p + 8, "WEBP", 4) == 0)
+        return "webp";
+    if (n >= 12 && std::memcmp(p, "\xABKTX 20\xBB\r\n\x1a\n", 12) == 0)
+        return "ktx2";
+    if (n >= 4 && std::memcmp(p, "DDS ", 4) == 0)
+        return "dds";
+    if (n >= 6 && (std::memcmp(p, "GIF87a", 6) == 0 || std::memcmp(p, "GIF89a", 6) == 0))
+        return "gif";
+    if (n >= 2 && p[0] == 'B' && p[1] == 'M')
+        return "bmp";
+    return "unknown";
+}
+
+/* Decodes image i into g.decoded[i]; false with g.image_error[i] set. */
+bool decode_image(gls_impl &g, size_t i)
+{
+    const std::vector<unsigned char> &b = g.image_bytes[i];
+    const tinygltf::Image &src = g.model.images[i];
+    const char *format = sniff(b);
+    std::string name = "image " + std::to_string(i);
+    if (!src.uri.empty())
+        name += " (URI \"" + (src.uri.size() > 120 ? src.uri.substr(0, 120) + "..." : src.uri) + "\")";
+    name += std::string(", format ") + format;
+    if (!src.mimeType.empty())
+        name += " (mimeType " + src.mimeType.substr(0, 40) + ")";
+    if (b.empty()) {
+        g.image_error[i] = name + ": no image data";
+        return false;
+    }
+    if (b.size() > INT_MAX) {
+        g.image_error[i] = name + ": too large to decode";
+        return false;
+    }
+    tinygltf::Image &out = g.decoded[i];
+    if (std::strcmp(format, "webp") == 0) {
+        int w = 0, h = 0;
+        if (!WebPGetInfo(b.data(), b.size(), &w, &h) || w <= 0 || h <= 0) {
+            g.image_error[i] = name + ": not a WebP image libwebp reads";
+            return false;
+        }
+        out.image.resize(static_cast<size_t>(w) * static_cast<size_t>(h) * 4);
+        if (!WebPDecodeRGBAInto(b.data(), b.size(), out.image.data(), out.image.size(), w * 4)) {
+            out.image.clear();
+            g.image_error[i] = name + ": libwebp does not decode it";
+            return false;
+        }
+        out.width = w;
+        out.height = h;
+        out.component = 4;
+        out.bits = 8;
+        return true;
+    }
+    if (std::strcmp(format, "ktx2") == 0 || std::strcmp(format, "dds") == 0) {
+        g.image_error[i] = name + ": not supported (no decoder for this format here)";
+        return false;
+    }
+    std::string err, warn;
+    /* No user data: tinygltf's defaults, channels expanded to RGBA. */
+    if (!tinygltf::LoadImageData(&out, static_cast<int>(i), &err, &warn, 0, 0, b.data(), static_cast<int>(b.size()),
+                                 nullptr)) {
+        std::string why;
+        for (char c : err)
+            why += (c == '\n' || c == '\r') ? ' ' : c;
+        while (!why.empty() && why.back() == ' ')
+            why.pop_back();
+        g.image_error[i] = name + ": does not decode (" + (why.empty() ? "stb_image failed" : why) + ")";
+        return false;
+    }
+    if (out.width <= 0 || out.height <= 0 || out.component != 4 || (out.bits != 8 && out.bits != 16) ||
+        out.image.size() != static_cast<size_t>(out.width) * static_cast<size_t>(out.height) * 4 * (out.bits / 8)) {
+        out.image.clear();
+        g.image_error[i] = name + ": decodes to no RGBA image of 8 or 16 bits";
+        return false;
+    }
+    return true;
+}
+
+} // namespace
+
+extern "C" gls_status gls_decode_image(const gls_model *model, int index, gls_pixels *out, char *msg,
+                                       size_t msg_size)
+{
+    std::memset(out, 0, sizeof *out);
+    if (msg && msg_size)
+        msg[0] = 0;
+    gls_impl &g = *model->impl;
+    if (index < 0 || static_cast<size_t>(index) >= g.image_state.size()) {
+        set_msg(msg, msg_size, "image " + std::to_string(index) + " does not exist");
+        return GLS_ERR_GLTF;
+    }
+    const size_t i = static_cast<size_t>(index);
+    try {
+        if (g.image_state[i] == 0)
+            g.image_state[i] = decode_image(g, i) ? 1 : -1;
+    } catch (const std::bad_alloc &) {
+        g.decoded[i].image.clear();
+        set_msg(msg, msg_size, "image " + std::to_string(index) + ": out of memory");
+        return GLS_ERR_NOMEM;
+    }
+    if (g.image_state[i] < 0) {
+        set_msg(msg, msg_size, g.image_error[i]);
+        return g.image_error[i].find("not supported") != std::string::npos ? GLS_ERR_UNSUPPORTED : GLS_ERR_GLTF;
+    }
+    const tinygltf::Image &d = g.decoded[i];
+    out->width = d.width;
+    out->height = d.height;
+    out->bits = d.bits;
+    out->rgba = d.image.data();
+    return GLS_OK;
 }
 
 extern "C" void gls_free(gls_model *model)

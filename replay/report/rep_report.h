@@ -48,6 +48,13 @@ typedef struct rep_entry {
     rep_flip_stats flip;     /* zero without computing when the buffer is bit-exact */
 } rep_entry;
 
+/* A frame whose manifest record carries a display warning (all black, clipped). */
+typedef struct rep_display_warning {
+    int golden; /* 0: the run's frame, 1: the golden's */
+    int frame;
+    char *text;
+} rep_display_warning;
+
 typedef struct rep_report {
     const char *run_dir;
     const char *golden_dir;  /* NULL: integrity-only */
@@ -71,7 +78,12 @@ typedef struct rep_report {
     char *run_renderer, *golden_renderer; /* owned; NULL if not recorded */
     int renderer_differs;
     rep_keep *keep;          /* owned: parts and ꟻLIP maps kept for report.html, or NULL */
+    int display_warning_count;
+    rep_display_warning *display_warnings; /* owned: run's, then golden's, frame order */
 } rep_report;
+
+/* Collects the display warnings of both runs' frame records into r (gold may be NULL). */
+void rep_report_display_warnings(rep_report *r, const rep_run *run, const rep_run *gold);
 
 /* Appends a zeroed entry for (frame, buffer) and returns it. */
 rep_entry *rep_report_add(rep_report *r, int frame, const char *buffer);
