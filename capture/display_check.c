@@ -21,7 +21,7 @@ int cap_display_warning(const eng_buffer *b, char *out, size_t size)
             hi = p[k] > hi ? p[k] : hi;
         if (hi >= CAP_DISPLAY_BLACK)
             lit++;
-        if (hi >= 1.0f)
+        if (hi >= CAP_DISPLAY_CLIPPED)
             clipped++;
     }
     if (lit == 0) {
