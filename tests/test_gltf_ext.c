@@ -2,11 +2,13 @@
  * name before tinygltf reads anything (glTF 1.0, required extensions), a scene without
  * geometry refused, images decoded only where a drawn material uses them, EXT_texture_webp
  * with its fallback, KHR_materials_unlit, KHR_materials_pbrSpecularGlossiness,
- * KHR_materials_transmission's texture, and the framing camera of sequences without one.
+ * KHR_materials_transmission's texture, meshopt-compressed buffer views, and the framing
+ * camera of sequences without one.
  * Every glTF is written here, a floor quad with UVs in a data URI. */
 #include "seq.h"
 
 #include <check.h>
+#include <meshoptimizer.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -310,6 +312,92 @@ START_TEST(framing_camera)
 }
 END_TEST
 
+static void base64(const unsigned char *in, size_t n, char *out)
+{
+    static const char t[] = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+    size_t o = 0;
+    for (size_t i = 0; i < n; i += 3) {
+        uint32_t v = (uint32_t)in[i] << 16 | (i + 1 < n ? (uint32_t)in[i + 1] << 8 : 0) | (i + 2 < n ? in[i + 2] : 0);
+        out[o++] = t[v >> 18 & 63];
+        out[o++] = t[v >> 12 & 63];
+        out[o++] = i + 1 < n ? t[v >> 6 & 63] : '=';
+        out[o++] = i + 2 < n ? t[v & 63] : '=';
+    }
+    out[o] = 0;
+}
+
+/* The floor with its positions and indices compressed by meshoptimizer's encoders (vertex
+ * codec, index codec), in a buffer of its own; the views point at a data-less fallback buffer
+ * as the extension has them. corrupt: one byte of the vertex stream changed. */
+static char *meshopt_floor(const char *ext, int corrupt)
+{
+    static const float pos[12] = {-1, 0, -1, 1, 0, -1, 1, 0, 1, -1, 0, 1};
+    static const unsigned int idx[6] = {0, 2, 1, 0, 3, 2};
+    unsigned char enc[1024];
+    size_t nv = meshopt_encodeVertexBuffer(enc, sizeof enc, pos, 4, 12);
+    ck_assert(nv > 0 && nv < 512);
+    size_t at = (nv + 3) & ~(size_t)3;
+    size_t ni = meshopt_encodeIndexBuffer(enc + at, sizeof enc - at, idx, 6);
+    ck_assert(ni > 0);
+    if (corrupt)
+        enc[0] ^= 0xFF;
+    char b64[2048];
+    base64(enc, at + ni, b64);
+    char *j = malloc(8192);
+    snprintf(j, 8192,
+             "{\"asset\":{\"version\":\"2.0\"},\"extensionsUsed\":[\"%s\"],\"extensionsRequired\":[\"%s\"],"
+             "\"scenes\":[{\"nodes\":[0]}],\"nodes\":[{\"mesh\":0}],"
+             "\"meshes\":[{\"primitives\":[{\"attributes\":{\"POSITION\":0},\"indices\":1}]}],"
+             "\"accessors\":[{\"bufferView\":0,\"componentType\":5126,\"count\":4,\"type\":\"VEC3\"},"
+             "{\"bufferView\":1,\"componentType\":5123,\"count\":6,\"type\":\"SCALAR\"}],"
+             "\"bufferViews\":[{\"buffer\":1,\"byteLength\":48,\"byteStride\":12,\"extensions\":{\"%s\":{\"buffer\":0,"
+             "\"byteLength\":%zu,\"byteStride\":12,\"count\":4,\"mode\":\"ATTRIBUTES\"}}},"
+             "{\"buffer\":1,\"byteOffset\":48,\"byteLength\":12,\"extensions\":{\"%s\":{\"buffer\":0,\"byteOffset\":%zu,"
+             "\"byteLength\":%zu,\"byteStride\":2,\"count\":6,\"mode\":\"TRIANGLES\"}}}],"
+             "\"buffers\":[{\"byteLength\":%zu,\"uri\":\"data:application/octet-stream;base64,%s\"},"
+             "{\"byteLength\":60,\"extensions\":{\"%s\":{\"fallback\":true}}}]}",
+             ext, ext, ext, nv, ext, at, ni, at + ni, b64, ext);
+    return j;
+}
+
+START_TEST(meshopt_decoded)
+{
+    static const char *const exts[] = {"EXT_meshopt_compression", "KHR_meshopt_compression"};
+    for (int e = 0; e < 2; e++) {
+        char *f = meshopt_floor(exts[e], 0);
+        scn_scene *s;
+        eng_error err;
+        ck_assert_msg(load(f, &s, &err) == ENG_OK, "%s", err.msg);
+        const scn_primitive *p = &s->primitives[0];
+        ck_assert_uint_eq(p->index_count, 6);
+        /* The index codec keeps each triangle and its winding, maybe rotated; the loader then
+         * un-shares the vertices (no NORMAL: flat normals). Compare corner positions. */
+        static const float pos[12] = {-1, 0, -1, 1, 0, -1, 1, 0, 1, -1, 0, 1};
+        static const uint32_t want[6] = {0, 2, 1, 0, 3, 2};
+        for (int t = 0; t < 2; t++) {
+            const float *c[3];
+            for (int k = 0; k < 3; k++)
+                c[k] = p->positions + 3 * (size_t)p->indices[3 * t + k];
+            int rot = -1;
+            for (int r = 0; r < 3; r++)
+                if (memcmp(c[0], pos + 3 * want[3 * t + r], 3 * sizeof(float)) == 0)
+                    rot = r;
+            ck_assert_int_ge(rot, 0);
+            for (int k = 0; k < 3; k++)
+                ck_assert(memcmp(c[k], pos + 3 * want[3 * t + (k + rot) % 3], 3 * sizeof(float)) == 0);
+        }
+        scn_destroy(s);
+        free(f);
+        f = meshopt_floor(exts[e], 1);
+        eng_result r = load(f, &s, &err);
+        ck_assert_int_eq(r, ENG_ERR_INVALID);
+        ck_assert_msg(strstr(err.msg, "bufferView 0: ") && strstr(err.msg, exts[e]) && strstr(err.msg, "does not decode"),
+                      "%s", err.msg);
+        free(f);
+    }
+}
+END_TEST
+
 int main(void)
 {
     Suite *s = suite_create("gltf_ext");
@@ -324,6 +412,7 @@ int main(void)
     tcase_add_test(tc, spec_gloss_conversion);
     tcase_add_test(tc, transmission_texture_scales_factor);
     tcase_add_test(tc, framing_camera);
+    tcase_add_test(tc, meshopt_decoded);
     suite_add_tcase(s, tc);
     SRunner *sr = srunner_create(s);
     srunner_run_all(sr, CK_NORMAL);

@@ -2,7 +2,7 @@
  *
  * tinygltf reads a glTF top-down and fails on the first thing it cannot read: a glTF 1.0
  * file may pass and render nothing, and a required extension that changes how buffers or
- * images are stored (EXT_meshopt_compression, KHR_texture_basisu) fails as some missing URI
+ * images are stored (KHR_texture_basisu, a compression) fails as some missing URI
  * or undecodable image. Looking at asset and extensionsRequired first makes the refusal name
  * the feature (glTF §3.12: a client that lacks a required extension must refuse the asset). */
 #include "gltf_precheck.h"
@@ -18,7 +18,7 @@ static const char *const supported[] = {
     "KHR_lights_punctual",          "KHR_materials_transmission", "KHR_materials_ior",
     "KHR_materials_emissive_strength", "KHR_materials_unlit",     "KHR_materials_pbrSpecularGlossiness",
     "KHR_mesh_quantization",        "KHR_texture_transform",      "KHR_draco_mesh_compression",
-    "EXT_texture_webp",
+    "EXT_texture_webp",             "EXT_meshopt_compression",    "KHR_meshopt_compression",
 };
 
 int gltf_extension_supported(const char *name)

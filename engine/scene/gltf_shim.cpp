@@ -17,17 +17,23 @@
  *     Only nlohmann's parse_error is syntax: its out_of_range (a number such as 1e999 that
  *     no double holds) is well-formed JSON with a wrong value, so structure;
  *   - KHR_draco_mesh_compression: tinygltf 2.7 (Debian, no Draco) refuses a Draco primitive's
- *     indices accessor, which has no bufferView. draco_prepare points that accessor at the
+ *     indices accessor, which has no bufferView. prepare points that accessor at the
  *     Draco bufferView in a copy of the JSON (GLB re-packed around it) so that tinygltf parses
  *     the rest; draco_decode then undoes it, decodes each Draco primitive with draco::Decoder
  *     and appends the decoded arrays as a new buffer, with one buffer view per accessor, in the
  *     accessor's own componentType and type. gltf_load.c then reads them like any accessor;
+ *   - EXT_meshopt_compression / KHR_meshopt_compression (meshoptimizer, Debian's
+ *     libmeshoptimizer): meshopt_patch points each compressed bufferView at its compressed
+ *     bytes in a copy of the JSON (and gives a data-less fallback buffer one byte), so that
+ *     tinygltf parses the file; meshopt_decode then decodes each view (vertex or index codec,
+ *     then its filter) into a buffer of its own and points the view back there;
  *   - every exception stops here.
  * The gls_impl owns the tinygltf::Model and the C arrays that point into it. */
 #include "gltf_shim.h"
 
 #include <tiny_gltf.h>
 #include <draco/compression/decode.h>
+#include <meshoptimizer.h>
 #include <nlohmann/json.hpp>
 #include <webp/decode.h>
 
@@ -126,7 +132,7 @@ bool exists_in_folder(const std::string &abs, void *user)
         return true; /* a data URI tinygltf does not know (read_whole decodes it) */
     const std::string shown = "URI \"" + (uri.size() > 120 ? uri.substr(0, 120) + "..." : uri) + "\"";
     if (uri.empty()) {
-        refuse(scope, GLS_ERR_GLTF, "an empty URI");
+        refuse(scope, GLS_ERR_GLTF, "an empty URI (a buffer without uri outside a GLB has no data)");
         return false;
     }
     if (uri[0] == '/') {
@@ -687,30 +693,205 @@ std::vector<int> patch_indices(json &j)
     return patched;
 }
 
-/* The bytes tinygltf should parse: a JSON glTF or a GLB whose JSON chunk went through
- * patch_indices. Returns false (and leaves *out empty) where nothing needed patching or the
- * input is too malformed to patch; tinygltf then reads the original bytes. */
-bool draco_prepare(const unsigned char *b, size_t len, std::vector<unsigned char> *out, std::vector<int> *patched)
+/* ---- EXT_meshopt_compression / KHR_meshopt_compression */
+
+struct meshopt_error {
+    std::string text;
+};
+
+/* A compressed bufferView as the file gave it: where its compressed bytes are (the
+ * extension's buffer range) and what it decodes to (count elements of byteStride bytes). */
+struct meshopt_view {
+    int view;
+    std::string ext; /* which of the two extensions */
+    int buffer;
+    uint64_t offset, length, stride, count;
+    std::string mode, filter;
+    bool has_view_stride;
+    uint64_t view_stride, view_length;
+};
+
+[[noreturn]] void meshopt_fail(size_t view, const std::string &ext, const std::string &what)
 {
-    const bool glb = len >= 4 && std::memcmp(b, "glTF", 4) == 0;
-    size_t json_at = 0, json_len = len;
-    if (glb) {
+    throw meshopt_error{"bufferView " + std::to_string(view) + ": " + ext + ": " + what};
+}
+
+uint64_t meshopt_uint(const json &o, const char *key, size_t view, const std::string &ext, bool required,
+                      uint64_t fallback)
+{
+    if (!o.contains(key)) {
+        if (required)
+            meshopt_fail(view, ext, std::string("no ") + key);
+        return fallback;
+    }
+    if (!o[key].is_number_unsigned())
+        meshopt_fail(view, ext, std::string(key) + " is not a non-negative integer");
+    return o[key].get<uint64_t>();
+}
+
+/* Points every compressed bufferView at its compressed bytes, so that tinygltf reads the
+ * file (meshopt_decode puts the decoded bytes back), and gives each fallback buffer without
+ * a URI (it holds no data) one byte of data URI, since tinygltf refuses a buffer without one. */
+std::vector<meshopt_view> meshopt_patch(json &j)
+{
+    std::vector<meshopt_view> out;
+    if (!j.contains("bufferViews") || !j["bufferViews"].is_array())
+        return out;
+    json &views = j["bufferViews"];
+    for (size_t vi = 0; vi < views.size(); vi++) {
+        json &v = views[vi];
+        if (!v.is_object() || !v.contains("extensions") || !v["extensions"].is_object())
+            continue;
+        for (const char *name : {"EXT_meshopt_compression", "KHR_meshopt_compression"}) {
+            if (!v["extensions"].contains(name))
+                continue;
+            const json &e = v["extensions"][name];
+            if (!e.is_object())
+                meshopt_fail(vi, name, "not an object");
+            meshopt_view m;
+            m.view = static_cast<int>(vi);
+            m.ext = name;
+            m.buffer = static_cast<int>(meshopt_uint(e, "buffer", vi, name, true, 0) & 0x7fffffff);
+            m.offset = meshopt_uint(e, "byteOffset", vi, name, false, 0);
+            m.length = meshopt_uint(e, "byteLength", vi, name, true, 0);
+            m.stride = meshopt_uint(e, "byteStride", vi, name, true, 0);
+            m.count = meshopt_uint(e, "count", vi, name, true, 0);
+            if (!e.contains("mode") || !e["mode"].is_string())
+                meshopt_fail(vi, name, "no mode");
+            m.mode = e["mode"].get<std::string>();
+            m.filter = e.contains("filter") && e["filter"].is_string() ? e["filter"].get<std::string>() : "NONE";
+            m.has_view_stride = v.contains("byteStride");
+            m.view_stride = m.has_view_stride && v["byteStride"].is_number_unsigned() ? v["byteStride"].get<uint64_t>() : 0;
+            m.view_length = v.contains("byteLength") && v["byteLength"].is_number_unsigned() ? v["byteLength"].get<uint64_t>() : 0;
+            v["buffer"] = m.buffer;
+            v["byteOffset"] = m.offset;
+            v["byteLength"] = m.length;
+            v.erase("byteStride");
+            out.push_back(m);
+            break;
+        }
+    }
+    if (out.empty() || !j.contains("buffers") || !j["buffers"].is_array())
+        return out;
+    for (json &b : j["buffers"]) {
+        if (!b.is_object() || b.contains("uri") || !b.contains("extensions") || !b["extensions"].is_object())
+            continue;
+        for (const char *name : {"EXT_meshopt_compression", "KHR_meshopt_compression"})
+            if (b["extensions"].contains(name) && b["extensions"][name].is_object() &&
+                b["extensions"][name].contains("fallback") && b["extensions"][name]["fallback"] == true) {
+                b["uri"] = "data:application/octet-stream;base64,AA==";
+                b["byteLength"] = 1;
+            }
+    }
+    return out;
+}
+
+/* Decodes every compressed bufferView (meshopt_patch) into a buffer of its own, filters
+ * applied, and points the view there with its own byteStride back. Throws meshopt_error
+ * naming the view. */
+void meshopt_decode(tinygltf::Model &m, const std::vector<meshopt_view> &views)
+{
+    for (const meshopt_view &mv : views) {
+        const size_t vi = static_cast<size_t>(mv.view);
+        if (vi >= m.bufferViews.size())
+            continue;
+        if (mv.buffer < 0 || static_cast<size_t>(mv.buffer) >= m.buffers.size())
+            meshopt_fail(vi, mv.ext, "buffer " + std::to_string(mv.buffer) + " does not exist");
+        const std::vector<unsigned char> &src = m.buffers[static_cast<size_t>(mv.buffer)].data;
+        if (mv.offset > src.size() || mv.length > src.size() - mv.offset)
+            meshopt_fail(vi, mv.ext, "bytes " + std::to_string(mv.offset) + "+" + std::to_string(mv.length) +
+                                         " lie outside buffer " + std::to_string(mv.buffer) + " (" +
+                                         std::to_string(src.size()) + " bytes)");
+        const bool attributes = mv.mode == "ATTRIBUTES";
+        const bool triangles = mv.mode == "TRIANGLES";
+        if (!attributes && !triangles && mv.mode != "INDICES")
+            meshopt_fail(vi, mv.ext, "mode \"" + mv.mode.substr(0, 40) + "\" is not ATTRIBUTES, TRIANGLES or INDICES");
+        if (attributes ? (mv.stride == 0 || mv.stride % 4 != 0 || mv.stride > 256) : (mv.stride != 2 && mv.stride != 4))
+            meshopt_fail(vi, mv.ext, "byteStride " + std::to_string(mv.stride) + " does not fit mode " + mv.mode);
+        if (triangles && mv.count % 3 != 0)
+            meshopt_fail(vi, mv.ext, "count " + std::to_string(mv.count) + " of TRIANGLES is not a multiple of 3");
+        if (mv.count > (uint64_t(1) << 30) / mv.stride)
+            meshopt_fail(vi, mv.ext, "count " + std::to_string(mv.count) + " x byteStride is over 1 GiB");
+        tinygltf::Buffer out;
+        out.data.resize(mv.count * mv.stride);
+        const unsigned char *in = src.data() + mv.offset;
+        int rc = attributes ? meshopt_decodeVertexBuffer(out.data.data(), mv.count, mv.stride, in, mv.length)
+                 : triangles ? meshopt_decodeIndexBuffer(out.data.data(), mv.count, mv.stride, in, mv.length)
+                             : meshopt_decodeIndexSequence(out.data.data(), mv.count, mv.stride, in, mv.length);
+        if (rc != 0)
+            meshopt_fail(vi, mv.ext, "the compressed data does not decode (meshoptimizer " +
+                                         std::to_string(MESHOPTIMIZER_VERSION / 100) + "." +
+                                         std::to_string(MESHOPTIMIZER_VERSION % 100) + ": error " +
+                                         std::to_string(rc) + ")");
+        if (mv.filter == "OCTAHEDRAL") {
+            if (!attributes || (mv.stride != 4 && mv.stride != 8))
+                meshopt_fail(vi, mv.ext, "filter OCTAHEDRAL needs ATTRIBUTES of byteStride 4 or 8");
+            meshopt_decodeFilterOct(out.data.data(), mv.count, mv.stride);
+        } else if (mv.filter == "QUATERNION") {
+            if (!attributes || mv.stride != 8)
+                meshopt_fail(vi, mv.ext, "filter QUATERNION needs ATTRIBUTES of byteStride 8");
+            meshopt_decodeFilterQuat(out.data.data(), mv.count, mv.stride);
+        } else if (mv.filter == "EXPONENTIAL") {
+            if (!attributes)
+                meshopt_fail(vi, mv.ext, "filter EXPONENTIAL needs ATTRIBUTES");
+            meshopt_decodeFilterExp(out.data.data(), mv.count, mv.stride);
+        } else if (mv.filter != "NONE") {
+            meshopt_fail(vi, mv.ext, "filter \"" + mv.filter.substr(0, 40) + "\" is not supported");
+        }
+        tinygltf::BufferView &v = m.bufferViews[vi];
+        if (mv.view_length > out.data.size())
+            meshopt_fail(vi, mv.ext, "the bufferView's byteLength " + std::to_string(mv.view_length) +
+                                         " is more than the " + std::to_string(out.data.size()) + " bytes decoded");
+        v.buffer = static_cast<int>(m.buffers.size());
+        v.byteOffset = 0;
+        v.byteLength = mv.view_length ? mv.view_length : out.data.size();
+        v.byteStride = mv.has_view_stride ? mv.view_stride : 0;
+        m.buffers.push_back(std::move(out));
+    }
+}
+
+/* The JSON chunk of a GLB (or the whole of a JSON glTF): false where the GLB header is
+ * malformed (tinygltf then says so). */
+bool json_range(const unsigned char *b, size_t len, bool *glb, size_t *at, size_t *n)
+{
+    *glb = len >= 4 && std::memcmp(b, "glTF", 4) == 0;
+    *at = 0;
+    *n = len;
+    if (*glb) {
         if (len < 20 || le32(b + 16) != 0x4E4F534Au || le32(b + 12) > len - 20)
             return false;
-        json_at = 20;
-        json_len = le32(b + 12);
+        *at = 20;
+        *n = le32(b + 12);
     }
-    json j = json::parse(b + json_at, b + json_at + json_len, nullptr, false);
-    if (j.is_discarded())
+    return true;
+}
+
+/* The bytes tinygltf should parse: the JSON glTF, or the GLB with its JSON chunk, after
+ * Draco's (patch_indices) and meshopt's (meshopt_patch) patches. Returns false (and leaves
+ * *out empty) where nothing needed patching or the input is too malformed to patch; tinygltf
+ * then reads the original bytes. */
+bool prepare(const unsigned char *b, size_t len, bool draco, bool meshopt, std::vector<unsigned char> *out,
+             std::vector<int> *patched, std::vector<meshopt_view> *views)
+{
+    bool glb;
+    size_t json_at, json_len;
+    if (!json_range(b, len, &glb, &json_at, &json_len))
         return false;
-    *patched = patch_indices(j);
-    if (patched->empty())
+    json j = json::parse(b + json_at, b + json_at + json_len, nullptr, false);
+    if (j.is_discarded() || !j.is_object())
+        return false;
+    if (draco)
+        *patched = patch_indices(j);
+    if (meshopt)
+        *views = meshopt_patch(j);
+    if (patched->empty() && views->empty())
         return false;
     std::string text;
     try {
         text = j.dump();
     } catch (const json::exception &) { /* a string that is not UTF-8: leave it to tinygltf */
         patched->clear();
+        views->clear();
         return false;
     }
     if (!glb) {
@@ -723,6 +904,7 @@ bool draco_prepare(const unsigned char *b, size_t len, std::vector<unsigned char
     const size_t total = 20 + text.size() + (len - rest);
     if (total > UINT32_MAX) {
         patched->clear();
+        views->clear();
         return false;
     }
     out->assign(b, b + 12);
@@ -907,7 +1089,7 @@ void decode_primitive(tinygltf::Model &m, size_t mi, size_t pi)
     m.buffers.push_back(std::move(buffer));
 }
 
-/* Undoes draco_prepare's patch, then decodes every TRIANGLES primitive with the extension
+/* Undoes prepare's Draco patch, then decodes every TRIANGLES primitive with the extension
  * (another mode is left to gltf_load.c, which skips it). */
 void draco_decode(tinygltf::Model &m, const std::vector<int> &patched)
 {
@@ -953,9 +1135,12 @@ gls_status load(const char *path, const void *bytes, size_t len, gls_model **out
     const unsigned char *b = static_cast<const unsigned char *>(bytes);
     std::vector<unsigned char> patched_bytes;
     std::vector<int> patched;
+    std::vector<meshopt_view> meshopt_views;
+    static const char MESHOPT[] = "_meshopt_compression";
     try {
-        if (std::search(b, b + len, std::begin(DRACO), std::end(DRACO) - 1) != b + len &&
-            draco_prepare(b, len, &patched_bytes, &patched)) {
+        const bool draco = std::search(b, b + len, std::begin(DRACO), std::end(DRACO) - 1) != b + len;
+        const bool meshopt = std::search(b, b + len, std::begin(MESHOPT), std::end(MESHOPT) - 1) != b + len;
+        if ((draco || meshopt) && prepare(b, len, draco, meshopt, &patched_bytes, &patched, &meshopt_views)) {
             if (patched_bytes.size() > UINT_MAX) {
                 set_msg(msg, msg_size, "file too large for tinygltf");
                 return GLS_ERR_GLTF;
@@ -964,6 +1149,9 @@ gls_status load(const char *path, const void *bytes, size_t len, gls_model **out
             len = patched_bytes.size();
         }
     } catch (const draco_error &e) {
+        set_msg(msg, msg_size, e.text);
+        return GLS_ERR_GLTF;
+    } catch (const meshopt_error &e) {
         set_msg(msg, msg_size, e.text);
         return GLS_ERR_GLTF;
     }
@@ -988,8 +1176,12 @@ gls_status load(const char *path, const void *bytes, size_t len, gls_model **out
         return classify(err);
     }
     try {
+        meshopt_decode(g->model, meshopt_views);
         draco_decode(g->model, patched);
     } catch (const draco_error &e) {
+        set_msg(msg, msg_size, e.text);
+        return GLS_ERR_GLTF;
+    } catch (const meshopt_error &e) {
         set_msg(msg, msg_size, e.text);
         return GLS_ERR_GLTF;
     }
