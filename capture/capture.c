@@ -86,6 +86,7 @@ typedef struct cap_frame {
     /* The lights' shadow views (eng_frame_stats.lights), for ispm lineage. */
     int light_count;
     eng_light_record lights[ENG_MAX_LIGHT_RECORDS];
+    char display_warning[CAP_DISPLAY_WARNING_MAX]; /* cap_display_warning's line, or "" */
 } cap_frame;
 
 /* A buffer of the frame in progress: its record and its pixel copy. */
@@ -113,6 +114,7 @@ struct cap_capture {
     int write_first, write_last; /* frames this run holds: 0..frame_count-1, or a shard's */
     int cur_frame;  /* -1 outside frame_begin .. frame_end */
     double cur_time;
+    char cur_display_warning[CAP_DISPLAY_WARNING_MAX]; /* of the frame in progress */
     int pending_count, pending_cap;
     cap_pending *pending;
     cap_compression compression;
@@ -716,6 +718,7 @@ static int on_frame_begin(void *user, int frame, double time)
     drop_pending(c);
     c->cur_frame = frame;
     c->cur_time = time;
+    c->cur_display_warning[0] = 0;
     return 0;
 }
 
@@ -728,6 +731,9 @@ static int on_buffer(void *user, int frame, const eng_buffer *buf)
         return fail_cb(c, eng_fail(&c->cb_error, ENG_ERR_INVALID,
                                    "%s: buffer announced for frame %d outside that frame's begin/end",
                                    c->run_dir, frame));
+    /* Checked whether or not it is captured: a black or white frame is never silent. */
+    if (buf && buf->name && buf->data && strcmp(buf->name, "final.display") == 0)
+        cap_display_warning(buf, c->cur_display_warning, sizeof c->cur_display_warning);
     char *where = frame_path(c, frame);
     eng_result r = ENG_OK;
     if (!buf || !buf->name)
@@ -886,6 +892,9 @@ static int on_frame_end(void *user, const eng_frame_stats *stats)
     f->light_count = stats->light_count < 0 ? 0
                    : stats->light_count > ENG_MAX_LIGHT_RECORDS ? ENG_MAX_LIGHT_RECORDS : stats->light_count;
     memcpy(f->lights, stats->lights, sizeof f->lights);
+    memcpy(f->display_warning, c->cur_display_warning, sizeof f->display_warning);
+    if (f->display_warning[0])
+        fprintf(stderr, "ispm: warning: frame %d: %s\n", frame, f->display_warning);
     /* The pending list moves into the job; the next frame starts a new one. */
     j->count = c->pending_count;
     j->bufs = c->pending;
@@ -1041,6 +1050,8 @@ static cJSON *frame_json(const cap_frame *f, int index)
         jpush(eye, jfloat(f->eye[i]));
     jadd(cam, "eye", eye);
     jadd(o, "camera", cam);
+    if (f->display_warning[0])
+        jadd(o, "display_warning", jfield(f->display_warning, sizeof f->display_warning));
     if (f->light_count > 0)
         jadd(o, "lights", lights_json(f));
     if (f->photons_emitted) {
@@ -1442,6 +1453,12 @@ static eng_result frame_from_json(const char *path, int index, const cJSON *o, c
         for (int b = 0; b < cJSON_GetArraySize(st); b++)
             f->photons_stored[b + 2] = (uint64_t)cJSON_GetArrayItem(st, b)->valuedouble;
     }
+    const cJSON *dw = cJSON_GetObjectItemCaseSensitive(o, "display_warning");
+    if (dw && (!cJSON_IsString(dw) || strlen(dw->valuestring) >= sizeof f->display_warning))
+        return eng_fail(err, ENG_ERR_INVALID, "%s: \"display_warning\" is not a string of under %zu bytes", path,
+                        sizeof f->display_warning);
+    if (dw)
+        snprintf(f->display_warning, sizeof f->display_warning, "%s", dw->valuestring);
     eng_result lr = eng_light_records_parse(path, cJSON_GetObjectItemCaseSensitive(o, "lights"), &f->light_count,
                                      f->lights, err);
     if (lr != ENG_OK)

@@ -38,6 +38,9 @@ struct eng_engine {
     eng_settings settings;
     int width, height;
     int32_t camera_node;
+    /* A framing camera's key and planes (seq_frame_scene), fixed when the engine is made. */
+    seq_camera_key frame_key;
+    float frame_znear, frame_zfar;
     eng_glctx *gl;
     eng_rt *rt;
     eng_gpu_prim *gpu;
@@ -243,6 +246,8 @@ eng_result eng_create(const eng_desc *desc, eng_engine **out, eng_error *err)
                             q->path, q->camera_node_index, s->path);
         }
     }
+    if (e->camera_node < 0 && q->camera_frame)
+        seq_frame_scene(q, s, &e->frame_key, &e->frame_znear, &e->frame_zfar);
     uint32_t nlights = 0;
     for (uint32_t i = 0; i < s->node_count; i++)
         if (s->nodes[i].light >= 0)
@@ -468,8 +473,10 @@ static void camera_at(const eng_engine *e, const float *world, double t, eng_vie
         m4_perspective(v->proj, c->yfov, aspect, c->znear, c->zfar);
     } else {
         const seq_sequence *q = e->seq;
-        const seq_camera_key *k = q->camera_keys;
-        int n = q->camera_key_count;
+        const seq_camera_key *k = q->camera_frame ? &e->frame_key : q->camera_keys;
+        int n = q->camera_frame ? 1 : q->camera_key_count;
+        float znear = q->camera_frame ? e->frame_znear : q->camera_znear;
+        float zfar = q->camera_frame ? e->frame_zfar : q->camera_zfar;
         float pos[3], tgt[3];
         int i = 0;
         while (i + 1 < n && k[i + 1].time <= t)
@@ -484,9 +491,9 @@ static void camera_at(const eng_engine *e, const float *world, double t, eng_vie
         }
         m4_look_at(v->view, pos, tgt, q->camera_up);
         memcpy(v->eye, pos, sizeof pos);
-        v->znear = q->camera_znear;
-        v->zfar = q->camera_zfar;
-        m4_perspective(v->proj, q->camera_yfov, aspect, q->camera_znear, q->camera_zfar);
+        v->znear = znear;
+        v->zfar = zfar;
+        m4_perspective(v->proj, q->camera_yfov, aspect, znear, zfar);
     }
     m4_mul(v->view_proj, v->proj, v->view);
 }

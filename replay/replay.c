@@ -448,6 +448,7 @@ static eng_result walk(const rep_options *o, const char *report_dir, rep_report 
 
     r->frames = run->frame_count;
     r->buffers_per_frame = run->frames[0].buffer_count;
+    rep_report_display_warnings(r, run, gold);
     if (gold) {
         if (gold->frame_count > r->frames)
             r->frames = gold->frame_count;

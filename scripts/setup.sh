@@ -6,7 +6,7 @@ cd "$(dirname "$0")/.."
 BUILD_DIR=${BUILD_DIR:-build}
 PKGS=(build-essential cmake pkg-config git
       libosmesa6-dev libegl-dev libegl-mesa0 libgl-dev libembree-dev libopenexr-dev libopenimageio-dev openimageio-tools
-      libtinygltf-dev libdraco-dev nlohmann-json3-dev libcjson-dev check libsubunit-dev libxxhash-dev
+      libtinygltf-dev libdraco-dev nlohmann-json3-dev libcjson-dev libwebp-dev libmeshoptimizer-dev check libsubunit-dev libxxhash-dev
       libplplot-dev plplot-driver-cairo libpng-dev
       chromium libxml2-utils
       clang libclang-rt-14-dev libomp-14-dev valgrind

@@ -43,7 +43,7 @@ expect() {
 }
 seq_with() { # seq_with FILE SCENE [FRAMES]
   printf '{"scene": "%s", "frames": %s, "fps": 8, "resolution": [32, 24], "camera": {"node": "Camera"},
- "settings": {"shadow_map_size": 16, "photon_count": 256}}\n' "$2" "${3:-2}" > "$1"
+ "settings": {"shadow_map_size": 16, "photon_count": 256, "exposure": -1}}\n' "$2" "${3:-2}" > "$1"
 }
 same() { cmp -s "$1" "$2"; }
 
@@ -139,11 +139,30 @@ ihdr = b'IHDR' + struct.pack('>IIBBBBB', int(sys.argv[2]), int(sys.argv[3]), 8, 
 open(sys.argv[1], 'wb').write(b'\x89PNG\r\n\x1a\n' + struct.pack('>I', 13) + ihdr + struct.pack('>I', zlib.crc32(ihdr)))
 " "$@"
 }
+tex_scene() { # tex_scene FILE IMAGE: a textured triangle (only an image a drawn material uses is decoded)
+  python3 - "$1" "$2" <<'PYEOF'
+import base64, json, struct, sys
+data = struct.pack('<9f', 0, 0, 0, 1, 0, 0, 0, 1, 0) + struct.pack('<6f', 0, 0, 1, 0, 0, 1)
+gltf = {"asset": {"version": "2.0"}, "scene": 0, "scenes": [{"nodes": [0]}], "nodes": [{"mesh": 0}],
+        "meshes": [{"primitives": [{"attributes": {"POSITION": 0, "TEXCOORD_0": 1}, "material": 0}]}],
+        "materials": [{"pbrMetallicRoughness": {"baseColorTexture": {"index": 0}}}],
+        "textures": [{"source": 0}], "images": [{"uri": sys.argv[2]}],
+        "buffers": [{"byteLength": len(data), "uri": "data:application/octet-stream;base64," + base64.b64encode(data).decode()}],
+        "bufferViews": [{"buffer": 0, "byteOffset": 0, "byteLength": 36}, {"buffer": 0, "byteOffset": 36, "byteLength": 24}],
+        "accessors": [{"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3", "min": [0, 0, 0], "max": [1, 1, 0]},
+                      {"bufferView": 1, "componentType": 5126, "count": 3, "type": "VEC2"}]}
+open(sys.argv[1], "w").write(json.dumps(gltf))
+PYEOF
+}
+seq_framed() { # seq_framed FILE SCENE: as seq_with, framed on the scene's bounds (no camera node)
+  printf '{"scene": "%s", "frames": 1, "fps": 8, "resolution": [32, 24],
+ "settings": {"shadow_map_size": 16, "photon_count": 256}}\n' "$2" > "$1"
+}
 for side in 16384 30000; do
   png_header "$W/ext/tex$side.png" $side $side
-  printf '{"asset": {"version": "2.0"}, "images": [{"uri": "tex%s.png"}]}\n' $side > "$W/ext/tex$side.gltf"
-  seq_with "$W/ext/tex$side.json" "$W/ext/tex$side.gltf"
-  expect "PNG texture of ${side}²" 2 "image 0 is ${side}x${side}, over the limit of 8192" \
+  tex_scene "$W/ext/tex$side.gltf" "tex$side.png"
+  seq_framed "$W/ext/tex$side.json" "$W/ext/tex$side.gltf"
+  expect "PNG texture of ${side}²" 2 "${side}x${side}, over the limit of 8192" \
     "$ISPM" record "$W/ext/tex$side.json" -o "$W/r" --quiet
 done
 

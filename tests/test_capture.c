@@ -1532,6 +1532,31 @@ START_TEST(test_nonfinite_counts)
 }
 END_TEST
 
+/* cap_display_warning: all black (every channel under half an 8-bit step), clipped (over 2%
+ * of the pixels at 8-bit white in some channel), and neither at the limits. */
+START_TEST(test_display_warning)
+{
+    static const char *const ch[] = {"R", "G", "B"};
+    enum { W = 10, H = 10 };
+    static float px[W * H * 3];
+    eng_buffer b = {"final.display", W, H, 3, ch, px};
+    char msg[CAP_DISPLAY_WARNING_MAX];
+    memset(px, 0, sizeof px);
+    px[5] = 0.4f / 255.0f; /* under half a step: still black */
+    ck_assert_int_eq(cap_display_warning(&b, msg, sizeof msg), 1);
+    ck_assert_msg(strstr(msg, "all black") && !strchr(msg, '\n'), "%s", msg);
+    px[5] = 1.0f / 255.0f; /* one pixel lit: not black */
+    ck_assert_int_eq(cap_display_warning(&b, msg, sizeof msg), 0);
+    ck_assert_str_eq(msg, "");
+    px[3 * 10 + 1] = 1.0f; /* 2 of 100 pixels clipped: exactly 2%, no warning */
+    px[3 * 20 + 2] = 0.99999994f;
+    ck_assert_int_eq(cap_display_warning(&b, msg, sizeof msg), 0);
+    px[3 * 30] = 1.0f; /* 3%: a warning that says how many */
+    ck_assert_int_eq(cap_display_warning(&b, msg, sizeof msg), 1);
+    ck_assert_msg(strstr(msg, "3.0% of its pixels clipped"), "%s", msg);
+}
+END_TEST
+
 static Suite *capture_suite(void)
 {
     Suite *s = suite_create("capture");
@@ -1542,6 +1567,7 @@ static Suite *capture_suite(void)
     tcase_add_test(exr, test_exr_zip_same_size_chunk);
     tcase_add_test(exr, test_exr_rejects_bad_input);
     tcase_add_test(exr, test_nonfinite_counts);
+    tcase_add_test(exr, test_display_warning);
     suite_add_tcase(s, exr);
     TCase *run = tcase_create("run");
     tcase_add_test(run, test_listener_full_flow);

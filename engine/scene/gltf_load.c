@@ -30,6 +30,7 @@
  *   - the digest covers the file and each external buffer, in buffer order.
  * The scene owns every array it points to; scn_destroy frees it whole. */
 #include "scn.h"
+#include "gltf_features.h"
 #include "gltf_precheck.h"
 #include "gltf_shim.h"
 
@@ -58,6 +59,9 @@ typedef struct loader {
     uint64_t total_vertices;
     int scene_index; /* -1: the default scene */
     int32_t *texture_source; /* per scene texture, its glTF texture (make_texture) */
+    unsigned char *drawn;    /* per glTF material: a node's mesh uses it (its textures are made) */
+    /* What an extension defines that the engine reads only in part: one warning per file. */
+    int averaged_transmission_texture, ignored_spec_gloss_texture;
 } loader;
 
 static eng_result fail(loader *L, eng_result code, const char *fmt, ...)
@@ -476,17 +480,46 @@ static eng_result make_texture(loader *L, int index, int srgb, const char *where
             return ENG_OK;
         }
     const gls_texture *t = &m->textures[index];
-    if (t->source < 0) {
+    gls_pixels px;
+    char msg[700];
+    gls_status st;
+    int source = t->source;
+    if (t->webp_source == -2)
+        return fail(L, ENG_ERR_INVALID, "texture %d: EXT_texture_webp.source is not a non-negative integer", index);
+    if (t->webp_source >= 0) {
+        /* EXT_texture_webp: the WebP image where it decodes, else the fallback source. */
+        if ((uint32_t)t->webp_source >= m->image_count)
+            return fail(L, ENG_ERR_INVALID, "texture %d: EXT_texture_webp.source %d out of range (%u images)", index,
+                        t->webp_source, m->image_count);
+        st = gls_decode_image(m, t->webp_source, &px, msg, sizeof msg);
+        if (st == GLS_ERR_NOMEM)
+            return nomem(L, "images");
+        if (st == GLS_OK)
+            source = t->webp_source;
+        else if (t->source >= 0)
+            scn_warn(s, "texture %d: EXT_texture_webp %s; its fallback source, image %d, is used", index, msg,
+                     t->source);
+        else
+            return fail(L, ENG_ERR_INVALID, "texture %d: EXT_texture_webp %s, and the texture has no fallback source",
+                        index, msg);
+    }
+    if (source < 0) {
         scn_warn(s, "%s: texture %d has no image (an extension's source?), ignored", where, index);
         *out = -1;
         return ENG_OK;
     }
-    if ((uint32_t)t->source >= m->image_count)
-        return fail(L, ENG_ERR_INVALID, "texture %d: source %d out of range (%u images)", index, t->source,
-                    m->image_count);
-    const gls_image *im = &m->images[t->source];
-    if (im->width <= 0 || im->height <= 0 || !im->rgba)
-        return fail(L, ENG_ERR_INVALID, "image %d: not decoded to RGBA (an unsupported format?)", t->source);
+    if (source == t->source) {
+        if ((uint32_t)t->source >= m->image_count)
+            return fail(L, ENG_ERR_INVALID, "texture %d: source %d out of range (%u images)", index, t->source,
+                        m->image_count);
+        st = gls_decode_image(m, t->source, &px, msg, sizeof msg);
+        if (st == GLS_ERR_NOMEM)
+            return nomem(L, "images");
+        if (st != GLS_OK)
+            return fail(L, st == GLS_ERR_UNSUPPORTED ? ENG_ERR_UNSUPPORTED : ENG_ERR_INVALID, "texture %d: %s", index,
+                        msg);
+    }
+    const gls_pixels *im = &px;
     scn_texture d;
     memset(&d, 0, sizeof d);
     d.mag_linear = 1;
@@ -571,6 +604,8 @@ static eng_result load_texref(loader *L, const gls_texinfo *g, int srgb, const c
     memcpy(d->transform, id, sizeof id);
     if (g->index == -1)
         return ENG_OK;
+    if (g->index == -2)
+        return fail(L, ENG_ERR_INVALID, "%s: not a textureInfo (an object with an integer index)", where);
     if (g->index < 0 || (uint32_t)g->index >= L->m->texture_count)
         return fail(L, ENG_ERR_INVALID, "%s: texture %d out of range (%u textures)", where, g->index,
                     L->m->texture_count);
@@ -610,6 +645,131 @@ static eng_result load_texref(loader *L, const gls_texinfo *g, int srgb, const c
     d->transform[4] = (float)off[0];
     d->transform[5] = (float)off[1];
     d->texcoord = set;
+    return ENG_OK;
+}
+
+/* Khronos' conversion of specular-glossiness to metal-roughness (glTF-Sample-Viewer's
+ * convert-between-workflows): the metallic value that explains the specular colour over the
+ * dielectric F0 of 0.04, and a base colour blended from the diffuse and specular colours. */
+static double perceived_brightness(const double c[3])
+{
+    return sqrt(0.299 * c[0] * c[0] + 0.587 * c[1] * c[1] + 0.114 * c[2] * c[2]);
+}
+
+static double solve_metallic(double diffuse, double specular, double one_minus_specular_strength)
+{
+    const double a = 0.04;
+    if (specular < a)
+        return 0.0;
+    double b = diffuse * one_minus_specular_strength / (1.0 - a) + specular - 2.0 * a;
+    double c = a - specular;
+    double d = b * b - 4.0 * a * c;
+    double m = (-b + sqrt(d > 0.0 ? d : 0.0)) / (2.0 * a);
+    return m < 0.0 ? 0.0 : m > 1.0 ? 1.0 : m;
+}
+
+void scn_spec_gloss_to_metal_rough(const double diffuse[4], const double specular[3], double glossiness,
+                                   float base_color[4], float *metallic, float *roughness)
+{
+    const double eps = 1e-6;
+    double smax = fmax(specular[0], fmax(specular[1], specular[2]));
+    double one_minus = 1.0 - smax;
+    double m = solve_metallic(perceived_brightness(diffuse), perceived_brightness(specular), one_minus);
+    for (int c = 0; c < 3; c++) {
+        double from_diffuse = diffuse[c] * one_minus / (1.0 - 0.04) / fmax(1.0 - m, eps);
+        double from_specular = (specular[c] - 0.04 * (1.0 - m)) / fmax(m, eps);
+        double v = from_diffuse + (from_specular - from_diffuse) * m * m;
+        base_color[c] = (float)(v < 0.0 ? 0.0 : v > 1.0 ? 1.0 : v);
+    }
+    base_color[3] = (float)diffuse[3];
+    *metallic = (float)m;
+    *roughness = (float)(1.0 - glossiness);
+}
+
+/* The material extensions that replace or scale what pbrMetallicRoughness gave: the
+ * transmission texture (its mean red channel scales transmissionFactor: the engine has one
+ * transmission per material), specular-glossiness (converted), unlit (docs/gltf.md). */
+static eng_result load_material_extensions(loader *L, const gls_material *g, scn_material *d, const char *where)
+{
+    eng_result r;
+    char what[96];
+    if (g->transmission_texture.index != -1) {
+        scn_texref t;
+        snprintf(what, sizeof what, "%s transmissionTexture", where);
+        if ((r = load_texref(L, &g->transmission_texture, 0, what, &t)))
+            return r;
+        if (t.texture >= 0) {
+            const scn_texture *tx = &L->s->textures[t.texture];
+            size_t n = (size_t)tx->width * tx->height;
+            double sum = 0.0;
+            for (size_t i = 0; i < n; i++)
+                sum += tx->texels[4 * i];
+            d->transmission = (float)(d->transmission * (n ? sum / (double)n : 1.0));
+            L->averaged_transmission_texture = 1;
+        }
+    }
+    if (g->spec_gloss) {
+        double diffuse[4] = {1, 1, 1, 1}, specular[3] = {1, 1, 1}, gloss = 1.0;
+        if (g->diffuse_factor.len && g->diffuse_factor.len != 4)
+            return fail(L, ENG_ERR_INVALID, "%s: KHR_materials_pbrSpecularGlossiness.diffuseFactor has %u values, not 4",
+                        where, g->diffuse_factor.len);
+        if (g->specular_factor.len && g->specular_factor.len != 3)
+            return fail(L, ENG_ERR_INVALID, "%s: KHR_materials_pbrSpecularGlossiness.specularFactor has %u values, not 3",
+                        where, g->specular_factor.len);
+        for (uint32_t c = 0; c < g->diffuse_factor.len; c++)
+            if ((r = check_unit_range(L, where, "diffuseFactor component", diffuse[c] = g->diffuse_factor.v[c])))
+                return r;
+        for (uint32_t c = 0; c < g->specular_factor.len; c++)
+            if ((r = check_unit_range(L, where, "specularFactor component", specular[c] = g->specular_factor.v[c])))
+                return r;
+        if (g->glossiness.state == GLS_NUM_NOT_A_NUMBER)
+            return fail(L, ENG_ERR_INVALID, "%s: glossinessFactor is not a number", where);
+        if (g->glossiness.state == GLS_NUM_PRESENT && (r = check_unit_range(L, where, "glossinessFactor",
+                                                                            gloss = g->glossiness.value)))
+            return r;
+        scn_spec_gloss_to_metal_rough(diffuse, specular, gloss, d->base_color, &d->metallic, &d->roughness);
+        snprintf(what, sizeof what, "%s diffuseTexture", where);
+        if ((r = load_texref(L, &g->diffuse_texture, 1, what, &d->base_color_tex)))
+            return r;
+        d->metallic_roughness_tex.texture = -1;
+        if (g->spec_gloss_texture.index != -1)
+            L->ignored_spec_gloss_texture = 1;
+    }
+    if (g->unlit) {
+        /* Unlit: the base colour is shown as it is, as emission; the surface reflects and
+         * transmits nothing, so lights neither shade it nor bounce off it. Alpha stays. */
+        for (int c = 0; c < 3; c++) {
+            d->emissive[c] = d->base_color[c];
+            d->base_color[c] = 0.0f;
+        }
+        d->emissive_tex = d->base_color_tex;
+        d->metallic = 0.0f;
+        d->roughness = 1.0f;
+        d->transmission = 0.0f;
+        d->metallic_roughness_tex.texture = -1;
+        d->normal_tex.texture = -1;
+        d->occlusion_tex.texture = -1;
+    }
+    return ENG_OK;
+}
+
+/* Which materials a node's mesh draws: only their textures are made (decoded). */
+static eng_result mark_drawn_materials(loader *L)
+{
+    const gls_model *m = L->m;
+    L->drawn = calloc(m->material_count ? m->material_count : 1, 1);
+    if (!L->drawn)
+        return nomem(L, "materials");
+    for (uint32_t n = 0; n < m->node_count; n++) {
+        int mi = m->nodes[n].mesh;
+        if (mi < 0 || (uint32_t)mi >= m->mesh_count)
+            continue;
+        for (uint32_t p = 0; p < m->meshes[mi].primitive_count; p++) {
+            int mat = m->meshes[mi].primitives[p].material;
+            if (mat >= 0 && (uint32_t)mat < m->material_count)
+                L->drawn[mat] = 1;
+        }
+    }
     return ENG_OK;
 }
 
@@ -664,7 +824,10 @@ static eng_result load_materials(loader *L)
             }
         }
         d->double_sided = g->double_sided;
-        if ((r = load_texref(L, &g->base_color_texture, 1, where, &d->base_color_tex)) ||
+        if (!L->drawn[i]) {
+            scn_texref none = {-1, 0, {1, 0, 0, 1, 0, 0}};
+            d->base_color_tex = d->metallic_roughness_tex = d->normal_tex = d->occlusion_tex = d->emissive_tex = none;
+        } else if ((r = load_texref(L, &g->base_color_texture, 1, where, &d->base_color_tex)) ||
             (r = load_texref(L, &g->metallic_roughness_texture, 0, where, &d->metallic_roughness_tex)) ||
             (r = load_texref(L, &g->normal_texture, 0, where, &d->normal_tex)) ||
             (r = load_texref(L, &g->occlusion_texture, 0, where, &d->occlusion_tex)) ||
@@ -706,7 +869,15 @@ static eng_result load_materials(loader *L)
              * perfect mirror); a large finite ior has the same limit and no division by 0. */
             d->ior = g->ior.value == 0.0 ? IOR_ZERO : (float)g->ior.value;
         }
+        if (L->drawn[i] && (r = load_material_extensions(L, g, d, where)))
+            return r;
     }
+    if (L->averaged_transmission_texture)
+        scn_warn(s, "KHR_materials_transmission.transmissionTexture: its mean red channel scales "
+                    "transmissionFactor (one transmission per material)");
+    if (L->ignored_spec_gloss_texture)
+        scn_warn(s, "KHR_materials_pbrSpecularGlossiness.specularGlossinessTexture ignored (its factors are "
+                    "converted, the texture is not)");
     return ENG_OK;
 }
 
@@ -1753,27 +1924,16 @@ static eng_result load_animations(loader *L, const int32_t *remap)
 
 /* ---------------------------------------------------------------- top level */
 
-static int known_extension(const char *e)
-{
-    static const char *const known[] = {"KHR_lights_punctual", "KHR_materials_transmission", "KHR_materials_ior",
-                                        "KHR_materials_emissive_strength", "KHR_mesh_quantization",
-                                        "KHR_texture_transform", "KHR_draco_mesh_compression"};
-    for (size_t k = 0; k < sizeof known / sizeof known[0]; k++)
-        if (strcmp(e, known[k]) == 0)
-            return 1;
-    return 0;
-}
-
 /* A required extension the loader lacks is an error naming it; an optional one is ignored
  * with a warning (glTF §3.12: a client may then render without it). */
 static eng_result check_extensions(loader *L)
 {
     for (uint32_t i = 0; i < L->m->extensions_required_count; i++)
-        if (!known_extension(L->m->extensions_required[i]))
+        if (!gltf_extension_supported(L->m->extensions_required[i]))
             return fail(L, ENG_ERR_UNSUPPORTED, "extensionsRequired: %s is not supported",
                         L->m->extensions_required[i]);
     for (uint32_t i = 0; i < L->m->extensions_used_count; i++)
-        if (!known_extension(L->m->extensions_used[i]))
+        if (!gltf_extension_supported(L->m->extensions_used[i]))
             scn_warn(L->s, "extensionsUsed: %s is not supported; ignored", L->m->extensions_used[i]);
     return ENG_OK;
 }
@@ -1804,17 +1964,29 @@ static eng_result compute_digest(loader *L, const char *bytes, size_t len)
     return ENG_OK;
 }
 
+/* A scene none of whose nodes draws a triangle would render only the background: an error
+ * naming the file rather than a black run. */
+static eng_result check_geometry(loader *L)
+{
+    const scn_scene *s = L->s;
+    for (uint32_t i = 0; i < s->node_count; i++)
+        if (s->nodes[i].mesh >= 0 && s->meshes[s->nodes[i].mesh].primitive_count > 0)
+            return ENG_OK;
+    return fail(L, ENG_ERR_INVALID, "no geometry: no node of the scene draws a triangle");
+}
+
 static eng_result build(loader *L, const char *bytes, size_t len)
 {
     eng_result r;
     if ((r = check_extensions(L)) || (r = check_buffer_views(L)) || (r = check_accessors(L)) ||
-        (r = load_materials(L)) || (r = load_cameras(L)) || (r = load_lights(L)) || (r = load_meshes(L)))
+        (r = mark_drawn_materials(L)) || (r = load_materials(L)) || (r = load_cameras(L)) || (r = load_lights(L)) || (r = load_meshes(L)))
         return r;
     uint32_t n = L->m->node_count;
     int32_t *remap = malloc((n ? n : 1) * sizeof *remap);
     if (!remap)
         return nomem(L, "nodes");
-    if (!(r = load_nodes(L, remap)) && !(r = load_skins(L, remap)) && !(r = load_node_weights(L)))
+    if (!(r = load_nodes(L, remap)) && !(r = check_geometry(L)) && !(r = load_skins(L, remap)) &&
+        !(r = load_node_weights(L)))
         r = load_animations(L, remap);
     free(remap);
     if (r)
@@ -1831,7 +2003,10 @@ static eng_result load_bytes(const char *path, const char *bytes, size_t len, in
     gls_model *m;
     char msg[800];
     uint64_t max_external;
+    /* Depth, trailing text and counts first (bounded parsing), then the features by name. */
     if ((r = scn_gltf_precheck(path, bytes, len, &max_external, err)) != ENG_OK)
+        return r;
+    if ((r = gltf_features_check(path, bytes, len, err)) != ENG_OK)
         return r;
     gls_status st = gls_load(path, bytes, len, max_external, &m, msg, sizeof msg);
     if (st != GLS_OK) {
@@ -1850,9 +2025,10 @@ static eng_result load_bytes(const char *path, const char *bytes, size_t len, in
         return eng_fail(err, ENG_ERR_NOMEM, "%s: out of memory", path);
     }
     snprintf(s->path, sizeof s->path, "%s", path);
-    loader L = {path, m, s, err, 0, scene_index, NULL};
+    loader L = {path, m, s, err, 0, scene_index, NULL, NULL, 0, 0};
     r = build(&L, bytes, len);
     free(L.texture_source);
+    free(L.drawn);
     gls_free(m);
     if (r) {
         scn_destroy(s);

@@ -17,11 +17,16 @@
  *     Only nlohmann's parse_error is syntax: its out_of_range (a number such as 1e999 that
  *     no double holds) is well-formed JSON with a wrong value, so structure;
  *   - KHR_draco_mesh_compression: tinygltf 2.7 (Debian, no Draco) refuses a Draco primitive's
- *     indices accessor, which has no bufferView. draco_prepare points that accessor at the
+ *     indices accessor, which has no bufferView. prepare points that accessor at the
  *     Draco bufferView in a copy of the JSON (GLB re-packed around it) so that tinygltf parses
  *     the rest; draco_decode then undoes it, decodes each Draco primitive with draco::Decoder
  *     and appends the decoded arrays as a new buffer, with one buffer view per accessor, in the
  *     accessor's own componentType and type. gltf_load.c then reads them like any accessor;
+ *   - EXT_meshopt_compression / KHR_meshopt_compression (meshoptimizer, Debian's
+ *     libmeshoptimizer): meshopt_patch points each compressed bufferView at its compressed
+ *     bytes in a copy of the JSON (and gives a data-less fallback buffer one byte), so that
+ *     tinygltf parses the file; meshopt_decode then decodes each view (vertex or index codec,
+ *     then its filter) into a buffer of its own and points the view back there;
  *   - every exception stops here.
  * The gls_impl owns the tinygltf::Model and the C arrays that point into it. */
 #include "gltf_shim.h"
@@ -29,12 +34,15 @@
 
 #include <tiny_gltf.h>
 #include <draco/compression/decode.h>
+#include <meshoptimizer.h>
 #include <nlohmann/json.hpp>
+#include <webp/decode.h>
 
 #include <sys/stat.h>
 #include <unistd.h>
 
 #include <cerrno>
+#include <deque>
 #include <algorithm>
 #include <climits>
 #include <iterator>
@@ -75,9 +83,13 @@ struct gls_impl {
     std::vector<gls_light> lights;
     std::vector<gls_material> materials;
     std::vector<gls_image> images;
+    std::vector<std::vector<unsigned char>> image_bytes; /* encoded, as the file stores them */
+    std::vector<int> image_state;                        /* 0 not tried, 1 decoded, -1 failed */
+    std::vector<tinygltf::Image> decoded;                /* pixels of the decoded images */
+    std::vector<std::string> image_error;                /* why an image failed */
     std::vector<gls_texture> textures;
     std::vector<gls_tex_sampler> tex_samplers;
-    std::vector<std::vector<double>> numbers; /* KHR_texture_transform arrays */
+    std::deque<std::vector<double>> numbers; /* extension arrays (a deque: never moves them) */
     std::vector<std::vector<gls_channel>> channels;
     std::vector<std::vector<gls_sampler>> samplers;
     std::vector<gls_animation> animations;
@@ -95,6 +107,11 @@ struct fs_scope {
     gls_status status;
     uint64_t max_external;   /* the largest external file read (gltf_precheck.h) */
 };
+
+bool starts_with_data(const std::string &uri)
+{
+    return uri.compare(0, 5, "data:") == 0;
+}
 
 void refuse(fs_scope *scope, gls_status status, const std::string &text)
 {
@@ -114,9 +131,11 @@ bool exists_in_folder(const std::string &abs, void *user)
     if (abs.compare(0, scope->prefix.size(), scope->prefix) != 0)
         return false;
     const std::string uri = abs.substr(scope->prefix.size());
+    if (starts_with_data(uri))
+        return true; /* a data URI tinygltf does not know (read_whole decodes it) */
     const std::string shown = "URI \"" + (uri.size() > 120 ? uri.substr(0, 120) + "..." : uri) + "\"";
     if (uri.empty()) {
-        refuse(scope, GLS_ERR_GLTF, "an empty URI");
+        refuse(scope, GLS_ERR_GLTF, "an empty URI (a buffer without uri outside a GLB has no data)");
         return false;
     }
     if (uri[0] == '/') {
@@ -164,7 +183,7 @@ std::string expand(const std::string &p, void *) { return tinygltf::ExpandFilePa
 
 /* An external file, opened as every input is (eng_open_input) and refused over the largest
  * size the glTF's buffers can need before a byte is read. */
-bool read_whole(std::vector<unsigned char> *out, std::string *err, const std::string &p, void *user)
+bool read_bounded(std::vector<unsigned char> *out, std::string *err, const std::string &p, void *user)
 {
     fs_scope *scope = static_cast<fs_scope *>(user);
     eng_error e;
@@ -196,23 +215,50 @@ bool read_whole(std::vector<unsigned char> *out, std::string *err, const std::st
     return true;
 }
 
-/* stb_image allocates an image's pixels from its header's size: a side over
- * SCN_IMAGE_MAX_SIDE is refused from the header, before decoding. */
-bool load_image_capped(tinygltf::Image *image, const int image_idx, std::string *err, std::string *warn, int req_width,
-                       int req_height, const unsigned char *bytes, int size, void *user)
+/* A base64 data URI of a media type tinygltf does not list (data:image/webp, ...) reaches the
+ * file callbacks as "<folder>/data:...", %-decoded, its '+' turned into ' '. Decodes its
+ * payload; false where it is not base64. */
+bool decode_data_uri(const std::string &uri, std::vector<unsigned char> *out)
 {
-    uint32_t w, h;
-    if (size > 0 && scn_image_header_size(bytes, static_cast<size_t>(size), &w, &h) &&
-        (w > SCN_IMAGE_MAX_SIDE || h > SCN_IMAGE_MAX_SIDE)) {
-        std::string why = "image " + std::to_string(image_idx) + " is " + std::to_string(w) + "x" +
-                          std::to_string(h) + ", over the limit of " + std::to_string(SCN_IMAGE_MAX_SIDE) +
-                          " texels a side";
-        refuse(static_cast<fs_scope *>(user), GLS_ERR_GLTF, why);
+    const size_t comma = uri.find(',');
+    if (comma == std::string::npos || comma < 7 || uri.compare(comma - 7, 7, ";base64") != 0)
+        return false;
+    uint32_t acc = 0;
+    int bits = 0;
+    size_t k = comma + 1;
+    for (; k < uri.size() && uri[k] != '='; k++) {
+        const char c = uri[k] == ' ' ? '+' : uri[k];
+        int v = c >= 'A' && c <= 'Z' ? c - 'A' : c >= 'a' && c <= 'z' ? c - 'a' + 26 : c >= '0' && c <= '9' ? c - '0' + 52
+              : c == '+' ? 62 : c == '/' ? 63 : -1;
+        if (v < 0)
+            return false;
+        acc = (acc << 6) | static_cast<uint32_t>(v);
+        bits += 6;
+        if (bits >= 8) {
+            bits -= 8;
+            out->push_back(static_cast<unsigned char>(acc >> bits));
+        }
+    }
+    for (; k < uri.size(); k++)
+        if (uri[k] != '=')
+            return false;
+    return true;
+}
+
+/* A data URI of a media type tinygltf does not list is decoded here; any other file goes to
+ * read_bounded. */
+bool read_whole(std::vector<unsigned char> *out, std::string *err, const std::string &p, void *user)
+{
+    const fs_scope *scope = static_cast<const fs_scope *>(user);
+    if (p.compare(0, scope->prefix.size(), scope->prefix) == 0 && starts_with_data(p.substr(scope->prefix.size()))) {
+        out->clear();
+        if (decode_data_uri(p.substr(scope->prefix.size()), out))
+            return true;
         if (err)
-            *err = why;
+            *err += "a data URI that is not base64\n";
         return false;
     }
-    return tinygltf::LoadImageData(image, image_idx, err, warn, req_width, req_height, bytes, size, nullptr);
+    return read_bounded(out, err, p, user);
 }
 
 bool write_whole(std::string *err, const std::string &p, const std::vector<unsigned char> &c, void *)
@@ -309,6 +355,64 @@ gls_texinfo texinfo(gls_impl &g, int index, int texcoord, const tinygltf::Extens
         t.scale = ext_vec(g, it->second, "scale");
     }
     return t;
+}
+
+/* The ExtensionMap form of a textureInfo's "extensions" member kept as a Value. */
+tinygltf::ExtensionMap extension_map(const tinygltf::Value &obj)
+{
+    tinygltf::ExtensionMap map;
+    if (obj.IsObject() && obj.Has("extensions") && obj.Get("extensions").IsObject()) {
+        const tinygltf::Value &e = obj.Get("extensions");
+        for (const std::string &k : e.Keys())
+            map[k] = e.Get(k);
+    }
+    return map;
+}
+
+/* The extension object ext_name of an extension map, or nullptr. */
+const tinygltf::Value *ext_object(const tinygltf::ExtensionMap &ext, const char *ext_name)
+{
+    auto it = ext.find(ext_name);
+    return it == ext.end() ? nullptr : &it->second;
+}
+
+/* obj.member as a textureInfo (index, texCoord, KHR_texture_transform): index -1 where
+ * absent, -2 where the member is not an object with an integer index. */
+gls_texinfo ext_texinfo(gls_impl &g, const tinygltf::Value *obj, const char *member)
+{
+    gls_texinfo t;
+    std::memset(&t, 0, sizeof t);
+    t.index = -1;
+    t.strength = 1.0;
+    if (!obj || !obj->IsObject() || !obj->Has(member))
+        return t;
+    const tinygltf::Value &v = obj->Get(member);
+    if (!v.IsObject() || !v.Has("index") || !v.Get("index").IsInt() || v.Get("index").GetNumberAsInt() < 0) {
+        t.index = -2;
+        return t;
+    }
+    int texcoord = 0;
+    if (v.Has("texCoord") && v.Get("texCoord").IsInt())
+        texcoord = v.Get("texCoord").GetNumberAsInt();
+    else if (v.Has("texCoord"))
+        texcoord = -1;
+    return texinfo(g, v.Get("index").GetNumberAsInt(), texcoord, extension_map(v));
+}
+
+/* tinygltf's image callback: keeps the encoded bytes; gls_decode_image decodes on demand, so
+ * an image no drawn material uses is never decoded and cannot fail the load. */
+bool keep_image(tinygltf::Image *image, const int index, std::string *, std::string *, int, int,
+                const unsigned char *bytes, int size, void *user)
+{
+    gls_impl *g = static_cast<gls_impl *>(user);
+    if (index < 0)
+        return false;
+    const size_t i = static_cast<size_t>(index);
+    if (g->image_bytes.size() <= i)
+        g->image_bytes.resize(i + 1);
+    g->image_bytes[i].assign(bytes, bytes + (size > 0 ? size : 0));
+    image->image.clear();
+    return true;
 }
 
 gls_status classify(const std::string &err)
@@ -434,7 +538,6 @@ void build_view(gls_impl &g)
                             l.spot.innerConeAngle, l.spot.outerConeAngle,
                             extras_number(l.extras, "ispm", "radius"),
                             extras_number(l.extras, "ispm", "angular_radius")});
-    g.numbers.reserve(m.materials.size() * 10); /* no reallocation under a pointer */
     for (const tinygltf::Material &mat : m.materials) {
         gls_material c;
         c.name = mat.name.c_str();
@@ -463,22 +566,33 @@ void build_view(gls_impl &g)
         c.ior = ext_number(mat.extensions, "KHR_materials_ior", "ior", nullptr);
         c.emissive_strength = ext_number(mat.extensions, "KHR_materials_emissive_strength", "emissiveStrength",
                                          nullptr);
+        c.transmission_texture =
+            ext_texinfo(g, ext_object(mat.extensions, "KHR_materials_transmission"), "transmissionTexture");
+        c.unlit = ext_object(mat.extensions, "KHR_materials_unlit") != nullptr;
+        const tinygltf::Value *sg = ext_object(mat.extensions, "KHR_materials_pbrSpecularGlossiness");
+        c.spec_gloss = sg != nullptr;
+        c.diffuse_factor = sg ? ext_vec(g, *sg, "diffuseFactor") : gls_doubles{0, nullptr};
+        c.specular_factor = sg ? ext_vec(g, *sg, "specularFactor") : gls_doubles{0, nullptr};
+        c.glossiness = sg ? member_number(*sg, "glossinessFactor") : gls_number{GLS_NUM_ABSENT, 0.0};
+        c.diffuse_texture = ext_texinfo(g, sg, "diffuseTexture");
+        c.spec_gloss_texture = ext_texinfo(g, sg, "specularGlossinessTexture");
         g.materials.push_back(c);
     }
 
-    for (const tinygltf::Image &im : m.images) {
-        gls_image c = {0, 0, 0, nullptr};
-        if (im.width > 0 && im.height > 0 && im.component == 4 && (im.bits == 8 || im.bits == 16) &&
-            im.image.size() == static_cast<size_t>(im.width) * static_cast<size_t>(im.height) * 4 * (im.bits / 8)) {
-            c.width = im.width;
-            c.height = im.height;
-            c.bits = im.bits;
-            c.rgba = im.image.data();
-        }
-        g.images.push_back(c);
+    g.image_bytes.resize(m.images.size());
+    g.image_state.assign(m.images.size(), 0);
+    g.decoded.resize(m.images.size());
+    g.image_error.resize(m.images.size());
+    for (size_t i = 0; i < m.images.size(); i++)
+        g.images.push_back({m.images[i].uri.c_str(), m.images[i].mimeType.c_str(), !g.image_bytes[i].empty()});
+    for (const tinygltf::Texture &t : m.textures) {
+        int webp = -1;
+        if (const tinygltf::Value *w = ext_object(t.extensions, "EXT_texture_webp"))
+            webp = w->IsObject() && w->Has("source") && w->Get("source").IsInt() && w->Get("source").GetNumberAsInt() >= 0
+                       ? w->Get("source").GetNumberAsInt()
+                       : -2;
+        g.textures.push_back({t.source, t.sampler, webp});
     }
-    for (const tinygltf::Texture &t : m.textures)
-        g.textures.push_back({t.source, t.sampler});
     for (const tinygltf::Sampler &t : m.samplers)
         g.tex_samplers.push_back({t.magFilter, t.minFilter, t.wrapS, t.wrapT});
 
@@ -618,30 +732,205 @@ std::vector<int> patch_indices(json &j)
     return patched;
 }
 
-/* The bytes tinygltf should parse: a JSON glTF or a GLB whose JSON chunk went through
- * patch_indices. Returns false (and leaves *out empty) where nothing needed patching or the
- * input is too malformed to patch; tinygltf then reads the original bytes. */
-bool draco_prepare(const unsigned char *b, size_t len, std::vector<unsigned char> *out, std::vector<int> *patched)
+/* ---- EXT_meshopt_compression / KHR_meshopt_compression */
+
+struct meshopt_error {
+    std::string text;
+};
+
+/* A compressed bufferView as the file gave it: where its compressed bytes are (the
+ * extension's buffer range) and what it decodes to (count elements of byteStride bytes). */
+struct meshopt_view {
+    int view;
+    std::string ext; /* which of the two extensions */
+    int buffer;
+    uint64_t offset, length, stride, count;
+    std::string mode, filter;
+    bool has_view_stride;
+    uint64_t view_stride, view_length;
+};
+
+[[noreturn]] void meshopt_fail(size_t view, const std::string &ext, const std::string &what)
 {
-    const bool glb = len >= 4 && std::memcmp(b, "glTF", 4) == 0;
-    size_t json_at = 0, json_len = len;
-    if (glb) {
+    throw meshopt_error{"bufferView " + std::to_string(view) + ": " + ext + ": " + what};
+}
+
+uint64_t meshopt_uint(const json &o, const char *key, size_t view, const std::string &ext, bool required,
+                      uint64_t fallback)
+{
+    if (!o.contains(key)) {
+        if (required)
+            meshopt_fail(view, ext, std::string("no ") + key);
+        return fallback;
+    }
+    if (!o[key].is_number_unsigned())
+        meshopt_fail(view, ext, std::string(key) + " is not a non-negative integer");
+    return o[key].get<uint64_t>();
+}
+
+/* Points every compressed bufferView at its compressed bytes, so that tinygltf reads the
+ * file (meshopt_decode puts the decoded bytes back), and gives each fallback buffer without
+ * a URI (it holds no data) one byte of data URI, since tinygltf refuses a buffer without one. */
+std::vector<meshopt_view> meshopt_patch(json &j)
+{
+    std::vector<meshopt_view> out;
+    if (!j.contains("bufferViews") || !j["bufferViews"].is_array())
+        return out;
+    json &views = j["bufferViews"];
+    for (size_t vi = 0; vi < views.size(); vi++) {
+        json &v = views[vi];
+        if (!v.is_object() || !v.contains("extensions") || !v["extensions"].is_object())
+            continue;
+        for (const char *name : {"EXT_meshopt_compression", "KHR_meshopt_compression"}) {
+            if (!v["extensions"].contains(name))
+                continue;
+            const json &e = v["extensions"][name];
+            if (!e.is_object())
+                meshopt_fail(vi, name, "not an object");
+            meshopt_view m;
+            m.view = static_cast<int>(vi);
+            m.ext = name;
+            m.buffer = static_cast<int>(meshopt_uint(e, "buffer", vi, name, true, 0) & 0x7fffffff);
+            m.offset = meshopt_uint(e, "byteOffset", vi, name, false, 0);
+            m.length = meshopt_uint(e, "byteLength", vi, name, true, 0);
+            m.stride = meshopt_uint(e, "byteStride", vi, name, true, 0);
+            m.count = meshopt_uint(e, "count", vi, name, true, 0);
+            if (!e.contains("mode") || !e["mode"].is_string())
+                meshopt_fail(vi, name, "no mode");
+            m.mode = e["mode"].get<std::string>();
+            m.filter = e.contains("filter") && e["filter"].is_string() ? e["filter"].get<std::string>() : "NONE";
+            m.has_view_stride = v.contains("byteStride");
+            m.view_stride = m.has_view_stride && v["byteStride"].is_number_unsigned() ? v["byteStride"].get<uint64_t>() : 0;
+            m.view_length = v.contains("byteLength") && v["byteLength"].is_number_unsigned() ? v["byteLength"].get<uint64_t>() : 0;
+            v["buffer"] = m.buffer;
+            v["byteOffset"] = m.offset;
+            v["byteLength"] = m.length;
+            v.erase("byteStride");
+            out.push_back(m);
+            break;
+        }
+    }
+    if (out.empty() || !j.contains("buffers") || !j["buffers"].is_array())
+        return out;
+    for (json &b : j["buffers"]) {
+        if (!b.is_object() || b.contains("uri") || !b.contains("extensions") || !b["extensions"].is_object())
+            continue;
+        for (const char *name : {"EXT_meshopt_compression", "KHR_meshopt_compression"})
+            if (b["extensions"].contains(name) && b["extensions"][name].is_object() &&
+                b["extensions"][name].contains("fallback") && b["extensions"][name]["fallback"] == true) {
+                b["uri"] = "data:application/octet-stream;base64,AA==";
+                b["byteLength"] = 1;
+            }
+    }
+    return out;
+}
+
+/* Decodes every compressed bufferView (meshopt_patch) into a buffer of its own, filters
+ * applied, and points the view there with its own byteStride back. Throws meshopt_error
+ * naming the view. */
+void meshopt_decode(tinygltf::Model &m, const std::vector<meshopt_view> &views)
+{
+    for (const meshopt_view &mv : views) {
+        const size_t vi = static_cast<size_t>(mv.view);
+        if (vi >= m.bufferViews.size())
+            continue;
+        if (mv.buffer < 0 || static_cast<size_t>(mv.buffer) >= m.buffers.size())
+            meshopt_fail(vi, mv.ext, "buffer " + std::to_string(mv.buffer) + " does not exist");
+        const std::vector<unsigned char> &src = m.buffers[static_cast<size_t>(mv.buffer)].data;
+        if (mv.offset > src.size() || mv.length > src.size() - mv.offset)
+            meshopt_fail(vi, mv.ext, "bytes " + std::to_string(mv.offset) + "+" + std::to_string(mv.length) +
+                                         " lie outside buffer " + std::to_string(mv.buffer) + " (" +
+                                         std::to_string(src.size()) + " bytes)");
+        const bool attributes = mv.mode == "ATTRIBUTES";
+        const bool triangles = mv.mode == "TRIANGLES";
+        if (!attributes && !triangles && mv.mode != "INDICES")
+            meshopt_fail(vi, mv.ext, "mode \"" + mv.mode.substr(0, 40) + "\" is not ATTRIBUTES, TRIANGLES or INDICES");
+        if (attributes ? (mv.stride == 0 || mv.stride % 4 != 0 || mv.stride > 256) : (mv.stride != 2 && mv.stride != 4))
+            meshopt_fail(vi, mv.ext, "byteStride " + std::to_string(mv.stride) + " does not fit mode " + mv.mode);
+        if (triangles && mv.count % 3 != 0)
+            meshopt_fail(vi, mv.ext, "count " + std::to_string(mv.count) + " of TRIANGLES is not a multiple of 3");
+        if (mv.count > (uint64_t(1) << 30) / mv.stride)
+            meshopt_fail(vi, mv.ext, "count " + std::to_string(mv.count) + " x byteStride is over 1 GiB");
+        tinygltf::Buffer out;
+        out.data.resize(mv.count * mv.stride);
+        const unsigned char *in = src.data() + mv.offset;
+        int rc = attributes ? meshopt_decodeVertexBuffer(out.data.data(), mv.count, mv.stride, in, mv.length)
+                 : triangles ? meshopt_decodeIndexBuffer(out.data.data(), mv.count, mv.stride, in, mv.length)
+                             : meshopt_decodeIndexSequence(out.data.data(), mv.count, mv.stride, in, mv.length);
+        if (rc != 0)
+            meshopt_fail(vi, mv.ext, "the compressed data does not decode (meshoptimizer " +
+                                         std::to_string(MESHOPTIMIZER_VERSION / 100) + "." +
+                                         std::to_string(MESHOPTIMIZER_VERSION % 100) + ": error " +
+                                         std::to_string(rc) + ")");
+        if (mv.filter == "OCTAHEDRAL") {
+            if (!attributes || (mv.stride != 4 && mv.stride != 8))
+                meshopt_fail(vi, mv.ext, "filter OCTAHEDRAL needs ATTRIBUTES of byteStride 4 or 8");
+            meshopt_decodeFilterOct(out.data.data(), mv.count, mv.stride);
+        } else if (mv.filter == "QUATERNION") {
+            if (!attributes || mv.stride != 8)
+                meshopt_fail(vi, mv.ext, "filter QUATERNION needs ATTRIBUTES of byteStride 8");
+            meshopt_decodeFilterQuat(out.data.data(), mv.count, mv.stride);
+        } else if (mv.filter == "EXPONENTIAL") {
+            if (!attributes)
+                meshopt_fail(vi, mv.ext, "filter EXPONENTIAL needs ATTRIBUTES");
+            meshopt_decodeFilterExp(out.data.data(), mv.count, mv.stride);
+        } else if (mv.filter != "NONE") {
+            meshopt_fail(vi, mv.ext, "filter \"" + mv.filter.substr(0, 40) + "\" is not supported");
+        }
+        tinygltf::BufferView &v = m.bufferViews[vi];
+        if (mv.view_length > out.data.size())
+            meshopt_fail(vi, mv.ext, "the bufferView's byteLength " + std::to_string(mv.view_length) +
+                                         " is more than the " + std::to_string(out.data.size()) + " bytes decoded");
+        v.buffer = static_cast<int>(m.buffers.size());
+        v.byteOffset = 0;
+        v.byteLength = mv.view_length ? mv.view_length : out.data.size();
+        v.byteStride = mv.has_view_stride ? mv.view_stride : 0;
+        m.buffers.push_back(std::move(out));
+    }
+}
+
+/* The JSON chunk of a GLB (or the whole of a JSON glTF): false where the GLB header is
+ * malformed (tinygltf then says so). */
+bool json_range(const unsigned char *b, size_t len, bool *glb, size_t *at, size_t *n)
+{
+    *glb = len >= 4 && std::memcmp(b, "glTF", 4) == 0;
+    *at = 0;
+    *n = len;
+    if (*glb) {
         if (len < 20 || le32(b + 16) != 0x4E4F534Au || le32(b + 12) > len - 20)
             return false;
-        json_at = 20;
-        json_len = le32(b + 12);
+        *at = 20;
+        *n = le32(b + 12);
     }
-    json j = json::parse(b + json_at, b + json_at + json_len, nullptr, false);
-    if (j.is_discarded())
+    return true;
+}
+
+/* The bytes tinygltf should parse: the JSON glTF, or the GLB with its JSON chunk, after
+ * Draco's (patch_indices) and meshopt's (meshopt_patch) patches. Returns false (and leaves
+ * *out empty) where nothing needed patching or the input is too malformed to patch; tinygltf
+ * then reads the original bytes. */
+bool prepare(const unsigned char *b, size_t len, bool draco, bool meshopt, std::vector<unsigned char> *out,
+             std::vector<int> *patched, std::vector<meshopt_view> *views)
+{
+    bool glb;
+    size_t json_at, json_len;
+    if (!json_range(b, len, &glb, &json_at, &json_len))
         return false;
-    *patched = patch_indices(j);
-    if (patched->empty())
+    json j = json::parse(b + json_at, b + json_at + json_len, nullptr, false);
+    if (j.is_discarded() || !j.is_object())
+        return false;
+    if (draco)
+        *patched = patch_indices(j);
+    if (meshopt)
+        *views = meshopt_patch(j);
+    if (patched->empty() && views->empty())
         return false;
     std::string text;
     try {
         text = j.dump();
     } catch (const json::exception &) { /* a string that is not UTF-8: leave it to tinygltf */
         patched->clear();
+        views->clear();
         return false;
     }
     if (!glb) {
@@ -654,6 +943,7 @@ bool draco_prepare(const unsigned char *b, size_t len, std::vector<unsigned char
     const size_t total = 20 + text.size() + (len - rest);
     if (total > UINT32_MAX) {
         patched->clear();
+        views->clear();
         return false;
     }
     out->assign(b, b + 12);
@@ -838,7 +1128,7 @@ void decode_primitive(tinygltf::Model &m, size_t mi, size_t pi)
     m.buffers.push_back(std::move(buffer));
 }
 
-/* Undoes draco_prepare's patch, then decodes every TRIANGLES primitive with the extension
+/* Undoes prepare's Draco patch, then decodes every TRIANGLES primitive with the extension
  * (another mode is left to gltf_load.c, which skips it). */
 void draco_decode(tinygltf::Model &m, const std::vector<int> &patched)
 {
@@ -879,15 +1169,18 @@ gls_status load(const char *path, const void *bytes, size_t len, uint64_t max_ex
     tinygltf::TinyGLTF loader;
     tinygltf::FsCallbacks fs = {&exists_in_folder, &expand, &read_whole, &write_whole, &scope};
     loader.SetFsCallbacks(fs);
-    loader.SetImageLoader(&load_image_capped, &scope); /* stb_image, RGBA 8 or 16 bits */
+    loader.SetImageLoader(&keep_image, g.get()); /* kept encoded; gls_decode_image decodes */
 
     std::string err, warn;
     const unsigned char *b = static_cast<const unsigned char *>(bytes);
     std::vector<unsigned char> patched_bytes;
     std::vector<int> patched;
+    std::vector<meshopt_view> meshopt_views;
+    static const char MESHOPT[] = "_meshopt_compression";
     try {
-        if (std::search(b, b + len, std::begin(DRACO), std::end(DRACO) - 1) != b + len &&
-            draco_prepare(b, len, &patched_bytes, &patched)) {
+        const bool draco = std::search(b, b + len, std::begin(DRACO), std::end(DRACO) - 1) != b + len;
+        const bool meshopt = std::search(b, b + len, std::begin(MESHOPT), std::end(MESHOPT) - 1) != b + len;
+        if ((draco || meshopt) && prepare(b, len, draco, meshopt, &patched_bytes, &patched, &meshopt_views)) {
             if (patched_bytes.size() > UINT_MAX) {
                 set_msg(msg, msg_size, "file too large for tinygltf");
                 return GLS_ERR_GLTF;
@@ -896,6 +1189,9 @@ gls_status load(const char *path, const void *bytes, size_t len, uint64_t max_ex
             len = patched_bytes.size();
         }
     } catch (const draco_error &e) {
+        set_msg(msg, msg_size, e.text);
+        return GLS_ERR_GLTF;
+    } catch (const meshopt_error &e) {
         set_msg(msg, msg_size, e.text);
         return GLS_ERR_GLTF;
     }
@@ -920,8 +1216,12 @@ gls_status load(const char *path, const void *bytes, size_t len, uint64_t max_ex
         return classify(err);
     }
     try {
+        meshopt_decode(g->model, meshopt_views);
         draco_decode(g->model, patched);
     } catch (const draco_error &e) {
+        set_msg(msg, msg_size, e.text);
+        return GLS_ERR_GLTF;
+    } catch (const meshopt_error &e) {
         set_msg(msg, msg_size, e.text);
         return GLS_ERR_GLTF;
     }
@@ -950,6 +1250,143 @@ extern "C" gls_status gls_load(const char *path, const void *bytes, size_t len, 
         set_msg(msg, msg_size, "unknown exception in tinygltf");
         return GLS_ERR_GLTF;
     }
+}
+
+namespace {
+
+/* The format the bytes' signature shows: "png", "jpeg", "webp", ... or "unknown". */
+const char *sniff(const std::vector<unsigned char> &b)
+{
+    const unsigned char *p = b.data();
+    const size_t n = b.size();
+    if (n >= 8 && std::memcmp(p, "\x89PNG\r\n\x1a\n", 8) == 0)
+        return "png";
+    if (n >= 3 && p[0] == 0xFF && p[1] == 0xD8 && p[2] == 0xFF)
+        return "jpeg";
+    if (n >= 12 && std::memcmp(p, "RIFF", 4) == 0 && std::memcmp(p + 8, "WEBP", 4) == 0)
+        return "webp";
+    if (n >= 12 && std::memcmp(p, "\xABKTX 20\xBB\r\n\x1a\n", 12) == 0)
+        return "ktx2";
+    if (n >= 4 && std::memcmp(p, "DDS ", 4) == 0)
+        return "dds";
+    if (n >= 6 && (std::memcmp(p, "GIF87a", 6) == 0 || std::memcmp(p, "GIF89a", 6) == 0))
+        return "gif";
+    if (n >= 2 && p[0] == 'B' && p[1] == 'M')
+        return "bmp";
+    return "unknown";
+}
+
+/* Decodes image i into g.decoded[i]; false with g.image_error[i] set. */
+bool decode_image(gls_impl &g, size_t i)
+{
+    const std::vector<unsigned char> &b = g.image_bytes[i];
+    const tinygltf::Image &src = g.model.images[i];
+    const char *format = sniff(b);
+    std::string name = "image " + std::to_string(i);
+    if (!src.uri.empty())
+        name += " (URI \"" + (src.uri.size() > 120 ? src.uri.substr(0, 120) + "..." : src.uri) + "\")";
+    name += std::string(", format ") + format;
+    if (!src.mimeType.empty())
+        name += " (mimeType " + src.mimeType.substr(0, 40) + ")";
+    if (b.empty()) {
+        g.image_error[i] = name + ": no image data";
+        return false;
+    }
+    if (b.size() > INT_MAX) {
+        g.image_error[i] = name + ": too large to decode";
+        return false;
+    }
+    /* The decoders allocate from the header's size: a side over SCN_IMAGE_MAX_SIDE
+     * (docs/inputs.md) is refused from the header, before any pixel memory is taken. */
+    uint32_t hw = 0, hh = 0;
+    int wi = 0, hi = 0;
+    if (std::strcmp(format, "webp") == 0 && WebPGetInfo(b.data(), b.size(), &wi, &hi) && wi > 0 && hi > 0) {
+        hw = static_cast<uint32_t>(wi);
+        hh = static_cast<uint32_t>(hi);
+    } else if (!scn_image_header_size(b.data(), b.size(), &hw, &hh)) {
+        hw = hh = 0;
+    }
+    if (hw > SCN_IMAGE_MAX_SIDE || hh > SCN_IMAGE_MAX_SIDE) {
+        g.image_error[i] = name + ": " + std::to_string(hw) + "x" + std::to_string(hh) + ", over the limit of " +
+                           std::to_string(SCN_IMAGE_MAX_SIDE) + " texels a side";
+        return false;
+    }
+    tinygltf::Image &out = g.decoded[i];
+    if (std::strcmp(format, "webp") == 0) {
+        int w = 0, h = 0;
+        if (!WebPGetInfo(b.data(), b.size(), &w, &h) || w <= 0 || h <= 0) {
+            g.image_error[i] = name + ": not a WebP image libwebp reads";
+            return false;
+        }
+        out.image.resize(static_cast<size_t>(w) * static_cast<size_t>(h) * 4);
+        if (!WebPDecodeRGBAInto(b.data(), b.size(), out.image.data(), out.image.size(), w * 4)) {
+            out.image.clear();
+            g.image_error[i] = name + ": libwebp does not decode it";
+            return false;
+        }
+        out.width = w;
+        out.height = h;
+        out.component = 4;
+        out.bits = 8;
+        return true;
+    }
+    if (std::strcmp(format, "ktx2") == 0 || std::strcmp(format, "dds") == 0) {
+        g.image_error[i] = name + ": not supported (no decoder for this format here)";
+        return false;
+    }
+    std::string err, warn;
+    /* No user data: tinygltf's defaults, channels expanded to RGBA. */
+    if (!tinygltf::LoadImageData(&out, static_cast<int>(i), &err, &warn, 0, 0, b.data(), static_cast<int>(b.size()),
+                                 nullptr)) {
+        std::string why;
+        for (char c : err)
+            why += (c == '\n' || c == '\r') ? ' ' : c;
+        while (!why.empty() && why.back() == ' ')
+            why.pop_back();
+        g.image_error[i] = name + ": does not decode (" + (why.empty() ? "stb_image failed" : why) + ")";
+        return false;
+    }
+    if (out.width <= 0 || out.height <= 0 || out.component != 4 || (out.bits != 8 && out.bits != 16) ||
+        out.image.size() != static_cast<size_t>(out.width) * static_cast<size_t>(out.height) * 4 * (out.bits / 8)) {
+        out.image.clear();
+        g.image_error[i] = name + ": decodes to no RGBA image of 8 or 16 bits";
+        return false;
+    }
+    return true;
+}
+
+} // namespace
+
+extern "C" gls_status gls_decode_image(const gls_model *model, int index, gls_pixels *out, char *msg,
+                                       size_t msg_size)
+{
+    std::memset(out, 0, sizeof *out);
+    if (msg && msg_size)
+        msg[0] = 0;
+    gls_impl &g = *model->impl;
+    if (index < 0 || static_cast<size_t>(index) >= g.image_state.size()) {
+        set_msg(msg, msg_size, "image " + std::to_string(index) + " does not exist");
+        return GLS_ERR_GLTF;
+    }
+    const size_t i = static_cast<size_t>(index);
+    try {
+        if (g.image_state[i] == 0)
+            g.image_state[i] = decode_image(g, i) ? 1 : -1;
+    } catch (const std::bad_alloc &) {
+        g.decoded[i].image.clear();
+        set_msg(msg, msg_size, "image " + std::to_string(index) + ": out of memory");
+        return GLS_ERR_NOMEM;
+    }
+    if (g.image_state[i] < 0) {
+        set_msg(msg, msg_size, g.image_error[i]);
+        return g.image_error[i].find("not supported") != std::string::npos ? GLS_ERR_UNSUPPORTED : GLS_ERR_GLTF;
+    }
+    const tinygltf::Image &d = g.decoded[i];
+    out->width = d.width;
+    out->height = d.height;
+    out->bits = d.bits;
+    out->rgba = d.image.data();
+    return GLS_OK;
 }
 
 extern "C" void gls_free(gls_model *model)

@@ -157,13 +157,22 @@ typedef struct gls_texinfo {
     double strength; /* occlusionTexture.strength, normalTexture.scale (1 for the others) */
 } gls_texinfo;
 
+/* A glTF image as the file stores it; its pixels come from gls_decode_image, on demand. */
 typedef struct gls_image {
-    int width, height, bits; /* bits 8 or 16 per component; 0 x 0: not decoded */
-    const unsigned char *rgba; /* width*height*4 components, top row first */
+    const char *uri;       /* the file URI ("" for a bufferView or a data URI) */
+    const char *mime_type; /* as the file or its data URI names it ("" where absent) */
+    int has_bytes;         /* encoded bytes were found (0: e.g. an external file not read) */
 } gls_image;
+
+/* Decoded pixels: width*height*4 components of bits 8 or 16, top row first. */
+typedef struct gls_pixels {
+    int width, height, bits;
+    const unsigned char *rgba;
+} gls_pixels;
 
 typedef struct gls_texture {
     int source, sampler; /* -1: absent */
+    int webp_source;     /* EXT_texture_webp.source; -1: absent, -2: present but not an integer */
 } gls_texture;
 
 typedef struct gls_tex_sampler {
@@ -183,6 +192,15 @@ typedef struct gls_material {
     gls_number transmission; /* KHR_materials_transmission.transmissionFactor */
     gls_number ior;          /* KHR_materials_ior.ior */
     gls_number emissive_strength; /* KHR_materials_emissive_strength.emissiveStrength */
+    /* Textures of extensions, index -1 where absent, -2 where the member is not a textureInfo
+     * object with an integer index. */
+    gls_texinfo transmission_texture; /* KHR_materials_transmission.transmissionTexture */
+    int unlit;                        /* carries KHR_materials_unlit */
+    int spec_gloss;                   /* carries KHR_materials_pbrSpecularGlossiness: */
+    gls_doubles diffuse_factor;       /*   diffuseFactor (len 0: absent, default [1,1,1,1]) */
+    gls_doubles specular_factor;      /*   specularFactor (len 0: absent, default [1,1,1]) */
+    gls_number glossiness;            /*   glossinessFactor (default 1) */
+    gls_texinfo diffuse_texture, spec_gloss_texture; /* diffuseTexture, specularGlossinessTexture */
 } gls_material;
 
 typedef struct gls_channel {
@@ -236,10 +254,16 @@ typedef struct gls_model {
 /* Parses a glTF from memory: .glb when bytes start with the GLB magic, JSON otherwise.
  * path is the file the bytes came from; external buffers are looked up in its folder only, and
  * one larger than max_external bytes is refused before it is read (gltf_precheck.h).
- * Images are decoded to RGBA (8 or 16 bits) by tinygltf's stb_image loader. On failure *out is NULL and msg holds tinygltf's one-line
- * complaint. Never throws. */
+ * Images are kept encoded (gls_decode_image decodes one when asked). On failure *out is NULL
+ * and msg holds tinygltf's one-line complaint. Never throws. */
 gls_status gls_load(const char *path, const void *bytes, size_t len, uint64_t max_external, gls_model **out,
                     char *msg, size_t msg_size);
+
+/* Decodes image `index` to RGBA of 8 or 16 bits (PNG, JPEG and what else stb_image reads;
+ * WebP with libwebp), once: the pixels are the model's until gls_free. On failure msg names
+ * the image's index, URI and format and the decoder's reason (GLS_ERR_UNSUPPORTED for a
+ * format no decoder here reads, GLS_ERR_GLTF for bytes that do not decode). */
+gls_status gls_decode_image(const gls_model *model, int index, gls_pixels *out, char *msg, size_t msg_size);
 
 /* Frees everything the model owns; accepts NULL. */
 void gls_free(gls_model *model);

@@ -226,6 +226,10 @@ eng_result scn_load_gltf_scene(const char *path, int scene_index, scn_scene **ou
  * up beside it. Borrows bytes. For the fuzz targets and tests. */
 eng_result scn_load_gltf_memory(const char *name, const void *bytes, size_t len, scn_scene **out, eng_error *err);
 void scn_destroy(scn_scene *scene);
+/* KHR_materials_pbrSpecularGlossiness factors as metal-roughness (Khronos' conversion):
+ * diffuse RGBA, specular RGB and glossiness in [0, 1] -> base colour RGBA, metallic, roughness. */
+void scn_spec_gloss_to_metal_rough(const double diffuse[4], const double specular[3], double glossiness,
+                                   float base_color[4], float *metallic, float *roughness);
 
 /* World matrices of every node at time t (seconds), all animations applied; animations are
  * clamped at their ends (no looping). world must hold node_count*16 floats. */

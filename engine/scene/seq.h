@@ -13,6 +13,9 @@ extern "C" {
 #define SEQ_MAX_CAMKEYS 64
 #define SEQ_MAX_LIGHTS 8
 #define SEQ_MAX_ANIMATIONS 32
+/* The direction a framing camera looks along when the sequence names none (normalised when
+ * parsed): at the model's front (+Z in glTF), a little from above and from the right. */
+#define SEQ_FRAME_DIRECTION {-0.35f, -0.3f, -1.0f}
 
 /* A light the sequence adds to the scene's own ("lights"): a root node at position whose
  * -Z axis points along direction (spot, directional), carrying this light. */
@@ -53,6 +56,11 @@ typedef struct seq_sequence {
     float camera_up[3];     /* look-at keys only; default (0,1,0) */
     float camera_yfov;      /* radians; look-at keys only; default 40° */
     float camera_znear, camera_zfar; /* defaults 0.05, 100 */
+    /* No "camera", or {"frame": "scene"}: the camera frames the scene's bounds at t = 0
+     * (seq_frame_scene) looking along camera_direction (normalised), with camera_up and
+     * camera_yfov; the engine fills the key and the planes from the loaded scene. */
+    int camera_frame;
+    float camera_direction[3];
     eng_settings settings;
     /* Glob patterns (fnmatch) of buffer names to capture; none means "*". */
     int capture_count;
@@ -84,6 +92,13 @@ const char *seq_preset_settings(eng_preset p);
  * its lights added as root nodes after the glTF's, and a warning when the result has no
  * light at all (every frame would be black). The one way the tools load a sequence's scene. */
 eng_result seq_load_scene(const seq_sequence *seq, scn_scene **out, eng_error *err);
+
+/* The look-at key and planes of a framing camera (camera_frame): the target is the centre of
+ * the bounding box of every drawn vertex at t = 0 (rest pose: skins and morph targets not
+ * applied), the eye as far back along camera_direction as the bounding sphere needs to fit
+ * the vertical and horizontal field of view, znear and zfar around that sphere. */
+void seq_frame_scene(const seq_sequence *seq, const scn_scene *scene, seq_camera_key *key, float *znear,
+                     float *zfar);
 
 /* Does the sequence ask for this buffer to be captured? */
 int seq_wants(const seq_sequence *seq, const char *buffer_name);

@@ -10,10 +10,12 @@
  *   still       optional; true: every frame is rendered at t = 0 (a still view whose frames
  *               differ only in their random numbers); default false
  *   resolution  required; [width, height], integers 1..16384
- *   camera      required; {"node": "<glTF node with a camera>"} or
+ *   camera      optional; {"node": "<glTF node with a camera>"} or
  *               {"keys": [{"time", "position", "target"}, ...], "up", "yfov_deg", "znear", "zfar"}
  *               (up to SEQ_MAX_CAMKEYS keys, times strictly increasing; defaults up (0,1,0),
- *               40°, 0.05, 100)
+ *               40°, 0.05, 100) or {"frame": "scene", "direction", "up", "yfov_deg"} (the
+ *               scene's bounds framed, seq_frame_scene); absent: framed along the default
+ *               direction SEQ_FRAME_DIRECTION
  *   settings    optional; the keys of engine/core/settings.def (docs/settings.md), each
  *               checked as its line says; absent ones get eng_settings_defaults. A "preset"
  *               key applies its bundle (presets.c) first; the other keys override it
@@ -332,6 +334,64 @@ static eng_result parse_camera_keys(parser *P, const cJSON *keys, seq_sequence *
     return ENG_OK;
 }
 
+/* The look-at frame needs up not parallel to a viewing direction. */
+static int parallel(const double dir[3], const float up[3])
+{
+    double c[3], u[3] = {up[0], up[1], up[2]};
+    c[0] = dir[1] * u[2] - dir[2] * u[1];
+    c[1] = dir[2] * u[0] - dir[0] * u[2];
+    c[2] = dir[0] * u[1] - dir[1] * u[0];
+    double cl = sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
+    double dl = sqrt(dir[0] * dir[0] + dir[1] * dir[1] + dir[2] * dir[2]);
+    double ul = sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]);
+    return !(cl > 1e-6 * dl * ul);
+}
+
+/* {"frame": "scene", "direction", "up", "yfov_deg"}, or no camera at all (cam NULL). */
+static eng_result parse_frame(parser *P, const cJSON *cam, seq_sequence *out)
+{
+    static const char *const frame_keys[] = {"frame", "direction", "up", "yfov_deg", NULL};
+    static const float fallback[3] = SEQ_FRAME_DIRECTION;
+    char v[80];
+    eng_result r;
+    const cJSON *it;
+    out->camera_frame = 1;
+    memcpy(out->camera_direction, fallback, sizeof fallback);
+    if (cam) {
+        if ((r = check_keys(P, cam, "camera (with \"frame\")", frame_keys)))
+            return r;
+        it = cJSON_GetObjectItemCaseSensitive(cam, "frame");
+        if (!cJSON_IsString(it) || strcmp(it->valuestring, "scene") != 0)
+            return bad(P, "camera.frame: expected \"scene\", got %s", show(it, v, sizeof v));
+        if ((it = cJSON_GetObjectItemCaseSensitive(cam, "direction")) &&
+            (r = get_vec3(P, it, "camera.direction", out->camera_direction)))
+            return r;
+        if ((it = cJSON_GetObjectItemCaseSensitive(cam, "up")) && (r = get_vec3(P, it, "camera.up", out->camera_up)))
+            return r;
+        if ((it = cJSON_GetObjectItemCaseSensitive(cam, "yfov_deg"))) {
+            double d;
+            if ((r = get_number(P, it, "camera.yfov_deg", &d)))
+                return r;
+            if (!(d > 0.0 && d < 180.0))
+                return bad(P, "camera.yfov_deg: %s is outside (0, 180)", show(it, v, sizeof v));
+            out->camera_yfov = (float)(d * PI / 180.0);
+        }
+    }
+    float *dv = out->camera_direction;
+    double len = sqrt((double)dv[0] * dv[0] + (double)dv[1] * dv[1] + (double)dv[2] * dv[2]);
+    if (!(len > 0.0) || !isfinite(len))
+        return bad(P, "camera.direction: is the zero vector");
+    const float *u = out->camera_up;
+    if (u[0] == 0.0f && u[1] == 0.0f && u[2] == 0.0f)
+        return bad(P, "camera.up: is the zero vector");
+    double dir[3];
+    for (int j = 0; j < 3; j++)
+        dv[j] = (float)(dv[j] / len), dir[j] = dv[j];
+    if (parallel(dir, out->camera_up))
+        return bad(P, "camera.direction: is parallel to camera.up");
+    return ENG_OK;
+}
+
 static eng_result parse_camera(parser *P, const cJSON *cam, seq_sequence *out)
 {
     static const char *const node_keys[] = {"node", NULL};
@@ -344,14 +404,19 @@ static eng_result parse_camera(parser *P, const cJSON *cam, seq_sequence *out)
     out->camera_yfov = (float)(40.0 * PI / 180.0);
     out->camera_znear = 0.05f;
     out->camera_zfar = 100.0f;
+    if (!cam)
+        return parse_frame(P, NULL, out);
     if (!cJSON_IsObject(cam))
         return bad(P, "camera: expected an object, got %s", show(cam, v, sizeof v));
     const cJSON *node = cJSON_GetObjectItemCaseSensitive(cam, "node");
     const cJSON *keys = cJSON_GetObjectItemCaseSensitive(cam, "keys");
-    if (node && keys)
-        return bad(P, "camera: has both \"node\" and \"keys\"; give one");
+    const cJSON *frame = cJSON_GetObjectItemCaseSensitive(cam, "frame");
+    if ((node != NULL) + (keys != NULL) + (frame != NULL) > 1)
+        return bad(P, "camera: has more than one of \"node\", \"keys\" and \"frame\"; give one");
+    if (frame)
+        return parse_frame(P, cam, out);
     if (!node && !keys)
-        return bad(P, "camera: needs \"node\" or \"keys\"");
+        return bad(P, "camera: needs \"node\", \"keys\" or \"frame\"");
     if (node) {
         if ((r = check_keys(P, cam, "camera (with \"node\")", node_keys)))
             return r;
@@ -397,18 +462,10 @@ static eng_result parse_camera(parser *P, const cJSON *cam, seq_sequence *out)
     /* The look-at frame needs up not parallel to any viewing direction. */
     for (int i = 0; i < out->camera_key_count; i++) {
         const seq_camera_key *k = &out->camera_keys[i];
-        double dir[3], c[3], u[3];
-        for (int j = 0; j < 3; j++) {
+        double dir[3];
+        for (int j = 0; j < 3; j++)
             dir[j] = (double)k->target[j] - k->position[j];
-            u[j] = out->camera_up[j];
-        }
-        c[0] = dir[1] * u[2] - dir[2] * u[1];
-        c[1] = dir[2] * u[0] - dir[0] * u[2];
-        c[2] = dir[0] * u[1] - dir[1] * u[0];
-        double cl = sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
-        double dl = sqrt(dir[0] * dir[0] + dir[1] * dir[1] + dir[2] * dir[2]);
-        double ul = sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]);
-        if (!(cl > 1e-6 * dl * ul))
+        if (parallel(dir, out->camera_up))
             return bad(P, "camera.keys[%d]: viewing direction is parallel to camera.up", i);
     }
     return ENG_OK;
@@ -561,7 +618,7 @@ static eng_result parse_root(parser *P, const cJSON *root, seq_sequence *out)
 {
     static const char *const keys[] = {"name", "scene", "frames", "fps", "resolution", "camera", "settings",
                                        "capture", "still", "scene_index", "animations", "lights", NULL};
-    static const char *const required[] = {"scene", "frames", "fps", "resolution", "camera"};
+    static const char *const required[] = {"scene", "frames", "fps", "resolution"};
     char v[80];
     eng_result r;
     if (!cJSON_IsObject(root))

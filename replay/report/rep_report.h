@@ -64,6 +64,12 @@ typedef struct rep_expect_outcome {
     int unexpected_count, expired_count;
     rep_expect_note *unexpected, *expired;
 } rep_expect_outcome;
+/* A frame whose manifest record carries a display warning (all black, clipped). */
+typedef struct rep_display_warning {
+    int golden; /* 0: the run's frame, 1: the golden's */
+    int frame;
+    char *text;
+} rep_display_warning;
 
 typedef struct rep_report {
     const char *run_dir;
@@ -92,7 +98,12 @@ typedef struct rep_report {
     char *renderer_set, *renderer_set_dir;
     rep_keep *keep;          /* owned: parts and ꟻLIP maps kept for report.html, or NULL */
     rep_expect_outcome *expect; /* owned: expectations in force, or NULL (no file) */
+    int display_warning_count;
+    rep_display_warning *display_warnings; /* owned: run's, then golden's, frame order */
 } rep_report;
+
+/* Collects the display warnings of both runs' frame records into r (gold may be NULL). */
+void rep_report_display_warnings(rep_report *r, const rep_run *run, const rep_run *gold);
 
 /* Appends a zeroed entry for (frame, buffer) and returns it. */
 rep_entry *rep_report_add(rep_report *r, int frame, const char *buffer);

@@ -910,6 +910,12 @@ static void summary(rep_sb *sb, const page *pg, size_t listed)
     }
     free(note);
     rep_sb_printf(sb, "</dd><dt>frames</dt><dd>%d, %d buffers per frame</dd>", r->frames, r->buffers_per_frame);
+    for (int i = 0; i < r->display_warning_count; i++) {
+        rep_sb_printf(sb, "<dt>display warning</dt><dd class=\"warn\">%s frame %d: ",
+                      r->display_warnings[i].golden ? "golden" : "run", r->display_warnings[i].frame);
+        esc(sb, r->display_warnings[i].text);
+        rep_sb_printf(sb, "</dd>");
+    }
     if (r->golden_dir && r->exit != REP_UNREADABLE) {
         rep_sb_printf(sb, "<dt>first digest difference</dt><dd>");
         if (r->digest_frame >= 0) {

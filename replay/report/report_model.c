@@ -33,6 +33,23 @@ rep_entry *rep_report_add(rep_report *r, int frame, const char *buffer)
     return e;
 }
 
+void rep_report_display_warnings(rep_report *r, const rep_run *run, const rep_run *gold)
+{
+    const rep_run *sides[2] = {run, gold};
+    for (int s = 0; s < 2; s++)
+        for (int f = 0; sides[s] && f < sides[s]->frame_count; f++) {
+            const char *t = sides[s]->frames[f].display_warning;
+            if (!t)
+                continue;
+            r->display_warnings = rep_xrealloc(r->display_warnings,
+                                               (size_t)(r->display_warning_count + 1) * sizeof *r->display_warnings);
+            rep_display_warning *w = &r->display_warnings[r->display_warning_count++];
+            w->golden = s;
+            w->frame = f;
+            w->text = rep_xstrdup(t);
+        }
+}
+
 void rep_report_free(rep_report *r)
 {
     for (size_t i = 0; i < r->count; i++) {
@@ -42,6 +59,9 @@ void rep_report_free(rep_report *r)
         free(r->entries[i].golden_shape);
     }
     free(r->entries);
+    for (int i = 0; i < r->display_warning_count; i++)
+        free(r->display_warnings[i].text);
+    free(r->display_warnings);
     free(r->digest_buffer);
     free(r->tol_path);
     free(r->run_renderer);

@@ -51,6 +51,10 @@ char *rep_report_text(const rep_report *r, int quiet)
         rep_sb_printf(&sb, "        %d frames, %d buffers per frame\n", r->frames, r->buffers_per_frame);
         if (r->scope_text)
             rep_sb_printf(&sb, "        compared: %s only\n", r->scope_text);
+        for (int i = 0; i < r->display_warning_count; i++)
+            rep_sb_printf(&sb, "        display warning: %s frame %d: %s\n",
+                          r->display_warnings[i].golden ? "golden" : "run", r->display_warnings[i].frame,
+                          r->display_warnings[i].text);
         if (r->golden_dir && r->exit != REP_UNREADABLE) {
             if (r->digest_frame >= 0)
                 rep_sb_printf(&sb, "        first digest difference (manifests): frame %d %s (%s)\n", r->digest_frame,
@@ -294,6 +298,16 @@ char *rep_report_json(const rep_report *r)
     cJSON_AddItemToObject(root, "expectations", (cJSON *)rep_expect_json(r));
     cJSON_AddNumberToObject(root, "frame_count", r->frames);
     cJSON_AddNumberToObject(root, "buffer_count", (double)r->count);
+    if (r->display_warning_count) {
+        cJSON *dws = cJSON_AddArrayToObject(root, "display_warnings");
+        for (int i = 0; i < r->display_warning_count; i++) {
+            cJSON *o = cJSON_CreateObject();
+            cJSON_AddStringToObject(o, "side", r->display_warnings[i].golden ? "golden" : "run");
+            cJSON_AddNumberToObject(o, "frame", r->display_warnings[i].frame);
+            cJSON_AddStringToObject(o, "warning", r->display_warnings[i].text);
+            cJSON_AddItemToArray(dws, o);
+        }
+    }
     cJSON *counts = cJSON_AddObjectToObject(root, "counts");
     size_t cnt[REP_V_COUNT] = {0};
     for (size_t i = 0; i < r->count; i++)

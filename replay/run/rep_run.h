@@ -44,6 +44,7 @@ typedef struct rep_frame_info {
     int has_camera;        /* the manifest gave "camera" (runs recorded before it did not) */
     float view_proj[16];   /* eye camera world → clip, column-major (GL) */
     float eye[3];
+    char *display_warning; /* the frame record's "display_warning" (black or clipped), or NULL */
 } rep_frame_info;
 
 /* A run's manifest, validated: one owner, freed whole by rep_run_close. */

@@ -93,6 +93,7 @@ static void free_frame(rep_frame_info *f)
         free_buffer(&f->buffers[j]);
     free(f->buffers);
     free(f->file);
+    free(f->display_warning);
     free(f->path);
 }
 
@@ -226,6 +227,11 @@ static eng_result parse_frame(rep_run *run, const char *mf, int i, const cJSON *
         }
         f->has_camera = 1;
     }
+    const cJSON *dw = cJSON_GetObjectItemCaseSensitive(jf, "display_warning");
+    if (dw && !cJSON_IsString(dw))
+        return eng_fail(err, ENG_ERR_INVALID, "%s: %s: \"display_warning\" must be a string", mf, where);
+    if (dw)
+        f->display_warning = rep_xstrdup(dw->valuestring);
     const cJSON *jbs = cJSON_GetObjectItemCaseSensitive(jf, "buffers");
     if (!cJSON_IsArray(jbs))
         return eng_fail(err, ENG_ERR_INVALID, "%s: %s: \"buffers\" must be an array", mf, where);

@@ -31,7 +31,9 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     if (seq.frame_count < 1 || !(seq.fps > 0) || !isfinite(seq.fps) || seq.width < 1 || seq.width > 16384 ||
         seq.height < 1 || seq.height > 16384 || seq.capture_count < 0 || seq.capture_count > SEQ_MAX_CAPTURE ||
         seq.camera_key_count < 0 || seq.camera_key_count > SEQ_MAX_CAMKEYS ||
-        (!seq.camera_node[0] && !seq.camera_by_index && seq.camera_key_count < 1) ||
+        (!seq.camera_node[0] && !seq.camera_by_index && !seq.camera_frame && seq.camera_key_count < 1) ||
+        (seq.camera_frame && !(fabsf(seq.camera_direction[0]) + fabsf(seq.camera_direction[1]) +
+                                   fabsf(seq.camera_direction[2]) > 0.0f)) ||
         (seq.camera_by_index && seq.camera_node_index < 0))
         abort();
     static const char *const names[] = {"gbuffer.depth", "shadow.light0.face3", "final.display", ""};
