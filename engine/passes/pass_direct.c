@@ -98,9 +98,10 @@ const glu_target *pass_direct_run(pass_direct *p, const eng_frame_scene *fs, con
             glUniformMatrix4fv(loc(g, "u_shadow_view_proj[%d]", i * 6 + f), 1, GL_FALSE, sm->view_proj[f]);
         glActiveTexture(GL_TEXTURE0 + SHADOW_UNIT0 + i);
         glBindTexture(GL_TEXTURE_2D_ARRAY, sm->target.color[0]);
-        /* Soft shadows (shadow_pcss.glsl): the light's size and its blocker map. A sphere's
-         * radius, or tan of a disc's angular radius. */
-        float radius = extra[i] ? (type == 2 ? tanf(l->radius) : l->radius) : 0.0f;
+        /* Soft shadows (shadow_pcss.glsl) where the light has a size (shadow_method_index):
+         * a sphere's radius, or tan of a disc's angular radius, and the blocker map unless
+         * the rays find the occluders. */
+        float radius = l->radius > 0.0f ? (type == 2 ? tanf(l->radius) : l->radius) : 0.0f;
         glUniform1f(loc(g, "u_light_radius[%d]", i), radius);
         if (extra[i]) {
             glActiveTexture(GL_TEXTURE0 + BLOCKER_UNIT0 + i);
@@ -110,6 +111,7 @@ const glu_target *pass_direct_run(pass_direct *p, const eng_frame_scene *fs, con
     glUniform1i(glGetUniformLocation(g, "u_shadow_size"), s->shadow_map_size);
     glUniform1i(glGetUniformLocation(g, "u_pcf_radius"), s->pcf_radius);
     glUniform1f(glGetUniformLocation(g, "u_shadow_bias"), s->shadow_bias);
+    glUniform1i(glGetUniformLocation(g, "u_pcss_rays"), s->pcss_blocker == ENG_PCSS_RAYS);
     glUniform3fv(glGetUniformLocation(g, "u_eye"), 1, fs->camera.eye);
     float inv[16];
     m4_invert(inv, fs->camera.view_proj);

@@ -193,3 +193,13 @@ for radius in (0.0, 0.05, 0.15, 0.3):
     g.light("Light", {"name": "sphere", "type": "point", "color": [1, 1, 1], "intensity": 6.0,
                       "extras": {"ispm": {"radius": radius}}}, [-0.3, 2.0, 0.0])
     g.write("soft-r%03d.gltf" % round(radius * 100))
+
+# cornell-r015: the Cornell box (scenes/cornell-box/cornell-box.gltf, its slide_and_dolly animation
+# included) with its point light given a radius of 0.15 m: soft shadows where the boxes stand on
+# the floor (bench/penumbra.sh, stress-cornell-r015; docs/shadows.md).
+with open(os.path.join(HERE, "..", "cornell-box", "cornell-box.gltf")) as f:
+    cornell = json.load(f)
+cornell["extensions"]["KHR_lights_punctual"]["lights"][0]["extras"] = {"ispm": {"radius": 0.15}}
+with open(os.path.join(HERE, "cornell-r015.gltf"), "w") as f:
+    json.dump(cornell, f, indent=1)
+    f.write("\n")

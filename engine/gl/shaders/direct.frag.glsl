@@ -13,7 +13,8 @@
 // Lights: point and spot are radiant intensity I (W/sr): E = I·cosθ/d²; spot cones use the
 // KHR_lights_punctual smooth falloff; directional lights are irradiance E (W/m²).
 // Visibility: lights without a size, percentage-closer filtering (shadow_pcf.glsl); lights
-// with a size, percentage-closer soft shadows (shadow_pcss.glsl, 001 §3.4). The shadow
+// with a size, percentage-closer soft shadows or rays through the shadow map
+// (shadow_pcss.glsl, 001 §3.4; setting pcss_blocker). The shadow
 // methods are listed in engine/shadow.h.
 #define MAX_LIGHTS 8
 #define PI 3.14159265358979323846
@@ -38,6 +39,7 @@ uniform float u_shadow_bias;
 uniform vec3 u_eye;
 uniform float u_light_radius[MAX_LIGHTS];    // light size (shadow_pcss.glsl); 0: hard shadows
 uniform sampler2DArray u_blocker[MAX_LIGHTS]; // blocker maps of the lights with a size
+uniform int u_pcss_rays;                     // 1: rays through the shadow map instead (no blocker maps)
 uniform mat4 u_inv_view_proj;                // the camera's, for the rays of background pixels
 uniform vec2 u_viewport;
 
@@ -151,7 +153,7 @@ void main()
         float vis;
         if (u_light_radius[i] > 0.0) {
             vec2 pen;
-            vis = pcss_visibility(i, p, n, pen);
+            vis = u_pcss_rays != 0 ? pcss_rays_visibility(i, p, n, pen) : pcss_visibility(i, p, n, pen);
             if (pen.x > widest.x)
                 widest = pen;
         } else {

@@ -91,3 +91,122 @@ float pcss_visibility(int i, vec3 p, vec3 n, out vec2 pen)
     }
     return lit / float(PCSS_TAPS);
 }
+
+// pcss_blocker "rays" (engine/shadow_pcss.c; the same march on the CPU: shadow_rays_cpu): the
+// light's disc seen from the receiver is sampled at PCSS_RAY_SAMPLES points (a Vogel spiral:
+// equal area each), and the segment from the receiver to each point is walked through the shadow
+// map in steps of at most PCSS_RAY_STEP texels, equal in the map (linear in t/(1−t) along the
+// segment for a perspective map, in depth for the ortho box), as far as PCSS_RAY_REACH texels at
+// the disc's rim (nearer occluders are missed). At every step the stored surface is either in front of the ray's point (seen from the
+// light's centre: the point is "behind") or not. A ray can leave the region behind a surface in
+// two ways: through the surface (an occluder: the ray is blocked) or past the surface's edge,
+// where the map steps from the occluder to what lies beyond it (a box standing on the floor: the
+// floor just behind it is hidden from the centre by the box's top, yet sees the light's far side
+// past the box's edge). The step where the ray leaves is halved PCSS_RAY_REFINE times to find the
+// texel it leaves from, and the ray is blocked when it ends in front of that texel's surface too,
+// or when the surface it ends in front of is no more than PCSS_RAY_SLOPE tolerances farther than
+// that one (the same surface, seen at a grazing angle, not the step at an edge).
+// A ray still behind a surface after its last step is blocked. Visibility: the unblocked share
+// of the rays, with no filter. Each comparison allows u_shadow_bias and two texels at the point's
+// distance.
+#define PCSS_RAY_SAMPLES 16
+#define PCSS_RAY_STEP 1.5    // texels
+#define PCSS_RAY_REACH 48.0 // texels
+#define PCSS_RAY_REFINE 2
+#define PCSS_RAY_SLOPE 8.0
+
+// Light i's map at world point x: (stored value, x's own value, comparison tolerance).
+vec3 pcss_ray_map(int i, vec3 x)
+{
+    int type = u_light_type[i];
+    int f = type == 0 ? cube_face(x - u_light_position[i]) : 0;
+    float v = type == 2 ? dot(x - u_light_position[i], u_light_direction[i]) : distance(x, u_light_position[i]);
+    vec4 c = u_shadow_view_proj[i * 6 + f] * vec4(x, 1.0);
+    ivec2 t = clamp(ivec2(floor((c.xy / c.w * 0.5 + 0.5) * float(u_shadow_size))), ivec2(0),
+                    ivec2(u_shadow_size - 1));
+    float tol = u_shadow_bias + 2.0 * u_shadow_texel[i] * (type == 2 ? 1.0 : v);
+    return vec3(texelFetch(u_shadow[i], ivec3(t, f), 0).r, v, tol);
+}
+
+// The point at parameter s of ray k: to light point l (perspective; s = t/(1−t)) or along
+// direction d from q (ortho; s = depth travelled).
+vec3 pcss_ray_point(int type, vec3 q, vec3 l, float s)
+{
+    return type == 2 ? q + s * l : mix(q, l, s / (1.0 + s));
+}
+
+float pcss_rays_visibility(int i, vec3 p, vec3 n, out vec2 pen)
+{
+    pen = vec2(0.0);
+    int type = u_light_type[i];
+    float r = u_light_radius[i];
+    float texel_unit = u_shadow_texel[i];
+    shadow_at sa = shadow_lookup(i, p, n);
+    float outside = shadow_outside(i, sa.uv);
+    if (outside >= 0.0)
+        return outside;
+    float value = sa.value;
+    vec3 q = sa.q;
+    vec3 w = type == 2 ? u_light_direction[i] : normalize(q - u_light_position[i]);
+    vec3 tb, bb;
+    pcss_basis(w, tb, bb);
+    vec3 m0 = pcss_ray_map(i, q);
+    bool behind0 = m0.y > m0.x + m0.z;
+    // The march's reach: PCSS_RAY_REACH texels at the rim, and no nearer to the light than just
+    // outside the emitter (perspective) or the box's near plane (ortho).
+    float near = max(1.5 * r, 0.05);
+    float reach = type == 2 ? min(PCSS_RAY_REACH * texel_unit / r, value)
+                            : min(PCSS_RAY_REACH * value * texel_unit / r, max(value - near, 0.0) / near);
+    // The reach in texels at the rim.
+    float reach_texels = type == 2 ? reach * r / texel_unit : reach * r / (value * texel_unit);
+    float lit = 0.0, crossings = 0.0, crossing_sum = 0.0;
+    for (int k = 0; k < PCSS_RAY_SAMPLES; k++) {
+        float rho = r * sqrt((float(k) + 0.5) / float(PCSS_RAY_SAMPLES));
+        float a = float(k) * PCSS_GOLDEN_ANGLE;
+        vec3 off = rho * (cos(a) * tb + sin(a) * bb);
+        vec3 l = type == 2 ? off - w : u_light_position[i] + off;
+        bool behind = behind0;
+        bool blocked = false;
+        float s_prev = 0.0;
+        vec3 m_prev = m0;
+        int steps = max(int(ceil(reach_texels * rho / (r * PCSS_RAY_STEP))), 1);
+        for (int j = 1; j <= steps && !blocked; j++) {
+            float s = reach * float(j) / float(steps);
+            vec3 m = pcss_ray_map(i, pcss_ray_point(type, q, l, s));
+            bool b = m.y > m.x + m.z;
+            if (behind && !b) {
+                float lo = s_prev, hi = s;
+                vec3 mlo = m_prev, mhi = m;
+                for (int h = 0; h < PCSS_RAY_REFINE; h++) {
+                    float mid = 0.5 * (lo + hi);
+                    vec3 mm = pcss_ray_map(i, pcss_ray_point(type, q, l, mid));
+                    if (mm.y > mm.x + mm.z) {
+                        lo = mid;
+                        mlo = mm;
+                    } else {
+                        hi = mid;
+                        mhi = mm;
+                    }
+                }
+                if (mhi.y <= mlo.x + mlo.z || mhi.x <= mlo.x + PCSS_RAY_SLOPE * mlo.z) {
+                    blocked = true;
+                    crossing_sum += mlo.x;
+                }
+            }
+            behind = b;
+            s_prev = s;
+            m_prev = m;
+        }
+        if (!blocked && behind) {
+            blocked = true;
+            crossing_sum += m_prev.x;
+        }
+        lit += blocked ? 0.0 : 1.0;
+        crossings += blocked ? 1.0 : 0.0;
+    }
+    if (crossings > 0.0) {
+        float blocker = crossing_sum / crossings;
+        pen = vec2(2.0 * pcss_penumbra_texels(i, value, min(blocker, value), texel_unit), blocker);
+    }
+    return lit / float(PCSS_RAY_SAMPLES);
+}
