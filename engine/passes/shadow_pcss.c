@@ -22,8 +22,8 @@
 #define PCSS_RAY_SAMPLES 16       /* = PCSS_RAY_SAMPLES of shadow_pcss.glsl */
 #define PCSS_RAY_STEP 1.5f        /* = PCSS_RAY_STEP */
 #define PCSS_RAY_REACH 48.0f      /* = PCSS_RAY_REACH */
-#define PCSS_RAY_REFINE 2         /* = PCSS_RAY_REFINE */
-#define PCSS_RAY_SLOPE 8.0f       /* = PCSS_RAY_SLOPE */
+#define PCSS_RAY_HIT 8.0f         /* = PCSS_RAY_HIT */
+#define PCSS_RAY_TOL 2.0f         /* = PCSS_RAY_TOL */
 
 typedef struct pcss_state {
     int size;         /* of the shadow maps; the blocker maps are (size + 1) / 2 */
@@ -216,7 +216,7 @@ typedef struct ray_at {
 
 static ray_at ray_map(const float *map, int size, float texel, float bias, float x, float y, float v)
 {
-    ray_at m = {fetch(map, size, (int)floorf(x), (int)floorf(y)), v, bias + 2.0f * texel};
+    ray_at m = {fetch(map, size, (int)floorf(x), (int)floorf(y)), v, bias + PCSS_RAY_TOL * texel};
     return m;
 }
 
@@ -228,15 +228,17 @@ static int ray_behind(ray_at m)
 float shadow_rays_cpu(const float *map, int size, float r, float texel, float bias, float x, float y, float value)
 {
     ray_at m0 = ray_map(map, size, texel, bias, x, y, value);
-    int behind0 = ray_behind(m0);
     float reach = fminf(PCSS_RAY_REACH * texel / r, value);
+    float g = 0.06711056f * floorf(x) + 0.00583715f * floorf(y);
+    g = 52.9829189f * (g - floorf(g));
+    float turn = 6.28318530717958648f * (g - floorf(g));
     int lit = 0;
     for (int k = 0; k < PCSS_RAY_SAMPLES; k++) {
         float rho = r * sqrtf(((float)k + 0.5f) / (float)PCSS_RAY_SAMPLES);
-        float a = (float)(k * PCSS_GOLDEN_ANGLE);
+        float a = (float)(k * PCSS_GOLDEN_ANGLE) + turn;
         /* Lateral texels per unit of depth travelled toward this point of the light. */
         float dx = rho * cosf(a) / texel, dy = rho * sinf(a) / texel;
-        int behind = behind0, blocked = 0;
+        int blocked = 0;
         float s_prev = 0.0f;
         ray_at m_prev = m0;
         int steps = (int)ceilf(reach * rho / texel / PCSS_RAY_STEP);
@@ -244,29 +246,21 @@ float shadow_rays_cpu(const float *map, int size, float r, float texel, float bi
         for (int j = 1; j <= steps && !blocked; j++) {
             float s = reach * (float)j / (float)steps;
             ray_at m = ray_map(map, size, texel, bias, x + s * dx, y + s * dy, value - s);
-            int b = ray_behind(m);
-            if (behind && !b) {
-                /* Left the region behind a surface: through it, or past its edge. */
-                float lo = s_prev, hi = s;
-                ray_at mlo = m_prev, mhi = m;
-                for (int h = 0; h < PCSS_RAY_REFINE; h++) {
-                    float mid = 0.5f * (lo + hi);
-                    ray_at mm = ray_map(map, size, texel, bias, x + mid * dx, y + mid * dy, value - mid);
-                    if (ray_behind(mm)) {
-                        lo = mid;
-                        mlo = mm;
-                    } else {
-                        hi = mid;
-                        mhi = mm;
-                    }
+            /* The stored depths at either end that the ray's depth passes over this step: is
+             * that surface where the ray is at that depth? */
+            for (int e = 0; e < 2 && !blocked; e++) {
+                float c = e == 0 ? m_prev.stored : m.stored;
+                if (c >= m.value && c < m_prev.value - (j == 1 ? m_prev.tol : 0.0f)) {
+                    float sc = s_prev + (s - s_prev) * (m_prev.value - c) / (m_prev.value - m.value);
+                    ray_at mc = ray_map(map, size, texel, bias, x + sc * dx, y + sc * dy, value - sc);
+                    blocked = fabsf(mc.value - mc.stored) <= PCSS_RAY_HIT * mc.tol;
                 }
-                blocked = mhi.value <= mlo.stored + mlo.tol || mhi.stored <= mlo.stored + PCSS_RAY_SLOPE * mlo.tol;
             }
-            behind = b;
             s_prev = s;
             m_prev = m;
         }
-        lit += !blocked && !behind;
+        blocked = blocked || ray_behind(m_prev);
+        lit += !blocked;
     }
     return (float)lit / (float)PCSS_RAY_SAMPLES;
 }
