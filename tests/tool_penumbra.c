@@ -14,7 +14,17 @@
  *
  * usage: ispm_test_penumbra RUN REF X0 X1 [MAX_WIDTH_ERR MAX_P90]
  * prints "width_ispm_mm width_ref_mm width_err p90 pen"; with the limits, exit 1 when
- * |width_ispm/width_ref − 1| > MAX_WIDTH_ERR or p90 > MAX_P90. */
+ * |width_ispm/width_ref − 1| > MAX_WIDTH_ERR or p90 > MAX_P90.
+ *
+ * usage: ispm_test_penumbra --lines RUN REF [LINE...]   (any scene; also needs gbuffer.normal)
+ *   floor_p90  the floor blocks' p90 as above, but over the blocks lit in the reference (block
+ *              mean at least 10% of the brightest floor block) and relative to the reference's
+ *              block alone;
+ *   LINE       x=COL:AXIS or y=ROW:AXIS (AXIS +x, -x, +y, -y, +z or -z): on that image column or
+ *              row, the longest run of pixels whose gbuffer.normal is within 0.1 of AXIS (x=40:+y,
+ *              the floor), the 10–90% width (pixels) of its one shadow edge for the run and the
+ *              reference (edge_width) and their ratio; exit 1 when either has none.
+ * PENUMBRA_DUMP=1 (--lines) writes every block's and every line pixel's values to stderr. */
 #define _POSIX_C_SOURCE 200809L
 #include <math.h>
 #include <stdio.h>
@@ -153,11 +163,8 @@ static double edge_width(const double *v, int n)
     return fabs(x90 - x10);
 }
 
-/* usage: --lines RUN REF SPEC...; SPEC is x=COL:AXIS or y=ROW:AXIS, AXIS the normal of the
- * surface measured on that line (+x, -x, +y, -y, +z, -z): the longest run of the line's pixels
- * whose gbuffer.normal is within 0.1 of it. Prints the floor block p90 over blocks lit in the
- * reference, then per SPEC its 10–90% widths (pixels) in the run and their ratio. */
-static int lines_main(int argc, char **argv, const float *eng, const float *ref, const float *pos, const float *nrm,
+/* --lines (see the header): the floor p90 over lit blocks, then each LINE's widths. */
+static int lines_main(const char *prog, int argc, char **argv, const float *eng, const float *ref, const float *pos, const float *nrm,
                       int w, int h)
 {
     /* Floor blocks lit in the reference: block mean at least 10% of the brightest floor block. */
@@ -196,7 +203,7 @@ static int lines_main(int argc, char **argv, const float *eng, const float *ref,
             be[lit++] = fabs(be[i] - br[i]) / br[i];
         }
     if (lit == 0) {
-        fprintf(stderr, "%s: no lit 8x8 block of floor pixels\n", argv[0]);
+        fprintf(stderr, "%s: no lit 8x8 block of floor pixels\n", prog);
         return 1;
     }
     qsort(be, (size_t)lit, sizeof(double), cmp_double);
@@ -209,7 +216,7 @@ static int lines_main(int argc, char **argv, const float *eng, const float *ref,
         int at;
         if (sscanf(argv[a], "%c=%d:%c%c", &kind, &at, &sign, &axis) != 4 || (kind != 'x' && kind != 'y') ||
             (sign != '+' && sign != '-') || axis < 'x' || axis > 'z' || at < 0 || at >= (kind == 'x' ? w : h)) {
-            fprintf(stderr, "%s: bad line %s (want x=COL:+y or y=ROW:-z)\n", argv[0], argv[a]);
+            fprintf(stderr, "%s: bad line %s (want x=COL:+y or y=ROW:-z)\n", prog, argv[a]);
             return 2;
         }
         float want[3] = {0, 0, 0};
@@ -264,7 +271,7 @@ int main(int argc, char **argv)
             fprintf(stderr, "%s, %s: image sizes differ\n", argv[2], argv[3]);
             return 1;
         }
-        int rc = lines_main(argc - 4, argv + 4, eng, ref, pos, nrm, w, h);
+        int rc = lines_main(argv[0], argc - 4, argv + 4, eng, ref, pos, nrm, w, h);
         free(eng);
         free(ref);
         free(pos);
@@ -272,7 +279,7 @@ int main(int argc, char **argv)
         return rc;
     }
     if (argc != 5 && argc != 7) {
-        fprintf(stderr, "usage: %s RUN REF X0 X1 [MAX_WIDTH_ERR MAX_P90]\n", argv[0]);
+        fprintf(stderr, "usage: %s RUN REF X0 X1 [MAX_WIDTH_ERR MAX_P90] | --lines RUN REF [LINE...]\n", argv[0]);
         return 2;
     }
     double x0 = atof(argv[3]), x1 = atof(argv[4]);
