@@ -65,7 +65,8 @@ float shadow_blocker_cpu(const float *map, int size, float far_value, int direct
  * (a directional light of tan α = r whose disc's axes are the map's x and y): map is size×size
  * depths from the box's near plane (row-major), texel the texel's world size, bias the shadow
  * bias; the receiver at texel position (x, y) (continuous) and depth value (its normal offset
- * applied). Returns the unblocked share of the rays, 0..1 in steps of 1/16. */
+ * applied); the spiral of rays turned by the hash of texel (floor(x), floor(y)) as the shader
+ * turns it. Returns the unblocked share of the rays, 0..1 in steps of 1/16. */
 float shadow_rays_cpu(const float *map, int size, float r, float texel, float bias, float x, float y, float value);
 
 #endif
