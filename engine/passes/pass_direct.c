@@ -16,7 +16,7 @@ struct pass_direct {
     glu_pass pass;
 };
 
-eng_result pass_direct_create(int width, int height, pass_direct **out, eng_error *err)
+eng_result pass_direct_create(int width, int height, int pcss_rays, pass_direct **out, eng_error *err)
 {
     *out = NULL;
     pass_direct *p = calloc(1, sizeof *p);
@@ -27,6 +27,16 @@ eng_result pass_direct_create(int width, int height, pass_direct **out, eng_erro
     if (r != ENG_OK) {
         free(p);
         return r;
+    }
+    if (pcss_rays) { /* the same pass with the rays compiled in instead of the filter */
+        glDeleteProgram(p->pass.program);
+        p->pass.program = 0;
+        r = glu_program_defines("fullscreen.vert.glsl", "direct.frag.glsl", "#define PCSS_RAYS 1\n", &p->pass.program,
+                                err);
+        if (r != ENG_OK) {
+            pass_direct_destroy(p);
+            return r;
+        }
     }
     GLuint g = p->pass.program;
     glUseProgram(g);
@@ -111,7 +121,6 @@ const glu_target *pass_direct_run(pass_direct *p, const eng_frame_scene *fs, con
     glUniform1i(glGetUniformLocation(g, "u_shadow_size"), s->shadow_map_size);
     glUniform1i(glGetUniformLocation(g, "u_pcf_radius"), s->pcf_radius);
     glUniform1f(glGetUniformLocation(g, "u_shadow_bias"), s->shadow_bias);
-    glUniform1i(glGetUniformLocation(g, "u_pcss_rays"), s->pcss_blocker == ENG_PCSS_RAYS);
     glUniform3fv(glGetUniformLocation(g, "u_eye"), 1, fs->camera.eye);
     float inv[16];
     m4_invert(inv, fs->camera.view_proj);

@@ -39,7 +39,6 @@ uniform float u_shadow_bias;
 uniform vec3 u_eye;
 uniform float u_light_radius[MAX_LIGHTS];    // light size (shadow_pcss.glsl); 0: hard shadows
 uniform sampler2DArray u_blocker[MAX_LIGHTS]; // blocker maps of the lights with a size
-uniform int u_pcss_rays;                     // 1: rays through the shadow map instead (no blocker maps)
 uniform mat4 u_inv_view_proj;                // the camera's, for the rays of background pixels
 uniform vec2 u_viewport;
 
@@ -153,7 +152,11 @@ void main()
         float vis;
         if (u_light_radius[i] > 0.0) {
             vec2 pen;
-            vis = u_pcss_rays != 0 ? pcss_rays_visibility(i, p, n, pen) : pcss_visibility(i, p, n, pen);
+#ifdef PCSS_RAYS
+            vis = pcss_rays_visibility(i, p, n, pen); // pcss_blocker "rays": no blocker maps
+#else
+            vis = pcss_visibility(i, p, n, pen);
+#endif
             if (pen.x > widest.x)
                 widest = pen;
         } else {

@@ -92,6 +92,7 @@ float pcss_visibility(int i, vec3 p, vec3 n, out vec2 pen)
     return lit / float(PCSS_TAPS);
 }
 
+#ifdef PCSS_RAYS
 // pcss_blocker "rays" (engine/shadow_pcss.c; the same march on the CPU: shadow_rays_cpu): the
 // light's disc seen from the receiver is sampled at PCSS_RAY_SAMPLES points (a Vogel spiral,
 // equal area each, turned by an angle of the receiver's shadow texel), and the segment from the
@@ -108,7 +109,8 @@ float pcss_visibility(int i, vec3 p, vec3 n, out vec2 pen)
 // side past the box's edge, which a single blocker depth cannot express. A ray still behind a
 // surface at its last step is blocked. Visibility: the unblocked share of the rays, with no
 // filter. Comparisons allow u_shadow_bias and PCSS_RAY_TOL texels at the point's distance; the
-// first step ignores surfaces within that of the receiver (its own).
+// first step ignores surfaces within that of the receiver (its own). Compiled in only with
+// PCSS_RAYS (pass_direct.c), so that the direct pass of "map" is the filter alone.
 #define PCSS_RAY_SAMPLES 16
 #define PCSS_RAY_STEP 1.5    // texels
 #define PCSS_RAY_REACH 48.0 // texels
@@ -216,3 +218,4 @@ float pcss_rays_visibility(int i, vec3 p, vec3 n, out vec2 pen)
     }
     return lit / float(PCSS_RAY_SAMPLES);
 }
+#endif
