@@ -270,9 +270,9 @@ eng_result eng_create(const eng_desc *desc, eng_engine **out, eng_error *err)
     if (r == ENG_OK)
         r = pass_shadow_create(e->settings.shadow_map_size, nlights, &e->shadow, err);
     for (int m = 0; m < SHADOW_METHOD_COUNT && r == ENG_OK; m++)
-        r = shadow_methods[m]->create(e->settings.shadow_map_size, nlights, &e->shadow_state[m], err);
+        r = shadow_methods[m]->create(&e->settings, nlights, &e->shadow_state[m], err);
     if (r == ENG_OK)
-        r = pass_direct_create(e->width, e->height, &e->direct, err);
+        r = pass_direct_create(e->width, e->height, e->settings.pcss_blocker == ENG_PCSS_RAYS, &e->direct, err);
     if (r == ENG_OK)
         r = pass_composite_create(e->width, e->height, &e->composite, err);
     ovl_join(e->overlap);

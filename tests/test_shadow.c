@@ -4,7 +4,9 @@
  * Topics: the penumbra radius of 001 Eq. 5 against hand-computed values (sphere and
  * directional disc); the blocker search on synthetic shadow maps (a flat receiver with a
  * square occluder, a sloped receiver that must not shadow itself, an empty map); the method
- * table; the lamps of lights with a size in the Embree scene (rt_lamp_hit, rt_intersect);
+ * table; the rays of pcss_blocker "rays" on synthetic ortho maps (a flat floor, a half-plane
+ * occluder against the disc segments it hides, receivers hidden behind it, a box standing on
+ * the floor, a sloped receiver); the lamps of lights with a size in the Embree scene (rt_lamp_hit, rt_intersect);
  * light sizes read from glTF extras, and one malformed file per rule. Tests check
  * result codes, never message text. */
 #include "shadow.h"
@@ -120,6 +122,100 @@ START_TEST(blocker_empty)
     for (int i = 0; i < N * N; i++)
         m[i] = 50.0f;
     ck_assert_float_eq(shadow_blocker_cpu(m, N, 50.0f, 0, 0.3f, 0.45f, 0.02f, 15, 15), 0.0f);
+    free(m);
+}
+END_TEST
+
+/* ---------------------------------------------------------------- rays */
+
+/* The share of a disc of radius 1 beyond a chord at distance d from its centre (d in −1..1). */
+static double disc_beyond(double d)
+{
+    if (d <= -1.0)
+        return 1.0;
+    if (d >= 1.0)
+        return 0.0;
+    return (acos(d) - d * sqrt(1.0 - d * d)) / 3.14159265358979323846;
+}
+
+/* A floor at depth 2 and, where x < edge, an occluder at depth occ (ortho texels of 1 cm). */
+static float *half_plane_map(int edge, float occ)
+{
+    float *m = malloc(N * N * sizeof *m);
+    for (int y = 0; y < N; y++)
+        for (int x = 0; x < N; x++)
+            m[y * N + x] = x < edge ? occ : 2.0f;
+    return m;
+}
+
+START_TEST(rays_flat_floor)
+{
+    float *m = half_plane_map(0, 1.0f);
+    for (int x = 2; x < N - 2; x += 5)
+        ck_assert_float_eq(shadow_rays_cpu(m, N, 0.1f, 0.01f, 0.002f, (float)x + 0.5f, 31.5f, 2.0f), 1.0f);
+    free(m);
+}
+END_TEST
+
+START_TEST(rays_half_plane)
+{
+    /* tan α = 0.1, the occluder's plane 1 m above the floor: the penumbra is 0.1 m either side of
+     * the edge's projection (x = 32), 10 texels. A ray from receiver x toward the disc's point
+     * (ρ, a) reaches the occluder's depth at x + 1 m · ρ cos a / 1 cm: it is blocked when that is
+     * left of the edge, so the visibility is the disc's share beyond the chord at
+     * (32 − x) texels / 10. Hidden receivers (x < 32, behind the occluder from the light's
+     * centre) see the light past the edge too. Sixteen rays, their spiral turned per texel:
+     * each texel within 3/16 of the exact share, and their mean error over the penumbra (the
+     * texels of several rows) within 1/32. */
+    float *m = half_plane_map(32, 1.0f);
+    double sum = 0.0, count = 0.0;
+    for (int y = 20; y < 44; y += 3)
+        for (int x = 18; x < 46; x++) {
+            float v = shadow_rays_cpu(m, N, 0.1f, 0.01f, 0.002f, (float)x + 0.5f, (float)y + 0.5f, 2.0f);
+            double want = disc_beyond((32.0 - ((double)x + 0.5)) / 10.0);
+            ck_assert_msg(fabs(v - want) <= 0.1875, "x %d: visibility %g, the disc beyond the edge %g", x, v, want);
+            sum += v - want;
+            count += 1.0;
+        }
+    ck_assert_msg(fabs(sum / count) <= 1.0 / 32.0, "mean error %g", sum / count);
+    ck_assert_float_eq(shadow_rays_cpu(m, N, 0.1f, 0.01f, 0.002f, 20.5f, 31.5f, 2.0f), 0.0f);
+    ck_assert_float_eq(shadow_rays_cpu(m, N, 0.1f, 0.01f, 0.002f, 44.5f, 31.5f, 2.0f), 1.0f);
+    /* A hidden receiver 3 texels in from the edge still sees a quarter of the light. */
+    float hidden = shadow_rays_cpu(m, N, 0.1f, 0.01f, 0.002f, 29.5f, 31.5f, 2.0f);
+    ck_assert(hidden >= 0.125f && hidden <= 0.5f);
+    free(m);
+}
+END_TEST
+
+START_TEST(rays_contact)
+{
+    /* A box 0.6 m high standing on the floor over x < 32 (its top at depth 1.4; the ortho light
+     * above sees none of its sides). The penumbra beside it narrows to the box's height:
+     * 0.6 m · 0.1 = 6 texels where the half plane 1 m up gave 10. */
+    float *m = half_plane_map(32, 1.4f);
+    for (int y = 20; y < 44; y += 3)
+        for (int x = 32; x < 40; x++) {
+            float v = shadow_rays_cpu(m, N, 0.1f, 0.01f, 0.002f, (float)x + 0.5f, (float)y + 0.5f, 2.0f);
+            double want = disc_beyond((32.0 - ((double)x + 0.5)) / 6.0);
+            ck_assert_msg(fabs(v - want) <= 0.1875, "x %d: visibility %g, the disc beyond the edge %g", x, v, want);
+        }
+    ck_assert_float_eq(shadow_rays_cpu(m, N, 0.1f, 0.01f, 0.002f, 38.5f, 31.5f, 2.0f), 1.0f);
+    free(m);
+}
+END_TEST
+
+START_TEST(rays_sloped_receiver)
+{
+    /* A plane rising 2 mm per texel along x (toward the light), no occluder: never its own
+     * occluder, whatever the direction of the rays. */
+    float *m = malloc(N * N * sizeof *m);
+    for (int y = 0; y < N; y++)
+        for (int x = 0; x < N; x++)
+            m[y * N + x] = 2.0f - 0.002f * (float)x;
+    for (int x = 4; x < N - 4; x += 7) {
+        float v = 2.0f - 0.002f * ((float)x + 0.5f);
+        ck_assert_float_eq(shadow_rays_cpu(m, N, 0.05f, 0.01f, 0.002f, (float)x + 0.5f, 20.5f, v), 1.0f);
+    }
     free(m);
 }
 END_TEST
@@ -249,6 +345,10 @@ int main(void)
     tcase_add_test(tc, blocker_block_receiver);
     tcase_add_test(tc, blocker_sloped_receiver);
     tcase_add_test(tc, blocker_empty);
+    tcase_add_test(tc, rays_flat_floor);
+    tcase_add_test(tc, rays_half_plane);
+    tcase_add_test(tc, rays_contact);
+    tcase_add_test(tc, rays_sloped_receiver);
     tcase_add_test(tc, method_of_light);
     tcase_add_test(tc, lamp_hits);
     suite_add_tcase(su, tc);

@@ -14,7 +14,17 @@
  *
  * usage: ispm_test_penumbra RUN REF X0 X1 [MAX_WIDTH_ERR MAX_P90]
  * prints "width_ispm_mm width_ref_mm width_err p90 pen"; with the limits, exit 1 when
- * |width_ispm/width_ref − 1| > MAX_WIDTH_ERR or p90 > MAX_P90. */
+ * |width_ispm/width_ref − 1| > MAX_WIDTH_ERR or p90 > MAX_P90.
+ *
+ * usage: ispm_test_penumbra --lines RUN REF [LINE...]   (any scene; also needs gbuffer.normal)
+ *   floor_p90  the floor blocks' p90 as above, but over the blocks lit in the reference (block
+ *              mean at least 10% of the brightest floor block) and relative to the reference's
+ *              block alone;
+ *   LINE       x=COL:AXIS or y=ROW:AXIS (AXIS +x, -x, +y, -y, +z or -z): on that image column or
+ *              row, the longest run of pixels whose gbuffer.normal is within 0.1 of AXIS (x=40:+y,
+ *              the floor), the 10–90% width (pixels) of its one shadow edge for the run and the
+ *              reference (edge_width) and their ratio; exit 1 when either has none.
+ * PENUMBRA_DUMP=1 (--lines) writes every block's and every line pixel's values to stderr. */
 #define _POSIX_C_SOURCE 200809L
 #include <math.h>
 #include <stdio.h>
@@ -120,10 +130,156 @@ static int cmp_double(const void *a, const void *b)
     return x < y ? -1 : x > y;
 }
 
+/* ---------------------------------------------------------------- --lines */
+
+/* The 10–90% width (pixels) of the one shadow edge on profile v (n pixels along a line): the
+ * levels between the profile's minimum and maximum; from the darkest pixel, the nearest 10% and
+ * 90% crossings on the side where the profile rises to its maximum, each interpolated linearly. */
+static double edge_width(const double *v, int n)
+{
+    int imin = 0, imax = 0;
+    for (int i = 1; i < n; i++) {
+        imin = v[i] < v[imin] ? i : imin;
+        imax = v[i] > v[imax] ? i : imax;
+    }
+    double lo = v[imin], hi = v[imax];
+    if (!(hi > lo))
+        return NAN;
+    double l10 = lo + 0.1 * (hi - lo), l90 = lo + 0.9 * (hi - lo);
+    int dir = imax > imin ? 1 : -1;
+    double x10 = NAN, x90 = NAN;
+    for (int i = imin; i != imax; i += dir) {
+        double a = v[i], b = v[i + dir];
+        /* The last rise through 10% before the first through 90%. */
+        if (isnan(x90) && a < l10 && b >= l10)
+            x10 = i + dir * (l10 - a) / (b - a);
+        if (isnan(x90) && a < l90 && b >= l90) {
+            x90 = i + dir * (l90 - a) / (b - a);
+            break;
+        }
+    }
+    if (isnan(x10) && !isnan(x90))
+        x10 = imin;
+    return fabs(x90 - x10);
+}
+
+/* --lines (see the header): the floor p90 over lit blocks, then each LINE's widths. */
+static int lines_main(const char *prog, int argc, char **argv, const float *eng, const float *ref, const float *pos, const float *nrm,
+                      int w, int h)
+{
+    /* Floor blocks lit in the reference: block mean at least 10% of the brightest floor block. */
+    int bw = w / 8, bh = h / 8, nb = 0;
+    double *be = rep_xcalloc((size_t)bw * (size_t)bh, sizeof(double));
+    double *br = rep_xcalloc((size_t)bw * (size_t)bh, sizeof(double));
+    double max_ref = 0.0;
+    for (int by = 0; by < bh; by++)
+        for (int bx = 0; bx < bw; bx++) {
+            double se = 0, sr = 0;
+            int ok = 1;
+            for (int y = by * 8; y < by * 8 + 8 && ok; y++)
+                for (int x = bx * 8; x < bx * 8 + 8; x++) {
+                    size_t i = (size_t)y * (size_t)w + (size_t)x;
+                    if (!floor_px(pos, i)) {
+                        ok = 0;
+                        break;
+                    }
+                    se += lum(eng, i);
+                    sr += lum(ref, i);
+                }
+            if (!ok)
+                continue;
+            be[nb] = se / 64;
+            br[nb] = sr / 64;
+            if (getenv("PENUMBRA_DUMP"))
+                fprintf(stderr, "block %d at %d,%d\n", nb, bx * 8, by * 8);
+            max_ref = br[nb] > max_ref ? br[nb] : max_ref;
+            nb++;
+        }
+    int lit = 0;
+    for (int i = 0; i < nb; i++)
+        if (br[i] >= 0.1 * max_ref) {
+            if (getenv("PENUMBRA_DUMP"))
+                fprintf(stderr, "block %d %.4f %.4f %+.3f\n", i, be[i], br[i], be[i] / br[i] - 1.0);
+            be[lit++] = fabs(be[i] - br[i]) / br[i];
+        }
+    if (lit == 0) {
+        fprintf(stderr, "%s: no lit 8x8 block of floor pixels\n", prog);
+        return 1;
+    }
+    qsort(be, (size_t)lit, sizeof(double), cmp_double);
+    printf("floor_p90 %.4f (%d lit blocks of %d)\n", be[(size_t)ceil(0.9 * lit) - 1], lit, nb);
+    free(be);
+    free(br);
+    int rc = 0;
+    for (int a = 0; a < argc; a++) {
+        char kind, sign, axis;
+        int at;
+        if (sscanf(argv[a], "%c=%d:%c%c", &kind, &at, &sign, &axis) != 4 || (kind != 'x' && kind != 'y') ||
+            (sign != '+' && sign != '-') || axis < 'x' || axis > 'z' || at < 0 || at >= (kind == 'x' ? w : h)) {
+            fprintf(stderr, "%s: bad line %s (want x=COL:+y or y=ROW:-z)\n", prog, argv[a]);
+            return 2;
+        }
+        float want[3] = {0, 0, 0};
+        want[axis - 'x'] = sign == '+' ? 1.0f : -1.0f;
+        int len = kind == 'x' ? h : w;
+        double *ve = rep_xcalloc((size_t)len, sizeof(double)), *vr = rep_xcalloc((size_t)len, sizeof(double));
+        int best = 0, best_at = 0, run = 0;
+        for (int k = 0; k <= len; k++) {
+            int on = 0;
+            if (k < len) {
+                size_t i = kind == 'x' ? (size_t)k * (size_t)w + (size_t)at : (size_t)at * (size_t)w + (size_t)k;
+                float d = 0;
+                for (int c = 0; c < 3; c++)
+                    d += (nrm[i * 3 + c] - want[c]) * (nrm[i * 3 + c] - want[c]);
+                on = d < 0.01f;
+            }
+            run = on ? run + 1 : 0;
+            if (run > best) {
+                best = run;
+                best_at = k - run + 1;
+            }
+        }
+        for (int k = 0; k < best; k++) {
+            int kk = best_at + k;
+            size_t i = kind == 'x' ? (size_t)kk * (size_t)w + (size_t)at : (size_t)at * (size_t)w + (size_t)kk;
+            ve[k] = lum(eng, i);
+            vr[k] = lum(ref, i);
+            if (getenv("PENUMBRA_DUMP"))
+                fprintf(stderr, "%s %d %.4f %.4f\n", argv[a], kk, ve[k], vr[k]);
+        }
+        double we = best >= 4 ? edge_width(ve, best) : NAN, wr = best >= 4 ? edge_width(vr, best) : NAN;
+        printf("%s %.2f %.2f %.3f (pixels %d-%d)\n", argv[a], we, wr, we / wr, best_at, best_at + best - 1);
+        if (isnan(we) || isnan(wr))
+            rc = 1;
+        free(ve);
+        free(vr);
+    }
+    return rc;
+}
+
 int main(int argc, char **argv)
 {
+    if (argc >= 4 && strcmp(argv[1], "--lines") == 0) {
+        int w, h, rw, rh, pw, ph, nw, nh;
+        float *eng = NULL, *ref = NULL, *pos = NULL, *nrm = NULL;
+        if (read_buffer(argv[2], "direct.radiance", RGB, 3, 0, &w, &h, &eng) ||
+            read_buffer(argv[2], "gbuffer.position", XYZ, 3, 0, &pw, &ph, &pos) ||
+            read_buffer(argv[2], "gbuffer.normal", XYZ, 3, 0, &nw, &nh, &nrm) ||
+            read_buffer(argv[3], "reference.direct", RGB, 3, 0, &rw, &rh, &ref))
+            return 1;
+        if (rw != w || rh != h || pw != w || ph != h || nw != w || nh != h) {
+            fprintf(stderr, "%s, %s: image sizes differ\n", argv[2], argv[3]);
+            return 1;
+        }
+        int rc = lines_main(argv[0], argc - 4, argv + 4, eng, ref, pos, nrm, w, h);
+        free(eng);
+        free(ref);
+        free(pos);
+        free(nrm);
+        return rc;
+    }
     if (argc != 5 && argc != 7) {
-        fprintf(stderr, "usage: %s RUN REF X0 X1 [MAX_WIDTH_ERR MAX_P90]\n", argv[0]);
+        fprintf(stderr, "usage: %s RUN REF X0 X1 [MAX_WIDTH_ERR MAX_P90] | --lines RUN REF [LINE...]\n", argv[0]);
         return 2;
     }
     double x0 = atof(argv[3]), x1 = atof(argv[4]);

@@ -52,6 +52,17 @@ typedef enum eng_kernel_scaling {
                                * ω_i's projection on the kernel plane by min(1/cos θ, s_max) */
 } eng_kernel_scaling;
 
+/* How the soft shadows of lights with a size find their occluders (shadow_pcss.c, 001 §3.4). */
+typedef enum eng_pcss_blocker {
+    ENG_PCSS_DEFAULT = 0, /* = map */
+    ENG_PCSS_MAP,         /* the average occluder depth of a blocker map, a filter of the penumbra
+                           * width it implies (percentage-closer soft shadows) */
+    ENG_PCSS_RAYS         /* rays from the receiver to points of the light marched through the
+                           * shadow map, an occluder where one crosses a stored surface (a
+                           * receiver hidden behind an occluder's top still sees the light past
+                           * its edge); no blocker map */
+} eng_pcss_blocker;
+
 /* The kernel's boundary correction (engine/indirect/boundary.h). */
 typedef enum eng_boundary {
     ENG_BOUNDARY_DEFAULT = 0, /* = none */
@@ -104,6 +115,7 @@ const char *eng_scaling_name(eng_kernel_scaling m);
 const char *eng_random_name(eng_random_mode m);
 const char *eng_detail_name(eng_atrous_detail m);
 const char *eng_boundary_name(eng_boundary m);
+const char *eng_pcss_blocker_name(eng_pcss_blocker m);
 
 /* Engine settings. A zero-initialised struct means defaults (eng_settings_defaults fills
  * them in explicitly so the manifest can record the values used). */
@@ -111,6 +123,7 @@ typedef struct eng_settings {
     int shadow_map_size;  /* texels per side (per cube face for point lights); default 1024 */
     int pcf_radius;       /* PCF kernel half-width in texels: (2r+1)^2 taps; default 1 */
     float shadow_bias;    /* world-space offset along the normal before the lookup; default 0.002 */
+    eng_pcss_blocker pcss_blocker; /* soft shadows' occluder search (shadow_pcss.c); default map */
     float exposure;       /* display transform: stops applied before sRGB encoding; default 0 */
     int threads;          /* CPU worker threads (OpenMP, Embree, llvmpipe); 0 = default 2 */
     /* Indirect light (ISPM). */

@@ -16,7 +16,7 @@ struct pass_direct {
     glu_pass pass;
 };
 
-eng_result pass_direct_create(int width, int height, pass_direct **out, eng_error *err)
+eng_result pass_direct_create(int width, int height, int pcss_rays, pass_direct **out, eng_error *err)
 {
     *out = NULL;
     pass_direct *p = calloc(1, sizeof *p);
@@ -27,6 +27,16 @@ eng_result pass_direct_create(int width, int height, pass_direct **out, eng_erro
     if (r != ENG_OK) {
         free(p);
         return r;
+    }
+    if (pcss_rays) { /* the same pass with the rays compiled in instead of the filter */
+        glDeleteProgram(p->pass.program);
+        p->pass.program = 0;
+        r = glu_program_defines("fullscreen.vert.glsl", "direct.frag.glsl", "#define PCSS_RAYS 1\n", &p->pass.program,
+                                err);
+        if (r != ENG_OK) {
+            pass_direct_destroy(p);
+            return r;
+        }
     }
     GLuint g = p->pass.program;
     glUseProgram(g);
@@ -98,9 +108,10 @@ const glu_target *pass_direct_run(pass_direct *p, const eng_frame_scene *fs, con
             glUniformMatrix4fv(loc(g, "u_shadow_view_proj[%d]", i * 6 + f), 1, GL_FALSE, sm->view_proj[f]);
         glActiveTexture(GL_TEXTURE0 + SHADOW_UNIT0 + i);
         glBindTexture(GL_TEXTURE_2D_ARRAY, sm->target.color[0]);
-        /* Soft shadows (shadow_pcss.glsl): the light's size and its blocker map. A sphere's
-         * radius, or tan of a disc's angular radius. */
-        float radius = extra[i] ? (type == 2 ? tanf(l->radius) : l->radius) : 0.0f;
+        /* Soft shadows (shadow_pcss.glsl) where the light has a size (shadow_method_index):
+         * a sphere's radius, or tan of a disc's angular radius, and the blocker map unless
+         * the rays find the occluders. */
+        float radius = l->radius > 0.0f ? (type == 2 ? tanf(l->radius) : l->radius) : 0.0f;
         glUniform1f(loc(g, "u_light_radius[%d]", i), radius);
         if (extra[i]) {
             glActiveTexture(GL_TEXTURE0 + BLOCKER_UNIT0 + i);

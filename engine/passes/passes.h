@@ -78,7 +78,9 @@ void pass_shadow_destroy(pass_shadow *p);
 /* Direct light (pass_direct.c): deferred shading of the G-buffer with all lights and PCF
  * shadow lookups; attachment 0 holds radiance RGB. */
 typedef struct pass_direct pass_direct;
-eng_result pass_direct_create(int width, int height, pass_direct **out, eng_error *err);
+/* pcss_rays: the soft shadows of lights with a size by rays (shadow_pcss.glsl, compiled in with
+ * PCSS_RAYS) instead of the blocker map's filter. */
+eng_result pass_direct_create(int width, int height, int pcss_rays, pass_direct **out, eng_error *err);
 /* extra[l]: light l's shadow-method map (shadow.h; the blocker map of a light with a size). */
 /* World size of one shadow texel of light l (u_shadow_texel of shadow_pcf.glsl): per metre of
  * distance for point and spot lights, absolute for directional ones. */

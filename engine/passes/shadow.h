@@ -3,14 +3,16 @@
  *
  *   shadow_pcf.c   "pcf"   hard shadows, percentage-closer filtering (shaders/shadow_pcf.glsl);
  *                          lights without a size
- *   shadow_pcss.c  "pcss"  soft shadows of lights with a size: blocker search in the shadow
- *                          map, penumbra from the light's size (001 §3.4 Eq. 2–5), filtered
- *                          lookup of that width (shaders/shadow_pcss.glsl)
+ *   shadow_pcss.c  "pcss"  soft shadows of lights with a size, by the setting pcss_blocker:
+ *                          "map", blocker search in the shadow map, penumbra from the light's
+ *                          size (001 §3.4 Eq. 2–5), filtered lookup of that width; "rays",
+ *                          rays to points of the light marched through the shadow map
+ *                          (shaders/shadow_pcss.glsl)
  *
  * The frame loop (engine.c) creates every method once, runs the method of each light after
  * that light's shadow map, announces the map it returns through the method's output table
- * (passes.h; `shadow.light<i>[.face<f>].<name>`) and hands them to the direct pass, which binds them and lets the shader pick the method by
- * u_light_radius (0: pcf). */
+ * (passes.h; `shadow.light<i>[.face<f>].<name>`) and hands them to the direct pass, which
+ * binds them and lets the shader pick the method by u_light_radius (0: pcf) and u_pcss_rays. */
 #ifndef ISPM_SHADOW_H
 #define ISPM_SHADOW_H
 
@@ -20,7 +22,8 @@ typedef struct shadow_method {
     const char *name;
     const pass_output *outputs; /* what the frame loop announces of the map run returns, or NULL */
     const char *pass;   /* pass name in the timings, or NULL */
-    eng_result (*create)(int size, uint32_t light_count, void **state, eng_error *err);
+    /* s: the run's settings (shadow_map_size, pcss_blocker), read once here. */
+    eng_result (*create)(const eng_settings *s, uint32_t light_count, void **state, eng_error *err);
     /* After light `light`'s shadow map sm: the method's own map of it (one layer per face,
      * attachment 0, channel R), or NULL when it needs none; NULL with *failed set on a GL
      * failure. */
@@ -57,5 +60,13 @@ float shadow_search_texels(int directional, float r, float z, float near, float 
  * texels 2hx..2hx+1, 2hy..2hy+1), 0 when there is none. */
 float shadow_blocker_cpu(const float *map, int size, float far_value, int directional, float r, float near,
                          float texel, int hx, int hy);
+
+/* The rays of pcss_blocker "rays" (shaders/shadow_pcss.glsl) on the CPU, for an ortho map
+ * (a directional light of tan α = r whose disc's axes are the map's x and y): map is size×size
+ * depths from the box's near plane (row-major), texel the texel's world size, bias the shadow
+ * bias; the receiver at texel position (x, y) (continuous) and depth value (its normal offset
+ * applied); the spiral of rays turned by the hash of texel (floor(x), floor(y)) as the shader
+ * turns it. Returns the unblocked share of the rays, 0..1 in steps of 1/16. */
+float shadow_rays_cpu(const float *map, int size, float r, float texel, float bias, float x, float y, float value);
 
 #endif

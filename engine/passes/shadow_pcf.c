@@ -4,9 +4,9 @@
 
 #include <stddef.h>
 
-static eng_result pcf_create(int size, uint32_t light_count, void **state, eng_error *err)
+static eng_result pcf_create(const eng_settings *s, uint32_t light_count, void **state, eng_error *err)
 {
-    (void)size;
+    (void)s;
     (void)light_count;
     (void)err;
     *state = NULL;

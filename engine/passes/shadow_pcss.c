@@ -1,9 +1,16 @@
-/* shadow_pcss.c — soft shadows of lights with a size (shadow.h "pcss"; 001 §3.4). Runs the
- * blocker search (shaders/blocker.frag.glsl) over every face of the light's shadow map into a
- * blocker map of the same layout at half its resolution, `shadow.light<i>[.face<f>].blocker`;
- * the direct pass reads
- * it in shaders/shadow_pcss.glsl, turns it into a penumbra width (001 Eq. 5) and filters the
- * shadow map over that width. */
+/* shadow_pcss.c — soft shadows of lights with a size (shadow.h "pcss"; 001 §3.4), in one of
+ * two ways by the setting pcss_blocker (shaders/shadow_pcss.glsl does the lookups):
+ *
+ *   map   runs the blocker search (shaders/blocker.frag.glsl) over every face of the light's
+ *         shadow map into a blocker map of the same layout at half its resolution,
+ *         `shadow.light<i>[.face<f>].blocker`; the direct pass turns it into a penumbra width
+ *         (001 Eq. 5) and filters the shadow map over that width. One depth per receiver: where
+ *         an occluder's near and far edges both shape a penumbra (a box standing on the floor)
+ *         the width follows their average;
+ *   rays  needs no map of its own: the direct pass marches rays from the receiver to points of
+ *         the light's disc through the shadow map, and a ray is blocked where it crosses a
+ *         stored surface (shadow_rays_cpu below is the same march on the CPU).
+ */
 #include "shadow.h"
 
 #include <math.h>
@@ -12,9 +19,15 @@
 #define PCSS_BLOCKER_TAPS 16      /* = BLOCKER_TAPS of blocker.frag.glsl */
 #define PCSS_BLOCKER_MAX 48.0f    /* = BLOCKER_MAX_RADIUS */
 #define PCSS_GOLDEN_ANGLE 2.39996322972865332
+#define PCSS_RAY_SAMPLES 16       /* = PCSS_RAY_SAMPLES of shadow_pcss.glsl */
+#define PCSS_RAY_STEP 1.5f        /* = PCSS_RAY_STEP */
+#define PCSS_RAY_REACH 48.0f      /* = PCSS_RAY_REACH */
+#define PCSS_RAY_HIT 8.0f         /* = PCSS_RAY_HIT */
+#define PCSS_RAY_TOL 2.0f         /* = PCSS_RAY_TOL */
 
 typedef struct pcss_state {
     int size;         /* of the shadow maps; the blocker maps are (size + 1) / 2 */
+    int rays;         /* pcss_blocker "rays": no blocker pass */
     uint32_t light_count;
     glu_target *maps; /* per light */
     GLuint program, vao;
@@ -35,18 +48,23 @@ static void pcss_destroy(void *state)
     free(p);
 }
 
-static eng_result pcss_create(int size, uint32_t light_count, void **state, eng_error *err)
+static eng_result pcss_create(const eng_settings *s, uint32_t light_count, void **state, eng_error *err)
 {
     *state = NULL;
     pcss_state *p = calloc(1, sizeof *p);
     if (!p)
         return eng_fail(err, ENG_ERR_NOMEM, "pcss: out of memory");
-    p->size = size;
+    p->size = s->shadow_map_size;
+    p->rays = s->pcss_blocker == ENG_PCSS_RAYS;
     p->light_count = light_count;
     p->maps = calloc(light_count ? light_count : 1, sizeof *p->maps);
     if (!p->maps) {
         free(p);
         return eng_fail(err, ENG_ERR_NOMEM, "pcss: out of memory");
+    }
+    if (p->rays) {
+        *state = p;
+        return ENG_OK;
     }
     eng_result r = glu_program("fullscreen.vert.glsl", "blocker.frag.glsl", &p->program, err);
     if (r != ENG_OK) {
@@ -71,6 +89,8 @@ static const glu_target *pcss_run(void *state, const eng_light_pose *l, const sh
 {
     pcss_state *p = state;
     *failed = 0;
+    if (p->rays)
+        return NULL;
     glu_target *t = &p->maps[light];
     if (t->fbo && t->layers != sm->faces)
         glu_target_destroy(t);
@@ -186,4 +206,61 @@ float shadow_blocker_cpu(const float *map, int size, float far_value, int direct
         }
     }
     return count > 0.0f ? sum / count : 0.0f;
+}
+
+/* One point of the ortho march: the stored value at lateral position (x, y) (texels) and the
+ * point's own depth v; its tolerance, as shadow_pcss.glsl's pcss_ray_map for the ortho box. */
+typedef struct ray_at {
+    float stored, value, tol;
+} ray_at;
+
+static ray_at ray_map(const float *map, int size, float texel, float bias, float x, float y, float v)
+{
+    ray_at m = {fetch(map, size, (int)floorf(x), (int)floorf(y)), v, bias + PCSS_RAY_TOL * texel};
+    return m;
+}
+
+static int ray_behind(ray_at m)
+{
+    return m.value > m.stored + m.tol;
+}
+
+float shadow_rays_cpu(const float *map, int size, float r, float texel, float bias, float x, float y, float value)
+{
+    ray_at m0 = ray_map(map, size, texel, bias, x, y, value);
+    float reach = fminf(PCSS_RAY_REACH * texel / r, value);
+    float g = 0.06711056f * floorf(x) + 0.00583715f * floorf(y);
+    g = 52.9829189f * (g - floorf(g));
+    float turn = 6.28318530717958648f * (g - floorf(g));
+    int lit = 0;
+    for (int k = 0; k < PCSS_RAY_SAMPLES; k++) {
+        float rho = r * sqrtf(((float)k + 0.5f) / (float)PCSS_RAY_SAMPLES);
+        float a = (float)(k * PCSS_GOLDEN_ANGLE) + turn;
+        /* Lateral texels per unit of depth travelled toward this point of the light. */
+        float dx = rho * cosf(a) / texel, dy = rho * sinf(a) / texel;
+        int blocked = 0;
+        float s_prev = 0.0f;
+        ray_at m_prev = m0;
+        int steps = (int)ceilf(reach * rho / texel / PCSS_RAY_STEP);
+        steps = steps < 1 ? 1 : steps;
+        for (int j = 1; j <= steps && !blocked; j++) {
+            float s = reach * (float)j / (float)steps;
+            ray_at m = ray_map(map, size, texel, bias, x + s * dx, y + s * dy, value - s);
+            /* The stored depths at either end that the ray's depth passes over this step: is
+             * that surface where the ray is at that depth? */
+            for (int e = 0; e < 2 && !blocked; e++) {
+                float c = e == 0 ? m_prev.stored : m.stored;
+                if (c >= m.value && c < m_prev.value - (j == 1 ? m_prev.tol : 0.0f)) {
+                    float sc = s_prev + (s - s_prev) * (m_prev.value - c) / (m_prev.value - m.value);
+                    ray_at mc = ray_map(map, size, texel, bias, x + sc * dx, y + sc * dy, value - sc);
+                    blocked = fabsf(mc.value - mc.stored) <= PCSS_RAY_HIT * mc.tol;
+                }
+            }
+            s_prev = s;
+            m_prev = m;
+        }
+        blocked = blocked || ray_behind(m_prev);
+        lit += !blocked;
+    }
+    return (float)lit / (float)PCSS_RAY_SAMPLES;
 }

@@ -13,6 +13,8 @@ point or spot light (KHR_lights_punctual, radiant intensity in W/sr as the engin
   soft-rNNN.gltf a 0.4 m box on a 3 m floor under a spherical light of radius 0.NN m (glTF light
                  extras.ispm.radius, issue 15), 2 m up and 0.3 m to the side: the box's shadow edge
                  at x = 0.575 has a penumbra as wide as the light is large (bench/penumbra.sh)
+  soft-spot-r015.gltf  the same under a spot light of radius 0.15 m pointing down
+  cornell-r015.gltf    the Cornell box (../cornell-box) with its light given a radius of 0.15 m
 Stdlib only; the output is committed. Run from anywhere: writes beside this file."""
 import base64, json, math, os, struct
 
@@ -193,3 +195,26 @@ for radius in (0.0, 0.05, 0.15, 0.3):
     g.light("Light", {"name": "sphere", "type": "point", "color": [1, 1, 1], "intensity": 6.0,
                       "extras": {"ispm": {"radius": radius}}}, [-0.3, 2.0, 0.0])
     g.write("soft-r%03d.gltf" % round(radius * 100))
+
+# soft-spot-r015: the soft-r015 floor and box under a spot light of radius 0.15 m at the same place,
+# pointing straight down (its cone reaches 0.5 rad at full intensity: the box's shadow edge is
+# inside it): soft shadows through a perspective map (bench/penumbra.sh).
+g = Gltf()
+white = g.material("white", (0.75, 0.75, 0.75))
+boxm = g.material("box", (0.6, 0.6, 0.65))
+g.mesh("floor", [((-1.5, -0.02, -1.5), (1.5, 0, 1.5))], white)
+g.mesh("box", [((0.0, 0.0, -0.2), (0.4, 0.4, 0.2))], boxm)
+g.light("Spot", {"name": "spot", "type": "spot", "color": [1, 1, 1], "intensity": 6.0,
+                 "spot": {"innerConeAngle": 0.5, "outerConeAngle": 0.7}, "extras": {"ispm": {"radius": 0.15}}},
+        [-0.3, 2.0, 0.0], [-math.sqrt(0.5), 0.0, 0.0, math.sqrt(0.5)])
+g.write("soft-spot-r015.gltf")
+
+# cornell-r015: the Cornell box (scenes/cornell-box/cornell-box.gltf, its slide_and_dolly animation
+# included) with its point light given a radius of 0.15 m: soft shadows where the boxes stand on
+# the floor (bench/penumbra.sh, stress-cornell-r015; docs/shadows.md).
+with open(os.path.join(HERE, "..", "cornell-box", "cornell-box.gltf")) as f:
+    cornell = json.load(f)
+cornell["extensions"]["KHR_lights_punctual"]["lights"][0]["extras"] = {"ispm": {"radius": 0.15}}
+with open(os.path.join(HERE, "cornell-r015.gltf"), "w") as f:
+    json.dump(cornell, f, indent=1)
+    f.write("\n")

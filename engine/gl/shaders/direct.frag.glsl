@@ -13,7 +13,8 @@
 // Lights: point and spot are radiant intensity I (W/sr): E = I·cosθ/d²; spot cones use the
 // KHR_lights_punctual smooth falloff; directional lights are irradiance E (W/m²).
 // Visibility: lights without a size, percentage-closer filtering (shadow_pcf.glsl); lights
-// with a size, percentage-closer soft shadows (shadow_pcss.glsl, 001 §3.4). The shadow
+// with a size, percentage-closer soft shadows or rays through the shadow map
+// (shadow_pcss.glsl, 001 §3.4; setting pcss_blocker). The shadow
 // methods are listed in engine/shadow.h.
 #define MAX_LIGHTS 8
 #define PI 3.14159265358979323846
@@ -151,7 +152,11 @@ void main()
         float vis;
         if (u_light_radius[i] > 0.0) {
             vec2 pen;
+#ifdef PCSS_RAYS
+            vis = pcss_rays_visibility(i, p, n, pen); // pcss_blocker "rays": no blocker maps
+#else
             vis = pcss_visibility(i, p, n, pen);
+#endif
             if (pen.x > widest.x)
                 widest = pen;
         } else {
