@@ -109,14 +109,16 @@ eng_listener cap_listener(cap_capture *c);
 int cap_builds_aside(const cap_capture *c);
 /* A frame whose final.display is all black (no channel of any pixel reaches
  * CAP_DISPLAY_BLACK, half of one 8-bit step) or has more than CAP_DISPLAY_CLIP_FRACTION of its
- * pixels clipped (some channel at CAP_DISPLAY_CLIPPED or above: 255 in 8 bits, what the
- * display transform's clamp to 1 gives after sRGB encoding's rounding) gets a warning:
- * printed on stderr, written as the frame record's "display_warning", shown by replay and the
- * report. cap_display_warning writes it (one line, no newline) and returns 1, or returns 0
+ * pixels clipped to white (every channel at CAP_DISPLAY_CLIPPED or above: 255 in 8 bits, what
+ * the display transform's clamp to 1 gives after sRGB encoding's rounding; a saturated colour
+ * is not white) gets a warning: printed on stderr, written as the frame record's
+ * "display_warning", shown by replay and the report. The fraction leaves room for visible
+ * emitters and their surroundings (the canonical Cornell box shows 2.7 % white at its default
+ * exposure). cap_display_warning writes it (one line, no newline) and returns 1, or returns 0
  * with out "". */
 #define CAP_DISPLAY_BLACK (0.5f / 255.0f)
 #define CAP_DISPLAY_CLIPPED (1.0f - 0.5f / 255.0f)
-#define CAP_DISPLAY_CLIP_FRACTION 0.02
+#define CAP_DISPLAY_CLIP_FRACTION 0.05
 #define CAP_DISPLAY_WARNING_MAX 200
 int cap_display_warning(const eng_buffer *display, char *out, size_t size);
 

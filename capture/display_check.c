@@ -16,12 +16,14 @@ int cap_display_warning(const eng_buffer *b, char *out, size_t size)
     size_t lit = 0, clipped = 0;
     for (size_t i = 0; i < n; i++) {
         const float *p = b->data + i * (size_t)b->channel_count;
-        float hi = p[0];
-        for (int k = 1; k < nc; k++)
+        float hi = p[0], lo = p[0];
+        for (int k = 1; k < nc; k++) {
             hi = p[k] > hi ? p[k] : hi;
+            lo = p[k] < lo ? p[k] : lo;
+        }
         if (hi >= CAP_DISPLAY_BLACK)
             lit++;
-        if (hi >= CAP_DISPLAY_CLIPPED)
+        if (lo >= CAP_DISPLAY_CLIPPED) /* white: every channel clipped (a saturated colour is not) */
             clipped++;
     }
     if (lit == 0) {

@@ -31,15 +31,16 @@ grep -q '^7 manifests, 6 run.json' "$WORK/recorded.txt" || fail "expected 7 mani
 # Every committed golden.
 $VALIDATE --find "$SRC/golden" > "$WORK/goldens.txt" || { cat "$WORK/goldens.txt"; fail "a golden does not validate"; }
 cat "$WORK/goldens.txt"
-n=$(ls -d "$SRC"/golden/*/ | wc -l)
+n=$(ls "$SRC"/golden/*/manifest.json | wc -l) # objects/ is the shared store, not a golden
 grep -q "^$n manifests" "$WORK/goldens.txt" || fail "expected $n golden manifests"
 
 # What the other end-to-end tests recorded (those that ran before this one; CTest orders them
-# first). e2e_inputs' runs are hostile by design; fuzz corpora are not runs.
+# first). The runs of e2e_inputs, e2e_hostile and e2e_goldens are hostile or tampered by design;
+# fuzz corpora are not runs.
 others=()
 for d in "$(dirname "$WORK")"/*.work; do
   case "$(basename "$d")" in
-    e2e_manifest_schema.work|e2e_inputs.work|fuzz_smoke.work) ;;
+    e2e_manifest_schema.work|e2e_inputs.work|e2e_hostile.work|e2e_goldens.work|fuzz_smoke.work) ;;
     *) [ -d "$d" ] && others+=("$d") ;;
   esac
 done
@@ -60,7 +61,8 @@ broken() {  # broken NAME PYTHON-EXPRESSION-ON-m
   [ $? -eq 1 ] || { cat "$WORK/broken/$1.txt"; fail "a manifest with $1 validates"; }
 }
 broken "no complete flag" "del m['complete']"
-broken "another format version" "m['format_version'] = 2"
+broken "another format version" "m['format_version'] = 3"
+broken "format 2 without an object store" "m['format_version'] = 2"
 broken "a short digest" "m['frames'][0]['buffers'][0]['digest'] = 'abc'"
 broken "a buffer without channels" "m['frames'][0]['buffers'][1]['channels'] = []"
 broken "a frame file elsewhere" "m['frames'][1]['file'] = '../000001.exr'"

@@ -1532,8 +1532,8 @@ START_TEST(test_nonfinite_counts)
 }
 END_TEST
 
-/* cap_display_warning: all black (every channel under half an 8-bit step), clipped (over 2%
- * of the pixels at 8-bit white in some channel), and neither at the limits. */
+/* cap_display_warning: all black (every channel under half an 8-bit step), clipped (over 5%
+ * of the pixels at 8-bit white in every channel), and neither at the limits. */
 START_TEST(test_display_warning)
 {
     static const char *const ch[] = {"R", "G", "B"};
@@ -1548,12 +1548,15 @@ START_TEST(test_display_warning)
     px[5] = 1.0f / 255.0f; /* one pixel lit: not black */
     ck_assert_int_eq(cap_display_warning(&b, msg, sizeof msg), 0);
     ck_assert_str_eq(msg, "");
-    px[3 * 10 + 1] = 1.0f; /* 2 of 100 pixels clipped: exactly 2%, no warning */
-    px[3 * 20 + 2] = 0.99999994f;
+    for (int i = 10; i < 20; i++) /* 10 saturated red pixels: a colour, not white */
+        px[3 * i] = 1.0f;
     ck_assert_int_eq(cap_display_warning(&b, msg, sizeof msg), 0);
-    px[3 * 30] = 1.0f; /* 3%: a warning that says how many */
+    for (int i = 30; i < 35; i++) /* 5 of 100 pixels white: exactly 5%, no warning */
+        px[3 * i] = px[3 * i + 1] = px[3 * i + 2] = i == 34 ? 0.99999994f : 1.0f;
+    ck_assert_int_eq(cap_display_warning(&b, msg, sizeof msg), 0);
+    px[3 * 40] = px[3 * 40 + 1] = px[3 * 40 + 2] = 1.0f; /* 6%: a warning that says how many */
     ck_assert_int_eq(cap_display_warning(&b, msg, sizeof msg), 1);
-    ck_assert_msg(strstr(msg, "3.0% of its pixels clipped"), "%s", msg);
+    ck_assert_msg(strstr(msg, "6.0% of its pixels clipped"), "%s", msg);
 }
 END_TEST
 
