@@ -247,7 +247,7 @@ static void trace_tree(const eye_tracer *t, spec_ray *stack, int top, uint32_t s
         }
         if ((float)r.bounce > *depth)
             *depth = (float)r.bounce;
-        scn_material hm = eng_material_of(scene, h.material);
+        scn_material hm = eng_material_at(scene, &h);
         const float hwi[3] = {-r.dir[0], -r.dir[1], -r.dir[2]};
         for (int c = 0; c < 3 && emit; c++) /* an emitter seen in the mirror (not a light source) */
             radiance[c] += r.thr[c] * (hm.emissive[c] * h.emissive_tex[c]);
