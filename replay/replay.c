@@ -449,6 +449,7 @@ static eng_result walk(const rep_options *o, const char *report_dir, rep_report 
     r->frames = run->frame_count;
     r->buffers_per_frame = run->frames[0].buffer_count;
     rep_report_display_warnings(r, run, gold);
+    rep_report_tol_warnings(r, use, gold);
     if (gold) {
         if (gold->frame_count > r->frames)
             r->frames = gold->frame_count;

@@ -146,6 +146,43 @@ START_TEST(block_keys_parsed)
 }
 END_TEST
 
+/* A tolerance rule whose pattern names no buffer of the golden judges nothing: one warning line
+ * per such rule, naming the file and the pattern, in the report model (text, JSON, HTML show it). */
+START_TEST(tolerance_rules_matching_nothing)
+{
+    rep_tolerances *t = NULL;
+    eng_error err = {{0}};
+    const char *j = "{\"buffers\": [{\"match\": \"gbuffer.*\", \"fail\": 0.1}, {\"match\": \"shadow.*\", \"fail\": 0.1},"
+                    " {\"match\": \"final.display\", \"fail\": 0.1}]}";
+    ck_assert_int_eq(rep_tol_parse("tol.json", j, strlen(j), &t, &err), ENG_OK);
+    rep_buffer_info b0[2], b1[1];
+    memset(b0, 0, sizeof b0);
+    memset(b1, 0, sizeof b1);
+    b0[0].name = "gbuffer.albedo";
+    b0[1].name = "direct.radiance";
+    b1[0].name = "final.display"; /* a rule matched in a later frame only still matches */
+    rep_frame_info frames[2];
+    memset(frames, 0, sizeof frames);
+    frames[0].buffer_count = 2;
+    frames[0].buffers = b0;
+    frames[1].buffer_count = 1;
+    frames[1].buffers = b1;
+    rep_run gold;
+    memset(&gold, 0, sizeof gold);
+    gold.frame_count = 2;
+    gold.frames = frames;
+    rep_report r;
+    memset(&r, 0, sizeof r);
+    rep_report_tol_warnings(&r, t, &gold);
+    ck_assert_int_eq(r.tol_warning_count, 1);
+    ck_assert_str_eq(r.tol_warnings[0], "tol.json: rule \"shadow.*\" matches no buffer of the golden");
+    rep_report_tol_warnings(&r, t, NULL); /* no golden: nothing to judge against */
+    ck_assert_int_eq(r.tol_warning_count, 1);
+    rep_report_free(&r);
+    rep_tol_free(t);
+}
+END_TEST
+
 static rep_expectations *expect_parse(const char *json, eng_result want)
 {
     rep_expectations *x = NULL;
@@ -494,6 +531,7 @@ int main(void)
     tcase_add_test(tc, block_partial_edge);
     tcase_add_test(tc, block_alignment_and_floor);
     tcase_add_test(tc, block_keys_parsed);
+    tcase_add_test(tc, tolerance_rules_matching_nothing);
     tcase_add_test(tc, expectations_parsed_and_validated);
     tcase_add_test(tc, expectations_applied);
     tcase_add_test(tc, worst_block_in_every_format);

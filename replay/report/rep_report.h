@@ -100,7 +100,17 @@ typedef struct rep_report {
     rep_expect_outcome *expect; /* owned: expectations in force, or NULL (no file) */
     int display_warning_count;
     rep_display_warning *display_warnings; /* owned: run's, then golden's, frame order */
+    /* Rules of the tolerance file in use that name no buffer of the golden (stale or mistyped:
+     * they judge nothing), one line each naming the file and the pattern; they do not change
+     * the verdict. */
+    int tol_warning_count;
+    char **tol_warnings; /* owned */
 } rep_report;
+
+/* Adds to r one tolerance warning per rule of t whose pattern matches no buffer name of any
+ * frame of gold (the cross-renderer section is judged only when t is it). */
+struct rep_tolerances;
+void rep_report_tol_warnings(rep_report *r, const struct rep_tolerances *t, const rep_run *gold);
 
 /* Collects the display warnings of both runs' frame records into r (gold may be NULL). */
 void rep_report_display_warnings(rep_report *r, const rep_run *run, const rep_run *gold);

@@ -916,6 +916,11 @@ static void summary(rep_sb *sb, const page *pg, size_t listed)
         esc(sb, r->display_warnings[i].text);
         rep_sb_printf(sb, "</dd>");
     }
+    for (int i = 0; i < r->tol_warning_count; i++) {
+        rep_sb_printf(sb, "<dt>tolerance warning</dt><dd class=\"warn\">");
+        esc(sb, r->tol_warnings[i]);
+        rep_sb_printf(sb, "</dd>");
+    }
     if (r->golden_dir && r->exit != REP_UNREADABLE) {
         rep_sb_printf(sb, "<dt>first digest difference</dt><dd>");
         if (r->digest_frame >= 0) {

@@ -16,6 +16,7 @@
 #include "rep_stab.h" /* rep_stab_report_free, the stability verdict's count */
 #include "rep_util.h"
 
+#include <fnmatch.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -50,6 +51,22 @@ void rep_report_display_warnings(rep_report *r, const rep_run *run, const rep_ru
         }
 }
 
+void rep_report_tol_warnings(rep_report *r, const rep_tolerances *t, const rep_run *gold)
+{
+    for (int i = 0; t && gold && i < t->rule_count; i++) {
+        int found = 0;
+        for (int f = 0; f < gold->frame_count && !found; f++)
+            for (int b = 0; b < gold->frames[f].buffer_count && !found; b++)
+                found = fnmatch(t->rules[i].match, gold->frames[f].buffers[b].name, 0) == 0;
+        if (found)
+            continue;
+        r->tol_warnings = rep_xrealloc(r->tol_warnings, (size_t)(r->tol_warning_count + 1) * sizeof *r->tol_warnings);
+        r->tol_warnings[r->tol_warning_count++] =
+            rep_xprintf("%s: rule \"%s\" matches no buffer of the golden", t->path ? t->path : "tolerances",
+                        t->rules[i].match);
+    }
+}
+
 void rep_report_free(rep_report *r)
 {
     for (size_t i = 0; i < r->count; i++) {
@@ -62,6 +79,9 @@ void rep_report_free(rep_report *r)
     for (int i = 0; i < r->display_warning_count; i++)
         free(r->display_warnings[i].text);
     free(r->display_warnings);
+    for (int i = 0; i < r->tol_warning_count; i++)
+        free(r->tol_warnings[i]);
+    free(r->tol_warnings);
     free(r->digest_buffer);
     free(r->tol_path);
     free(r->run_renderer);

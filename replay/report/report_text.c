@@ -55,6 +55,8 @@ char *rep_report_text(const rep_report *r, int quiet)
             rep_sb_printf(&sb, "        display warning: %s frame %d: %s\n",
                           r->display_warnings[i].golden ? "golden" : "run", r->display_warnings[i].frame,
                           r->display_warnings[i].text);
+        for (int i = 0; i < r->tol_warning_count; i++)
+            rep_sb_printf(&sb, "        tolerance warning: %s\n", r->tol_warnings[i]);
         if (r->golden_dir && r->exit != REP_UNREADABLE) {
             if (r->digest_frame >= 0)
                 rep_sb_printf(&sb, "        first digest difference (manifests): frame %d %s (%s)\n", r->digest_frame,
@@ -307,6 +309,11 @@ char *rep_report_json(const rep_report *r)
             cJSON_AddStringToObject(o, "warning", r->display_warnings[i].text);
             cJSON_AddItemToArray(dws, o);
         }
+    }
+    if (r->tol_warning_count) {
+        cJSON *tws = cJSON_AddArrayToObject(root, "tolerance_warnings");
+        for (int i = 0; i < r->tol_warning_count; i++)
+            cJSON_AddItemToArray(tws, cJSON_CreateString(r->tol_warnings[i]));
     }
     cJSON *counts = cJSON_AddObjectToObject(root, "counts");
     size_t cnt[REP_V_COUNT] = {0};
