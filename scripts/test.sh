@@ -32,6 +32,8 @@ if [ "${SANITIZE:-1}" != 0 ]; then
   # code test_viewer covers; under ASan its screenshots race the slower first frame),
   # e2e_stability (25 stress sequences through the same record/replay code e2e_regression and
   # the method e2e tests run here; 145 s under ASan, which would take the command past 20 min),
-  # e2e_slurm (a second Slurm cluster for the same record and merge code that e2e_cli runs here).
-  (cd "$SAN_DIR" && CRASH_KILLS=2 ctest --output-on-failure --timeout 900 -j"$JOBS" -E 'fuzz_smoke|memcheck|e2e_viewer|e2e_stability|e2e_slurm' "$@")
+  # e2e_slurm (a second Slurm cluster for the same record and merge code that e2e_cli runs here),
+  # e2e_faults (it preloads its fault library, and ASan's runtime must come first in the list of
+  # initial libraries; e2e_hostile runs the same failing writes here: full disk, interrupted swaps).
+  (cd "$SAN_DIR" && CRASH_KILLS=2 ctest --output-on-failure --timeout 900 -j"$JOBS" -E 'fuzz_smoke|memcheck|e2e_viewer|e2e_stability|e2e_slurm|e2e_faults' "$@")
 fi
