@@ -74,20 +74,6 @@ static eng_result verify_run(const char *run_dir, rep_run **out, eng_error *err)
     return eng_fail(err, ENG_ERR_INVALID, "%s", why.msg);
 }
 
-/* Creates the parent folders of path (path names a file). */
-static eng_result make_parent(const char *path, eng_error *err)
-{
-    char *dir = rep_xstrdup(path);
-    char *slash = strrchr(dir, '/');
-    eng_result r = ENG_OK;
-    if (slash && slash != dir) {
-        *slash = 0;
-        r = rep_mkdirs(dir, err);
-    }
-    free(dir);
-    return r;
-}
-
 /* The golden's frames into tmp: as objects (format 2) in the shared store above the golden
  * (rep_store_find) or in the golden's own objects/ when it has one, else as ZIP frame files. */
 static eng_result build_tmp(const rep_run *run, const char *golden, const char *tol_from, const char *tmp,
@@ -126,7 +112,7 @@ static eng_result build_tmp(const rep_run *run, const char *golden, const char *
         for (int i = 0; i < run->frame_count && r == ENG_OK; i++) {
             char *dst = rep_path_join(tmp, run->frames[i].file);
             int rewritten = 0;
-            r = make_parent(dst, err);
+            r = rep_make_parent(dst, err);
             if (r == ENG_OK)
                 r = cap_recompress_exr(run->frames[i].path, dst, CAP_COMPRESSION_ZIP, &rewritten, err);
             if (r == ENG_OK && !rewritten)
@@ -329,7 +315,7 @@ eng_result rep_bless_reviewed(const rep_bless_options *o, FILE *summary, rep_ble
     }
     rep_run *run = NULL;
     eng_lock lock;
-    eng_result r = make_parent(golden, err);
+    eng_result r = rep_make_parent(golden, err);
     if (r == ENG_OK)
         r = eng_lock_take(golden, "ispm bless", &lock, err);
     else

@@ -75,8 +75,7 @@ char *rep_store_find(const char *golden, char **rel)
     return found;
 }
 
-/* Creates the parent folders of path (path names a file or folder). */
-static eng_result make_parent(const char *path, eng_error *err)
+eng_result rep_make_parent(const char *path, eng_error *err)
 {
     char *dir = rep_xstrdup(path);
     char *slash = strrchr(dir, '/');
@@ -97,7 +96,7 @@ eng_result rep_swap_in(const char *golden, const char *tmp, eng_error *err)
     if (slash)
         slash[slash == parent ? 1 : 0] = 0;
     int had_old = rep_is_dir(golden);
-    eng_result r = had_old ? rep_remove_tree(old, err) : make_parent(golden, err);
+    eng_result r = had_old ? rep_remove_tree(old, err) : rep_make_parent(golden, err);
     if (r == ENG_OK && had_old && rename(golden, old) != 0)
         r = eng_fail(err, ENG_ERR_IO, "%s: cannot move the old golden aside: %s", golden, strerror(errno));
     if (r == ENG_OK && rename(tmp, golden) != 0) {

@@ -13,6 +13,9 @@
  * files; returns r->exit. */
 rep_exit rep_replay_report(const rep_options *o, rep_report *r, eng_error *err);
 
+/* Creates the parent folders of path (path names a file or folder). */
+eng_result rep_make_parent(const char *path, eng_error *err);
+
 /* golden_store.c: moves the finished tmp folder into golden's place (the old golden aside, then
  * removed), so a reader sees the old golden or the new one. */
 eng_result rep_swap_in(const char *golden, const char *tmp, eng_error *err);

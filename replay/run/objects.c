@@ -129,18 +129,6 @@ static void rename_channels(rep_part *p, const rep_buffer_info *b)
     }
 }
 
-static int same_names(const rep_part *p, const rep_buffer_info *b)
-{
-    for (int c = 0; c < b->channel_count; c++) {
-        int found = 0;
-        for (int k = 0; k < p->channel_count && !found; k++)
-            found = strcmp(p->channels[k], b->channels[c]) == 0;
-        if (!found)
-            return 0;
-    }
-    return 1;
-}
-
 /* rep_parts_check for an object: one part of the buffer's size and channel count. */
 static eng_result check_head(void *user, const char *path, const rep_part *heads, int count, eng_error *err)
 {
@@ -181,7 +169,7 @@ eng_result rep_object_read(const char *store, const rep_buffer_info *b, const ch
     if (r == ENG_OK) {
         *out = parts[0];
         memset(&parts[0], 0, sizeof parts[0]);
-        if (!same_names(out, b))
+        if (!rep_run_same_channels(out, b))
             rename_channels(out, b);
         free(out->name);
         out->name = rep_xstrdup(b->name);
@@ -244,7 +232,7 @@ void rep_object_cache_free(struct rep_object_cache *c)
 static int serves(const rep_part *p, const char *d, const rep_buffer_info *b)
 {
     return strcmp(d, b->digest) == 0 && p->width == b->width && p->height == b->height &&
-           p->channel_count == b->channel_count && same_names(p, b);
+           p->channel_count == b->channel_count && rep_run_same_channels(p, b);
 }
 
 eng_result rep_objects_read_frame(const rep_run *run, int frame, rep_part **out, eng_error *err)
@@ -291,7 +279,7 @@ eng_result rep_objects_read_frame(const rep_run *run, int frame, rep_part **out,
         }
     for (int j = 0; j < n && r == ENG_OK; j++)
         if (same_as[j] >= 0) {
-            if (same_names(&parts[same_as[j]], &f->buffers[j]))
+            if (rep_run_same_channels(&parts[same_as[j]], &f->buffers[j]))
                 copy_part(&parts[same_as[j]], &f->buffers[j], &parts[j]);
             else
                 r = rep_object_read(run->objects_dir, &f->buffers[j], run->manifest_path, &parts[j], err);
@@ -308,7 +296,7 @@ eng_result rep_objects_read_frame(const rep_run *run, int frame, rep_part **out,
             for (int k = 0; k < next->buffer_count && !again; k++)
                 again = strcmp(next->buffers[k].digest, f->buffers[j].digest) == 0;
             for (int k = 0; k < kept && again; k++)
-                again = strcmp(digests[k], f->buffers[j].digest) != 0 || !same_names(&keep[k], &f->buffers[j]);
+                again = strcmp(digests[k], f->buffers[j].digest) != 0 || !rep_run_same_channels(&keep[k], &f->buffers[j]);
             if (again) {
                 copy_part(&parts[j], &f->buffers[j], &keep[kept]);
                 memcpy(digests[kept++], f->buffers[j].digest, 40);
