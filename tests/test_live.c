@@ -12,13 +12,14 @@
 #include <string.h>
 #include <unistd.h>
 
+#include "rep.h"
 #include "rep_run.h"
 #include "rep_util.h"
 #include "view_model.h"
 
 #define GOLDEN ISPM_SOURCE_DIR "/golden/stress-photons-1k"
 
-static char g_tmp[4096];
+static char g_tmp[4096], g_src[4096];
 static cJSON *g_manifest;
 
 static void setup(void)
@@ -26,13 +27,26 @@ static void setup(void)
     const char *base = getenv("TMPDIR");
     snprintf(g_tmp, sizeof g_tmp, "%s/ispm-test-live-XXXXXX", base && base[0] ? base : "/tmp");
     ck_assert_ptr_nonnull(mkdtemp(g_tmp));
+    /* The golden written out as frame files (it may store its buffers as objects): the frames
+     * a recording would land. */
+    snprintf(g_src, sizeof g_src, "%s/ispm-test-live-src-XXXXXX", base && base[0] ? base : "/tmp");
+    ck_assert_ptr_nonnull(mkdtemp(g_src));
+    char *src = rep_path_join(g_src, "golden");
+    FILE *out = tmpfile();
+    ck_assert_ptr_nonnull(out);
+    eng_error uerr;
+    ck_assert_msg(rep_golden_unpack(GOLDEN, src, out, &uerr) == ENG_OK, "%s", uerr.msg);
+    fclose(out);
+    free(src);
     char *frames = rep_path_join(g_tmp, "frames");
     eng_error err;
     ck_assert_int_eq(rep_mkdirs(frames, &err), ENG_OK);
     free(frames);
     char *text = NULL;
     size_t len = 0;
-    ck_assert_int_eq(eng_read_file(GOLDEN "/manifest.json", 1 << 24, &text, &len, &err), ENG_OK);
+    char *manifest = rep_path_join(g_src, "golden/manifest.json");
+    ck_assert_int_eq(eng_read_file(manifest, 1 << 24, &text, &len, &err), ENG_OK);
+    free(manifest);
     g_manifest = cJSON_ParseWithLength(text, len);
     free(text);
     ck_assert_ptr_nonnull(g_manifest);
@@ -42,6 +56,7 @@ static void teardown(void)
 {
     cJSON_Delete(g_manifest);
     rep_remove_tree(g_tmp, NULL);
+    rep_remove_tree(g_src, NULL);
 }
 
 static void put(const char *rel, const char *text)
@@ -70,9 +85,11 @@ static void land_exr(int i)
 {
     char rel[64];
     snprintf(rel, sizeof rel, "frames/%06d.exr", i);
-    char *src = rep_path_join(GOLDEN, rel), *dst = rep_path_join(g_tmp, rel);
+    char *golden = rep_path_join(g_src, "golden");
+    char *src = rep_path_join(golden, rel), *dst = rep_path_join(g_tmp, rel);
     eng_error err;
     ck_assert_int_eq(rep_copy_file(src, 0, dst, &err), ENG_OK);
+    free(golden);
     free(src);
     free(dst);
 }
