@@ -12,6 +12,9 @@
 #   4. replay of a cornell-box-ci run against the golden as objects vs the same golden as frame
 #      files (ispm golden unpack), with idiff -a over the same EXR pairs as in bench/perf.sh,
 #      alternated RUNS times (default 3)                                   goal: objects ≤ 1.0× files
+#   5. (only when ROWS names it) what codecs make of the objects: ZIP level 9 as stored, PIZ and
+#      no compression through oiiotool, and xz -9e over the uncompressed EXR, on every
+#      SAMPLE-th object in name order (default 7): how far lossless storage can shrink golden/
 #
 # usage: bench/goldens-size.sh [OUTDIR]   (from the repository root; ISPM=path/to/ispm,
 #        ROWS=1234 picks rows, RUNS=N, ATRIUM_RUNS=N, COMPRESSION=none|zip|piz|... for row 3)
@@ -22,6 +25,7 @@ ISPM=${ISPM:-build/cli/ispm}
 RUNS=${RUNS:-3}
 ATRIUM_RUNS=${ATRIUM_RUNS:-1}
 ROWS=${ROWS:-1234}
+SAMPLE=${SAMPLE:-7}
 COMPRESSION=${COMPRESSION:-}
 OUT=${1:-$(mktemp -d /tmp/ispm-goldens-size.XXXXXX)}
 TOP=$(pwd)
@@ -147,4 +151,20 @@ if echo "$ROWS" | grep -q 4; then
     printf '  replay vs golden as frame files: %s s (runs:%s; CPU %s s)\n' "$F" "$tf" "$(echo "$cf" | median)"
     [ -n "$ti" ] && printf '  idiff -a over the same pairs:    %s s (runs:%s)\n' "$(echo "$ti" | median)" "$ti"
     printf '  objects / frame files: %sx (goal <= 1.0x: no slower)\n' "$(ratio "$O" "$F")"
+fi
+if echo "$ROWS" | grep -q 5; then
+    echo "5. the objects under other codecs (every ${SAMPLE}th object of golden/objects)"
+    command -v oiiotool > /dev/null && command -v xz > /dev/null ||
+        { echo "goldens-size.sh: row 5 needs oiiotool and xz" >&2; exit 2; }
+    z=0 p=0 n=0 x=0 k=0 i=0
+    for f in $(find golden/objects -name '*.exr' | LC_ALL=C sort); do
+        i=$((i + 1))
+        [ $(((i - 1) % SAMPLE)) -eq 0 ] || continue
+        oiiotool "$f" --compression piz -o "$OUT/o-piz.exr" && oiiotool "$f" --compression none -o "$OUT/o-none.exr"
+        z=$((z + $(bytes "$f"))) p=$((p + $(bytes "$OUT/o-piz.exr"))) n=$((n + $(bytes "$OUT/o-none.exr")))
+        x=$((x + $(xz -9e -c "$OUT/o-none.exr" | wc -c))) k=$((k + 1))
+    done
+    printf '  %s objects: ZIP-9 (as stored) %s, PIZ %s, none %s, xz -9e of none %s\n' "$k" "$(mb "$z")" "$(mb "$p")" \
+        "$(mb "$n")" "$(mb "$x")"
+    printf '  against ZIP-9: PIZ %sx, none %sx, xz -9e %sx\n' "$(ratio "$p" "$z")" "$(ratio "$n" "$z")" "$(ratio "$x" "$z")"
 fi
