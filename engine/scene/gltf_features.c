@@ -4,7 +4,8 @@
  * file may pass and render nothing, and a required extension that changes how buffers or
  * images are stored (KHR_texture_basisu, a compression) fails as some missing URI
  * or undecodable image. Looking at asset and extensionsRequired first makes the refusal name
- * the feature (glTF §3.12: a client that lacks a required extension must refuse the asset). */
+ * the feature (glTF §3.12: a client that lacks a required extension must refuse the asset).
+ * A file that names no mesh in any node is refused as having no geometry here too. */
 #include "gltf_features.h"
 
 #include <cjson/cJSON.h>
@@ -58,6 +59,23 @@ static int name_keyed(const cJSON *root)
     return 0;
 }
 
+/* 0 when no node names a mesh, or there is no mesh with a primitive: the file cannot draw
+ * anything, whatever its buffers hold (the glTF validator's test files often have buffers
+ * without data and no mesh), so the refusal says so before tinygltf fails on the buffers.
+ * Anything finer (a mesh of POINTS only, a scene without that node) is gltf_load.c's
+ * check_geometry, after loading. */
+static int draws_anything(const cJSON *root)
+{
+    const cJSON *meshes = cJSON_GetObjectItemCaseSensitive(root, "meshes");
+    const cJSON *nodes = cJSON_GetObjectItemCaseSensitive(root, "nodes");
+    int primitives = 0, named = 0;
+    for (const cJSON *m = cJSON_IsArray(meshes) ? meshes->child : NULL; m && !primitives; m = m->next)
+        primitives = cJSON_GetArraySize(cJSON_GetObjectItemCaseSensitive(m, "primitives")) > 0;
+    for (const cJSON *n = cJSON_IsArray(nodes) ? nodes->child : NULL; n && !named; n = n->next)
+        named = cJSON_GetObjectItemCaseSensitive(n, "mesh") != NULL;
+    return primitives && named;
+}
+
 static eng_result check_json(const char *path, const cJSON *root, eng_error *err)
 {
     const cJSON *asset = cJSON_GetObjectItemCaseSensitive(root, "asset");
@@ -91,6 +109,8 @@ static eng_result check_json(const char *path, const cJSON *root, eng_error *err
         if (cJSON_IsString(e) && !gltf_extension_supported(e->valuestring))
             return eng_fail(err, ENG_ERR_UNSUPPORTED, "%s: extensionsRequired: %.120s is not supported", path,
                             e->valuestring);
+    if (cJSON_IsObject(asset) && !draws_anything(root)) /* without asset, not a glTF: tinygltf says so */
+        return eng_fail(err, ENG_ERR_INVALID, "%s: no geometry: no node of the scene draws a triangle", path);
     return ENG_OK;
 }
 
