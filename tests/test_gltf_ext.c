@@ -192,8 +192,8 @@ START_TEST(indices_without_buffer_view_are_zeros)
 }
 END_TEST
 
-/* No node names a mesh: "no geometry" before tinygltf fails on buffers without data (as the
- * glTF validator's accessor and buffer test files have). */
+/* No node names a mesh: the refusal says "no geometry" first, then what tinygltf failed on
+ * (buffers without data, as the glTF validator's accessor and buffer test files have). */
 START_TEST(no_mesh_refused_before_buffers)
 {
     const char *j = "{\"asset\":{\"version\":\"2.0\"},\"accessors\":[{\"bufferView\":0,\"componentType\":5126,"
@@ -202,7 +202,9 @@ START_TEST(no_mesh_refused_before_buffers)
     scn_scene *s;
     eng_error err;
     ck_assert_int_eq(load(j, &s, &err), ENG_ERR_INVALID);
-    ck_assert_msg(strstr(err.msg, "test.gltf: no geometry"), "%s", err.msg);
+    ck_assert_msg(strstr(err.msg, "test.gltf: no geometry: no node of the scene draws a triangle; the file also "
+                                  "fails to load: an empty URI"), "%s", err.msg);
+    ck_assert_ptr_null(strchr(err.msg, '\n'));
     /* a node with the mesh: the buffer is the error */
     const char *k = "{\"asset\":{\"version\":\"2.0\"},\"nodes\":[{\"mesh\":0}],\"meshes\":[{\"primitives\":"
                     "[{\"attributes\":{\"POSITION\":0}}]}],\"accessors\":[{\"bufferView\":0,\"componentType\":5126,"

@@ -5,7 +5,8 @@
  * images are stored (KHR_texture_basisu, a compression) fails as some missing URI
  * or undecodable image. Looking at asset and extensionsRequired first makes the refusal name
  * the feature (glTF §3.12: a client that lacks a required extension must refuse the asset).
- * A file that names no mesh in any node is refused as having no geometry here too. */
+ * It also tells whether the file names no mesh at all, so that a file that then fails to load
+ * is refused for having no geometry first. */
 #include "gltf_features.h"
 
 #include <cjson/cJSON.h>
@@ -61,9 +62,8 @@ static int name_keyed(const cJSON *root)
 
 /* 0 when no node names a mesh, or there is no mesh with a primitive: the file cannot draw
  * anything, whatever its buffers hold (the glTF validator's test files often have buffers
- * without data and no mesh), so the refusal says so before tinygltf fails on the buffers.
- * Anything finer (a mesh of POINTS only, a scene without that node) is gltf_load.c's
- * check_geometry, after loading. */
+ * without data and no mesh). Anything finer (a mesh of POINTS only, a scene without that
+ * node) is gltf_load.c's check_geometry, after loading. */
 static int draws_anything(const cJSON *root)
 {
     const cJSON *meshes = cJSON_GetObjectItemCaseSensitive(root, "meshes");
@@ -109,13 +109,12 @@ static eng_result check_json(const char *path, const cJSON *root, eng_error *err
         if (cJSON_IsString(e) && !gltf_extension_supported(e->valuestring))
             return eng_fail(err, ENG_ERR_UNSUPPORTED, "%s: extensionsRequired: %.120s is not supported", path,
                             e->valuestring);
-    if (cJSON_IsObject(asset) && !draws_anything(root)) /* without asset, not a glTF: tinygltf says so */
-        return eng_fail(err, ENG_ERR_INVALID, "%s: no geometry: no node of the scene draws a triangle", path);
     return ENG_OK;
 }
 
-eng_result gltf_features_check(const char *path, const char *bytes, size_t len, eng_error *err)
+eng_result gltf_features_check(const char *path, const char *bytes, size_t len, int *no_mesh, eng_error *err)
 {
+    *no_mesh = 0;
     const unsigned char *b = (const unsigned char *)bytes;
     const char *json = bytes;
     size_t json_len = len;
@@ -132,6 +131,8 @@ eng_result gltf_features_check(const char *path, const char *bytes, size_t len, 
     if (!root)
         return ENG_OK;
     eng_result r = cJSON_IsObject(root) ? check_json(path, root, err) : ENG_OK;
+    /* without asset, not a glTF: tinygltf says so */
+    *no_mesh = cJSON_IsObject(cJSON_GetObjectItemCaseSensitive(root, "asset")) && !draws_anything(root);
     cJSON_Delete(root);
     return r;
 }

@@ -2055,9 +2055,18 @@ static eng_result load_bytes(const char *path, const char *bytes, size_t len, in
     /* Depth, trailing text and counts first (bounded parsing), then the features by name. */
     if ((r = scn_gltf_precheck(path, bytes, len, &max_external, err)) != ENG_OK)
         return r;
-    if ((r = gltf_features_check(path, bytes, len, err)) != ENG_OK)
+    int no_mesh = 0;
+    if ((r = gltf_features_check(path, bytes, len, &no_mesh, err)) != ENG_OK)
         return r;
     gls_status st = gls_load(path, bytes, len, max_external, &m, msg, sizeof msg);
+    if (st != GLS_OK && no_mesh) {
+        /* What matters first is that nothing would be drawn; what else is wrong follows. */
+        static const char first[] = "no geometry: no node of the scene draws a triangle; the file also fails to load: ";
+        size_t n = strlen(msg), room = sizeof msg - sizeof first; /* gls_load ends msg with a NUL */
+        memmove(msg + sizeof first - 1, msg, n < room ? n : room);
+        msg[sizeof first - 1 + (n < room ? n : room)] = 0;
+        memcpy(msg, first, sizeof first - 1);
+    }
     if (st != GLS_OK) {
         switch (st) {
         case GLS_ERR_IO: return eng_fail(err, ENG_ERR_IO, "%s: %s", path, msg);
