@@ -205,6 +205,16 @@ START_TEST(no_mesh_refused_before_buffers)
     ck_assert_msg(strstr(err.msg, "test.gltf: no geometry: no node of the scene draws a triangle; the file also "
                                   "fails to load: an empty URI"), "%s", err.msg);
     ck_assert_ptr_null(strchr(err.msg, '\n'));
+    /* the same after tinygltf, for what the loader checks (a camera's yfov) */
+    const char *c = "{\"asset\":{\"version\":\"2.0\"},\"cameras\":[{\"type\":\"perspective\",\"perspective\":"
+                    "{\"yfov\":4,\"znear\":0.1}}]}";
+    ck_assert_int_eq(load(c, &s, &err), ENG_ERR_INVALID);
+    ck_assert_msg(strstr(err.msg, "test.gltf: no geometry: no node of the scene draws a triangle; the file also "
+                                  "fails to load: camera 0: yfov 4"), "%s", err.msg);
+    /* nothing else wrong: no geometry alone */
+    ck_assert_int_eq(load("{\"asset\":{\"version\":\"2.0\"},\"nodes\":[{}]}", &s, &err), ENG_ERR_INVALID);
+    ck_assert_msg(strstr(err.msg, "test.gltf: no geometry: no node of the scene draws a triangle") &&
+                      !strstr(err.msg, "also"), "%s", err.msg);
     /* a node with the mesh: the buffer is the error */
     const char *k = "{\"asset\":{\"version\":\"2.0\"},\"nodes\":[{\"mesh\":0}],\"meshes\":[{\"primitives\":"
                     "[{\"attributes\":{\"POSITION\":0}}]}],\"accessors\":[{\"bufferView\":0,\"componentType\":5126,"

@@ -2043,6 +2043,20 @@ static eng_result build(loader *L, const char *bytes, size_t len)
     return compute_digest(L, bytes, len);
 }
 
+/* A file that names no mesh and fails to load for another reason: what matters first is that
+ * nothing would be drawn, what else is wrong follows. Rewrites the reason (NUL-terminated, in
+ * size bytes) in place, cut where it no longer fits; a reason that is "no geometry" stays. */
+static void no_geometry_first(char *reason, size_t size)
+{
+    static const char first[] = "no geometry: no node of the scene draws a triangle; the file also fails to load: ";
+    if (size < sizeof first || strncmp(reason, "no geometry", 11) == 0)
+        return;
+    size_t n = strlen(reason), room = size - sizeof first;
+    memmove(reason + sizeof first - 1, reason, n < room ? n : room);
+    reason[sizeof first - 1 + (n < room ? n : room)] = 0;
+    memcpy(reason, first, sizeof first - 1);
+}
+
 /* Parses and validates bytes that came from path (named in messages; external buffers are
  * looked up beside it). Borrows bytes; frees nothing of the caller's. */
 static eng_result load_bytes(const char *path, const char *bytes, size_t len, int scene_index, scn_scene **out,
@@ -2059,14 +2073,8 @@ static eng_result load_bytes(const char *path, const char *bytes, size_t len, in
     if ((r = gltf_features_check(path, bytes, len, &no_mesh, err)) != ENG_OK)
         return r;
     gls_status st = gls_load(path, bytes, len, max_external, &m, msg, sizeof msg);
-    if (st != GLS_OK && no_mesh) {
-        /* What matters first is that nothing would be drawn; what else is wrong follows. */
-        static const char first[] = "no geometry: no node of the scene draws a triangle; the file also fails to load: ";
-        size_t n = strlen(msg), room = sizeof msg - sizeof first; /* gls_load ends msg with a NUL */
-        memmove(msg + sizeof first - 1, msg, n < room ? n : room);
-        msg[sizeof first - 1 + (n < room ? n : room)] = 0;
-        memcpy(msg, first, sizeof first - 1);
-    }
+    if (st != GLS_OK && no_mesh)
+        no_geometry_first(msg, sizeof msg);
     if (st != GLS_OK) {
         switch (st) {
         case GLS_ERR_IO: return eng_fail(err, ENG_ERR_IO, "%s: %s", path, msg);
@@ -2089,6 +2097,9 @@ static eng_result load_bytes(const char *path, const char *bytes, size_t len, in
     free(L.drawn);
     gls_free(m);
     if (r) {
+        size_t at = strlen(path) + 2; /* err->msg is "<path>: <reason>" */
+        if (no_mesh && err && strncmp(err->msg, path, at - 2) == 0 && strncmp(err->msg + at - 2, ": ", 2) == 0)
+            no_geometry_first(err->msg + at, sizeof err->msg - at);
         scn_destroy(s);
         return r;
     }
