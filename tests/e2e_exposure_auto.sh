@@ -6,7 +6,7 @@
 # frame 0's final.display uses them as every later frame does; the run replays against itself
 # bit-exact; record --resume reuses the recorded stops (a tampered record changes the resumed
 # frames; an untouched one gives bit-identical buffers); a shard that starts after frame 0
-# meters frame 0 and matches; an unlit floor falls back to 0 stops with one warning; any other
+# meters frame 0 and matches, and two shards merge into the whole run; an unlit floor falls back to 0 stops with one warning; any other
 # word is one line naming the key, exit 2.
 # usage: e2e_exposure_auto.sh ISPM SOURCE_DIR WORK_DIR
 set -u
@@ -120,9 +120,16 @@ for i in (2, 3):
 PY
 
 # ---- a shard after frame 0 meters frame 0 itself: the same stops and pixels
-cp "$WORK/auto.json" "$WORK/shard.json"
-record shard --frames 2-3 --overlap 0 || { cat "$WORK/shard.err"; fail "record a shard"; }
-[ "$(digests "$WORK/shard")" = "$(digests "$WORK/auto" | tail -2)" ] || fail "the shard's frames differ from the whole run's"
+shard() { # shard NAME A-B: a shard of auto.json, the frame before A written too (merge checks it)
+  "$ISPM" record "$WORK/auto.json" -o "$WORK/$1" --frames "$2" --overlap 1 --quiet > /dev/null 2> "$WORK/$1.err"
+}
+shard shard 2-3 || { cat "$WORK/shard.err"; fail "record a shard"; }
+[ "$(digests "$WORK/shard")" = "$(digests "$WORK/auto" | tail -3)" ] || fail "the shard's frames differ from the whole run's"
+shard shard0 0-1 || { cat "$WORK/shard0.err"; fail "record the first shard"; }
+"$ISPM" merge "$WORK/shard0" "$WORK/shard" -o "$WORK/merged" > "$WORK/merge.out" 2>&1 || { cat "$WORK/merge.out"; fail "merge"; }
+[ "$(digests "$WORK/merged")" = "$(digests "$WORK/auto")" ] || fail "the merged shards differ from the whole run"
+python3 -c 'import json,sys; a,b=(json.load(open(p))["settings"] for p in sys.argv[1:]); sys.exit(0 if a==b else 1)' \
+  "$WORK/auto/manifest.json" "$WORK/merged/manifest.json" || fail "the merged run records other settings"
 
 # ---- nothing lit: 0 stops, one warning (besides the black-frame warnings)
 seqf "$WORK/dark.json" '"auto"' ""
