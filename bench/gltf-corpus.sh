@@ -9,7 +9,8 @@
 # The corpus lives outside the repository: bench/gltf-corpus.list names each file as
 # "<owner>/<repo>@<commit> <path>"; CORPUS holds <owner>+<repo>/<path>, made with e.g.
 #   git clone https://github.com/<owner>/<repo> && git -C <repo> archive <commit> | tar -x -C CORPUS/<owner>+<repo>
-# usage: bench/gltf-corpus.sh ISPM CORPUS [OUTDIR]   (TIMEOUT=120 s per file, JOBS=1)
+# usage: bench/gltf-corpus.sh ISPM CORPUS [OUTDIR]   (TIMEOUT=120 s per file, JOBS=1; EXPOSURE=auto
+# or a number sets the sequences' "exposure"; LIST=FILE another list, e.g. the clipped files)
 set -u
 ISPM=$(readlink -f "$1"); CORPUS=$(readlink -f "$2"); OUT=${3:-out/gltf-corpus}
 TIMEOUT=${TIMEOUT:-120}; JOBS=${JOBS:-1}
@@ -20,10 +21,13 @@ one() { # one INDEX SOURCE PATH
   local dir="$OUT/$i" repo="${src%@*}"
   local file="$CORPUS/${repo/\//+}/$path"
   rm -rf "$dir"; mkdir -p "$dir"
-  python3 -c 'import json,sys; print(json.dumps({"scene": sys.argv[1], "frames": 1, "fps": 1,
+  python3 -c 'import json,sys; s={"scene": sys.argv[1], "frames": 1, "fps": 1,
     "resolution": [64, 48], "settings": {"shadow_map_size": 128, "photon_count": 2000, "threads": 1},
     "lights": [{"type": "directional", "direction": [-0.3, -1, -0.5], "intensity": 3}],
-    "capture": ["final.display"]}))' "$file" > "$dir/seq.json"
+    "capture": ["final.display"]}
+e = sys.argv[2]
+if e: s["settings"]["exposure"] = e if e == "auto" else float(e)
+print(json.dumps(s))' "$file" "${EXPOSURE:-}" > "$dir/seq.json"
   local t0 t1 rc
   t0=$(date +%s.%N)
   nice -n 10 timeout "$TIMEOUT" "$ISPM" record "$dir/seq.json" -o "$dir/run" --quiet > /dev/null 2> "$dir/err"
@@ -113,13 +117,18 @@ for line in open(lst):
         px = [p for row in png_pixels(d + "/display.png") for p in row] if os.path.exists(d + "/display.png") else []
         r["black"] = bool(px) and all(max(p) == 0 for p in px)
         r["clipped"] = sum(1 for p in px if max(p) == 255) / max(len(px), 1)
+        r["white"] = sum(1 for p in px if min(p) == 255) / max(len(px), 1)
+        r["exposure"] = m["settings"].get("exposure")
     rows.append(r)
 json.dump(rows, open(out + "/corpus.json", "w"), indent=1)
 loaded = [r for r in rows if r["state"] == "loaded"]
 refused = [r for r in rows if r["state"] == "refused"]
 bad = [r for r in rows if r["state"] in ("crash", "timeout")]
 black = [r for r in loaded if r["black"]]
-clipped = [r for r in loaded if r["clipped"] > 0.02]
+# clipped as the capture's warning counts it (more than 5 % of the pixels white in every channel),
+# and, as a wider net, more than 2 % with any channel at 255
+clipped = [r for r in loaded if r["white"] > 0.05]
+any_clip = [r for r in loaded if r["clipped"] > 0.02]
 silent = [r for r in black + clipped if not r["warned"]]
 print("files %d: loaded %d, refused %d, crashed or timed out %d" % (len(rows), len(loaded), len(refused), len(bad)))
 kinds = {}
@@ -128,9 +137,14 @@ for r in refused:
 for k, v in sorted(kinds.items(), key=lambda kv: -len(kv[1])):
     print("  refused, %-34s %3d  e.g. %s" % (k + ":", len(v), v[0]["why"][:150]))
 print("refusals not one line: %d" % sum(1 for r in refused if not r["one_line"]))
-print("black %d, clipped > 2%% %d, of them without a warning %d" % (len(black), len(clipped), len(silent)))
+print("black %d, clipped (> 5%% white) %d, of them without a warning %d" % (len(black), len(clipped), len(silent)))
 for r in silent:
     print("  SILENT: %s" % r["file"])
+print("any channel at 255 on > 2%% of the pixels: %d (%d of them warned)" % (len(any_clip),
+      sum(1 for r in any_clip if r["warned"])))
+for r in clipped + [r for r in any_clip if r not in clipped]:
+    print("  clipped: %s: %.1f %% white, %.1f %% any channel, exposure %s%s" % (r["file"], 100 * r["white"],
+          100 * r["clipped"], r["exposure"], ", warned" if r["warned"] else ""))
 for r in bad:
     print("  %s: %s (exit %d)" % (r["state"].upper(), r["file"], r["rc"]))
 ts = sorted(r["time"] for r in loaded)

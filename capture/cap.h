@@ -125,6 +125,10 @@ int cap_display_warning(const eng_buffer *display, char *out, size_t size);
 /* Was frame already captured (by this capture, or by the interrupted run it resumes)?
  * A resumed recording skips such frames. */
 int cap_frame_done(const cap_capture *c, int frame);
+/* The stops of `"exposure": "auto"` that a captured frame recorded (frames/NNNNNN.json
+ * "exposure"; a resumed run's too): 1 and *stops, or 0 when no captured frame has them. The
+ * manifest's "settings" gives this number for the exposure, with "exposure_auto": true. */
+int cap_recorded_exposure(const cap_capture *c, float *stops);
 
 /* The error that made a callback fail (ENG_OK if none); copies its message into err. */
 eng_result cap_status(const cap_capture *c, eng_error *err);

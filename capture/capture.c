@@ -35,6 +35,7 @@
 #include <errno.h>
 #include <fcntl.h>
 #include <fnmatch.h>
+#include <math.h>
 #include <pthread.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -87,6 +88,8 @@ typedef struct cap_frame {
     int light_count;
     eng_light_record lights[ENG_MAX_LIGHT_RECORDS];
     char display_warning[CAP_DISPLAY_WARNING_MAX]; /* cap_display_warning's line, or "" */
+    int exposure_auto; /* eng_frame_stats: the display's stops came from "exposure": "auto" */
+    float exposure;
 } cap_frame;
 
 /* A buffer of the frame in progress: its record and its pixel copy. */
@@ -651,6 +654,29 @@ int cap_builds_aside(const cap_capture *c)
     return c && c->final_dir && !c->swapped;
 }
 
+/* The stops the first captured frame with an "auto" exposure recorded (the caller holds the
+ * lock or is the only thread); 0 when none has. */
+static int recorded_exposure(const cap_capture *c, float *stops)
+{
+    for (int i = c->write_first; i <= c->write_last; i++)
+        if (c->frames[i].done && c->frames[i].exposure_auto) {
+            *stops = c->frames[i].exposure;
+            return 1;
+        }
+    return 0;
+}
+
+int cap_recorded_exposure(const cap_capture *c, float *stops)
+{
+    if (!c)
+        return 0;
+    cap_capture *m = (cap_capture *)c; /* the lock only */
+    pthread_mutex_lock(&m->lock);
+    int found = recorded_exposure(c, stops);
+    pthread_mutex_unlock(&m->lock);
+    return found;
+}
+
 int cap_frame_done(const cap_capture *c, int frame)
 {
     if (!c || frame < c->write_first || frame > c->write_last)
@@ -893,6 +919,8 @@ static int on_frame_end(void *user, const eng_frame_stats *stats)
                    : stats->light_count > ENG_MAX_LIGHT_RECORDS ? ENG_MAX_LIGHT_RECORDS : stats->light_count;
     memcpy(f->lights, stats->lights, sizeof f->lights);
     memcpy(f->display_warning, c->cur_display_warning, sizeof f->display_warning);
+    f->exposure_auto = stats->exposure_auto != 0;
+    f->exposure = stats->exposure;
     if (f->display_warning[0])
         fprintf(stderr, "ispm: warning: frame %d: %s\n", frame, f->display_warning);
     /* The pending list moves into the job; the next frame starts a new one. */
@@ -1052,6 +1080,8 @@ static cJSON *frame_json(const cap_frame *f, int index)
     jadd(o, "camera", cam);
     if (f->display_warning[0])
         jadd(o, "display_warning", jfield(f->display_warning, sizeof f->display_warning));
+    if (f->exposure_auto) /* the float's exact double: record --resume reads it back bit for bit */
+        jadd(o, "exposure", cJSON_CreateNumber((double)f->exposure));
     if (f->light_count > 0)
         jadd(o, "lights", lights_json(f));
     if (f->photons_emitted) {
@@ -1179,6 +1209,21 @@ static cJSON *manifest_json(const cap_capture *c)
         switch (d->type) {
         case ENG_SETTING_INT: jadd(st, d->key, cJSON_CreateNumber(d->get(&s))); break;
         case ENG_SETTING_FLOAT:
+            if (d->word && d->word_get(&s)) {
+                /* The engine's number once a frame recorded it ("<key>_<word>": true beside
+                 * it), the word before (run.json, written before any frame). */
+                float v;
+                if (!recorded_exposure(c, &v)) {
+                    jadd(st, d->key, jstr(d->word));
+                    break;
+                }
+                d->set(&s, v);
+                char flag[96];
+                snprintf(flag, sizeof flag, "%s_%s", d->key, d->word);
+                jadd(st, d->key, d->exact ? cJSON_CreateNumber(d->get(&s)) : jfloat((float)d->get(&s)));
+                jadd(st, flag, cJSON_CreateBool(1));
+                break;
+            }
             jadd(st, d->key, d->exact ? cJSON_CreateNumber(d->get(&s)) : jfloat((float)d->get(&s)));
             break;
         case ENG_SETTING_BOOL: jadd(st, d->key, cJSON_CreateBool(d->get(&s) != 0.0)); break;
@@ -1459,6 +1504,12 @@ static eng_result frame_from_json(const char *path, int index, const cJSON *o, c
                         sizeof f->display_warning);
     if (dw)
         snprintf(f->display_warning, sizeof f->display_warning, "%s", dw->valuestring);
+    const cJSON *ex = cJSON_GetObjectItemCaseSensitive(o, "exposure");
+    if (ex && (!cJSON_IsNumber(ex) || !(fabs(ex->valuedouble) <= ENG_EXPOSURE_MAX)))
+        return eng_fail(err, ENG_ERR_INVALID, "%s: \"exposure\" is not a number of stops within ±%g", path,
+                        ENG_EXPOSURE_MAX);
+    f->exposure_auto = ex != NULL;
+    f->exposure = ex ? (float)ex->valuedouble : 0.0f;
     eng_result lr = eng_light_records_parse(path, cJSON_GetObjectItemCaseSensitive(o, "lights"), &f->light_count,
                                      f->lights, err);
     if (lr != ENG_OK)

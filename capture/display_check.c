@@ -34,7 +34,7 @@ int cap_display_warning(const eng_buffer *b, char *out, size_t size)
     }
     if ((double)clipped > CAP_DISPLAY_CLIP_FRACTION * (double)n) {
         snprintf(out, size, "final.display has %.1f%% of its pixels clipped to white (over %.0f%%): lower the "
-                            "\"exposure\" setting or the light intensities",
+                            "\"exposure\" setting (or make it \"auto\") or the light intensities",
                  100.0 * (double)clipped / (double)n, 100.0 * CAP_DISPLAY_CLIP_FRACTION);
         return 1;
     }

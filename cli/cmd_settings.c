@@ -62,6 +62,9 @@ static void range_text(const eng_setting *d, int markdown, char *out, size_t siz
     at = strlen(out);
     if (at < size)
         snprintf(out + at, size - at, "%s", d->note);
+    at = strlen(out);
+    if (d->word && at < size)
+        snprintf(out + at, size - at, markdown ? ", or `\"%s\"`" : ", or \"%s\"", d->word);
 }
 
 int cmd_settings(int argc, char **argv)

@@ -246,6 +246,25 @@ static void shard_warmup(const eng_engine *eng, const eng_settings *s, cap_shard
     sh->overlap = overlap;
 }
 
+/* What `"exposure": "auto"` metered at frame 0 (nothing when the stops were recorded by an
+ * interrupted run or the exposure is a number): one line, a warning when frame 0 had no lit
+ * pixel and the stops fell back to 0. */
+static void report_exposure(const eng_engine *eng, const char *seq_path, int quiet)
+{
+    float stops;
+    eng_exposure_key_info in;
+    if (eng_exposure(eng, &stops, &in) != 1)
+        return;
+    if (in.counted == 0) {
+        fprintf(stderr, "ispm record: warning: %s: \"exposure\": \"auto\": frame 0 has no lit pixel to meter; "
+                        "exposure 0 stops\n", seq_path);
+    } else if (!quiet) {
+        fprintf(stderr, "ispm record: \"exposure\": \"auto\": %g stops (frame 0's log-average luminance %g over %llu "
+                        "pixels%s)\n", (double)stops, in.log_average, (unsigned long long)in.counted,
+                in.nonfinite ? ", non-finite ones left out" : "");
+    }
+}
+
 static int cmd_record(int argc, char **argv, const char *command_line)
 {
     static const struct option opts[] = {
@@ -423,6 +442,10 @@ static int cmd_record(int argc, char **argv, const char *command_line)
     }
     eng_listener l = cap_listener(cap);
     eng_add_listener(eng, &l);
+    /* Resuming an "auto" exposure: the stops the interrupted run metered at frame 0. */
+    float stops = 0.0f;
+    if (cap_recorded_exposure(cap, &stops))
+        eng_set_exposure(eng, stops);
     record_progress prog;
     int to_render = 0, write_first = shard ? sh.first - sh.overlap : 0, write_last = shard ? sh.last : seq->frame_count - 1;
     for (int i = write_first; i <= write_last; i++)
@@ -462,6 +485,7 @@ static int cmd_record(int argc, char **argv, const char *command_line)
     }
     if (!quiet)
         rep_progress_end(&prog.p);
+    report_exposure(eng, seq_path, quiet);
     /* The renderer is torn down (GL objects, the context: 20-30 ms) while the writer still
      * encodes, writes and syncs the last frame, which cap_finish waits for. */
     eng_destroy(eng);

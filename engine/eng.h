@@ -67,6 +67,18 @@ void eng_set_history_start(eng_engine *e, int first);
  * frame then depends on the frames before it. */
 int eng_stateful(const eng_engine *e);
 
+/* `"exposure": "auto"` (settings.exposure_auto): frame 0 is metered at its composite
+ * (eng_exposure_key over the pixels the eye G-buffer covers) and its display, like every later
+ * frame's, uses the stops found; a first frame other than 0 renders frame 0 first, without
+ * announcing it. eng_exposure returns 1 once frame 0 was metered (*stops gets the stops, *info
+ * the metering: counted 0 and 0 stops for a frame 0 without a lit pixel), 2 when eng_set_exposure
+ * gave the stops, 0 before either or for a numeric exposure (*stops then gets the setting).
+ * Either pointer may be NULL. */
+int eng_exposure(const eng_engine *e, float *stops, eng_exposure_key_info *info);
+/* Fixes the "auto" exposure at stops recorded by an earlier run of the same sequence (record
+ * --resume), so that frame 0 is not rendered again to meter it. No effect on a numeric exposure. */
+void eng_set_exposure(eng_engine *e, float stops);
+
 /* Is the segment from a to b blocked by scene geometry, as posed at the last rendered frame
  * (Embree occlusion query; the end points themselves are excluded by a small epsilon)?
  * Returns 1 blocked, 0 clear. Before the first frame the scene is at t = 0. */

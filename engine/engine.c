@@ -101,6 +101,11 @@ struct eng_engine {
     int silent;     /* re-rendering earlier frames for the temporal history: announce nothing */
     int history_start; /* eng_set_history_start: where a rebuilt history begins (0: frame 0) */
     int temporal_from; /* the frame the temporal history was last reset at */
+    /* `"exposure": "auto"`: settings.exposure holds the resolved stops once exposure_resolved
+     * (1: metered at frame 0's composite, exposure_info its metering; 2: eng_set_exposure). */
+    int exposure_resolved;
+    eng_exposure_key_info exposure_info;
+    float *exposure_rgb, *exposure_mask;
     int listener_count;
     eng_listener listeners[ENG_MAX_LISTENERS];
     float *world, *prev_world;
@@ -439,6 +444,8 @@ void eng_destroy(eng_engine *e)
     free(e->fs.draws);
     free(e->fs.lights);
     free(e->scratch);
+    free(e->exposure_rgb);
+    free(e->exposure_mask);
     free(e);
 }
 
@@ -1296,6 +1303,48 @@ static void history_reset(eng_engine *e, int from)
     e->temporal_from = from;
 }
 
+/* `"exposure": "auto"` at frame 0's composite (ran with settings.exposure 0): meters the linear
+ * radiance over the pixels the eye G-buffer covers (position.w is 1 on a surface, 0 on the
+ * background; eng_exposure_key), fixes settings.exposure at the result for this and every later
+ * frame, and runs the composite again so that frame 0's display uses it too (its radiance
+ * attachment is the same bits: the exposure only enters the display transform). */
+static const glu_target *meter_exposure(eng_engine *e, const glu_target *gb, const glu_target *comp, GLuint direct,
+                                        GLuint indirect, GLuint specular, GLuint emission, GLuint translucent)
+{
+    size_t n = (size_t)comp->width * (size_t)comp->height;
+    if (!e->exposure_rgb) {
+        e->exposure_rgb = eng_xcalloc(3 * n, sizeof(float));
+        e->exposure_mask = eng_xcalloc(n, sizeof(float));
+    }
+    static const int rgb[3] = {0, 1, 2}, w[1] = {3};
+    glu_read(comp, 0, 0, 3, rgb, e->exposure_rgb);
+    glu_read(gb, 0, 0, 1, w, e->exposure_mask);
+    eng_exposure_key(e->exposure_rgb, e->exposure_mask, n, &e->exposure_info);
+    e->settings.exposure = e->exposure_info.stops;
+    e->exposure_resolved = 1;
+    comp = pass_composite_run(e->composite, direct, indirect, specular, emission, translucent, &e->settings);
+    glFinish();
+    return comp;
+}
+
+int eng_exposure(const eng_engine *e, float *stops, eng_exposure_key_info *info)
+{
+    if (info)
+        *info = e->exposure_info;
+    if (stops)
+        *stops = e->settings.exposure;
+    return e->settings.exposure_auto ? e->exposure_resolved : 0;
+}
+
+void eng_set_exposure(eng_engine *e, float stops)
+{
+    if (!e->settings.exposure_auto)
+        return;
+    e->settings.exposure = stops;
+    e->exposure_resolved = 2;
+    memset(&e->exposure_info, 0, sizeof e->exposure_info);
+}
+
 /* The earliest frame the state of frame `frame` depends on (eng_frame_stats): the last
  * temporal reset, or the progressive accumulation's last global restart, whichever is earlier
  * (the state depends on both); -1 without a stateful pass. */
@@ -1328,6 +1377,18 @@ eng_result eng_render_frame(eng_engine *e, int frame, eng_error *err)
     if (frame < 0 || frame >= e->seq->frame_count)
         return eng_fail(err, ENG_ERR_INVALID, "%s: frame %d outside 0..%d", e->seq->path, frame, e->seq->frame_count - 1);
     const int window = e->settings.temporal_window;
+    if (e->settings.exposure_auto && !e->exposure_resolved && frame != 0) {
+        /* "auto" is metered at frame 0 whatever frame comes first (a shard, a resumed run
+         * without a recorded value): frame 0 is rendered without announcing, then any history
+         * is rebuilt as if it had not been. */
+        int silent = e->silent;
+        e->silent = 1;
+        eng_result r = eng_render_frame(e, 0, err);
+        e->silent = silent;
+        if (r != ENG_OK)
+            return r;
+        e->next_frame = -1;
+    }
     if (eng_stateful(e) && !e->silent && frame != e->next_frame) {
         /* Frame i's temporal (or progressive) result depends on every earlier frame (since the
          * last temporal_window boundary): asked for frames out of order (e.g. record --resume,
@@ -1510,7 +1571,12 @@ eng_result eng_render_frame(eng_engine *e, int frame, eng_error *err)
         pass_composite_run(e->composite, direct->color[0], indirect_tex, specular_tex, emission_tex,
                            translucent_tex, &e->settings);
     glFinish();
+    if (e->settings.exposure_auto && !e->exposure_resolved && frame == 0)
+        comp = meter_exposure(e, gb, comp, direct->color[0], indirect_tex, specular_tex, emission_tex,
+                              translucent_tex);
     add_time(e, "composite", now_ms() - t0);
+    e->stats.exposure_auto = e->settings.exposure_auto;
+    e->stats.exposure = e->settings.exposure;
     if (announce_outputs(e, frame, pass_composite_outputs, comp, NULL, 0, NULL, NULL, name))
         return eng_fail(err, ENG_ERR_ABORTED, "frame %d: capture failed in the composite pass", frame);
 

@@ -2,8 +2,9 @@
  * name before tinygltf reads anything (glTF 1.0, required extensions), a scene without
  * geometry refused, images decoded only where a drawn material uses them, EXT_texture_webp
  * with its fallback, KHR_materials_unlit, KHR_materials_pbrSpecularGlossiness,
- * KHR_materials_transmission's texture, meshopt-compressed buffer views, and the framing
- * camera of sequences without one.
+ * KHR_materials_transmission's texture, meshopt-compressed buffer views, the framing camera
+ * of sequences without one, and data the validator passes: zero-length normals, indices
+ * accessors without bufferView, files that name no mesh.
  * Every glTF is written here, a floor quad with UVs in a data URI. */
 #include "seq.h"
 
@@ -116,6 +117,111 @@ START_TEST(no_geometry_is_an_error)
     ck_assert_int_eq(load(f, &s, &err), ENG_ERR_INVALID);
     ck_assert_msg(strstr(err.msg, "test.gltf: no geometry"), "%s", err.msg);
     free(f);
+}
+END_TEST
+
+/* A triangle facing +Z: positions (0,0,0), (1,0,0), (0,1,0), then NORMALs (0,0,2), (0,0,0),
+ * (0,0,1) (TRI_B64) or (0,0,1), (NaN,0,0), (0,0,1) (TRI_NAN_B64): 72 bytes. */
+#define TRI_B64 "AAAAAAAAAAAAAAAAAACAPwAAAAAAAAAAAAAAAAAAgD8AAAAAAAAAAAAAAAAAAABAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAIA/"
+#define TRI_NAN_B64 "AAAAAAAAAAAAAAAAAACAPwAAAAAAAAAAAAAAAAAAgD8AAAAAAAAAAAAAAAAAAIA/AADAfwAAAAAAAAAAAAAAAAAAAAAAAIA/"
+
+/* The triangle glTF: buffer base64, the primitive's extra members, extra accessors (each
+ * after a comma). */
+static char *tri_gltf(const char *b64, const char *prim_extra, const char *accessors)
+{
+    size_t n = 2048 + strlen(prim_extra) + strlen(accessors);
+    char *j = malloc(n);
+    ck_assert_ptr_nonnull(j);
+    snprintf(j, n,
+             "{\"asset\":{\"version\":\"2.0\"},\"scenes\":[{\"nodes\":[0]}],\"nodes\":[{\"mesh\":0}],"
+             "\"meshes\":[{\"primitives\":[{\"attributes\":{\"POSITION\":0,\"NORMAL\":1}%s}]}],"
+             "\"accessors\":[{\"bufferView\":0,\"componentType\":5126,\"count\":3,\"type\":\"VEC3\","
+             "\"min\":[0,0,0],\"max\":[1,1,0]},"
+             "{\"bufferView\":0,\"byteOffset\":36,\"componentType\":5126,\"count\":3,\"type\":\"VEC3\"}%s],"
+             "\"bufferViews\":[{\"buffer\":0,\"byteLength\":72}],"
+             "\"buffers\":[{\"byteLength\":72,\"uri\":\"data:application/octet-stream;base64,%s\"}]}",
+             prim_extra, accessors, b64);
+    return j;
+}
+
+/* A zero-length normal is data (the validator passes it): it becomes the normal of the
+ * triangles at its vertex (+Z here; +Y where they are all degenerate), with one warning. A
+ * non-finite normal is still an error. */
+START_TEST(zero_normal_filled_in)
+{
+    char *f = tri_gltf(TRI_B64, "", "");
+    scn_scene *s;
+    eng_error err;
+    ck_assert_msg(load(f, &s, &err) == ENG_OK, "%s", err.msg);
+    ck_assert_uint_eq(s->primitive_count, 1);
+    const float *n = s->primitives[0].normals;
+    for (int v = 0; v < 3; v++)
+        ck_assert_msg(n[3 * v] == 0.0f && n[3 * v + 1] == 0.0f && n[3 * v + 2] == 1.0f, "normal %d: %g %g %g", v,
+                      (double)n[3 * v], (double)n[3 * v + 1], (double)n[3 * v + 2]);
+    ck_assert(has_warning(s, "NORMAL: 1 of 3 normals have zero length"));
+    scn_destroy(s);
+    free(f);
+    f = tri_gltf(TRI_NAN_B64, "", "");
+    ck_assert_int_eq(load(f, &s, &err), ENG_ERR_INVALID);
+    ck_assert_msg(strstr(err.msg, "NORMAL: accessor 1 element 1 is not finite"), "%s", err.msg);
+    free(f);
+}
+END_TEST
+
+/* An indices accessor without bufferView is all zeros (glTF §3.6.2.1), which tinygltf 2.7
+ * refuses: the loader reads it (one degenerate triangle, whose zero normal falls back to +Y).
+ * One whose bufferView does not exist is still refused. */
+START_TEST(indices_without_buffer_view_are_zeros)
+{
+    char *f = tri_gltf(TRI_B64, ",\"indices\":2", ",{\"componentType\":5123,\"count\":3,\"type\":\"SCALAR\"}");
+    scn_scene *s;
+    eng_error err;
+    ck_assert_msg(load(f, &s, &err) == ENG_OK, "%s", err.msg);
+    const scn_primitive *p = &s->primitives[0];
+    ck_assert_uint_eq(p->index_count, 3);
+    ck_assert(p->indices[0] == 0 && p->indices[1] == 0 && p->indices[2] == 0);
+    ck_assert(p->normals[3] == 0.0f && p->normals[4] == 1.0f && p->normals[5] == 0.0f);
+    ck_assert_uint_eq(p->vertex_count, 3);
+    scn_destroy(s);
+    free(f);
+    f = tri_gltf(TRI_B64, ",\"indices\":2",
+                 ",{\"bufferView\":7,\"componentType\":5123,\"count\":3,\"type\":\"SCALAR\"}");
+    ck_assert_int_eq(load(f, &s, &err), ENG_ERR_INVALID);
+    ck_assert_msg(strstr(err.msg, "accessor[2] invalid bufferView"), "%s", err.msg);
+    free(f);
+}
+END_TEST
+
+/* No node names a mesh: the refusal says "no geometry" first, then what tinygltf failed on
+ * (buffers without data, as the glTF validator's accessor and buffer test files have). */
+START_TEST(no_mesh_refused_before_buffers)
+{
+    const char *j = "{\"asset\":{\"version\":\"2.0\"},\"accessors\":[{\"bufferView\":0,\"componentType\":5126,"
+                    "\"count\":1,\"type\":\"VEC3\"}],\"bufferViews\":[{\"buffer\":0,\"byteLength\":12}],"
+                    "\"buffers\":[{\"byteLength\":12}]}";
+    scn_scene *s;
+    eng_error err;
+    ck_assert_int_eq(load(j, &s, &err), ENG_ERR_INVALID);
+    ck_assert_msg(strstr(err.msg, "test.gltf: no geometry: no node of the scene draws a triangle; the file also "
+                                  "fails to load: an empty URI"), "%s", err.msg);
+    ck_assert_ptr_null(strchr(err.msg, '\n'));
+    /* the same after tinygltf, for what the loader checks (a camera's yfov) */
+    const char *c = "{\"asset\":{\"version\":\"2.0\"},\"cameras\":[{\"type\":\"perspective\",\"perspective\":"
+                    "{\"yfov\":4,\"znear\":0.1}}]}";
+    ck_assert_int_eq(load(c, &s, &err), ENG_ERR_INVALID);
+    ck_assert_msg(strstr(err.msg, "test.gltf: no geometry: no node of the scene draws a triangle; the file also "
+                                  "fails to load: camera 0: yfov 4"), "%s", err.msg);
+    /* nothing else wrong: no geometry alone */
+    ck_assert_int_eq(load("{\"asset\":{\"version\":\"2.0\"},\"nodes\":[{}]}", &s, &err), ENG_ERR_INVALID);
+    ck_assert_msg(strstr(err.msg, "test.gltf: no geometry: no node of the scene draws a triangle") &&
+                      !strstr(err.msg, "also"), "%s", err.msg);
+    /* a node with the mesh: the buffer is the error */
+    const char *k = "{\"asset\":{\"version\":\"2.0\"},\"nodes\":[{\"mesh\":0}],\"meshes\":[{\"primitives\":"
+                    "[{\"attributes\":{\"POSITION\":0}}]}],\"accessors\":[{\"bufferView\":0,\"componentType\":5126,"
+                    "\"count\":3,\"type\":\"VEC3\"}],\"bufferViews\":[{\"buffer\":0,\"byteLength\":36}],"
+                    "\"buffers\":[{\"byteLength\":36}]}";
+    ck_assert_int_ne(load(k, &s, &err), ENG_OK);
+    ck_assert_msg(!strstr(err.msg, "no geometry"), "%s", err.msg);
 }
 END_TEST
 
@@ -406,6 +512,9 @@ int main(void)
     tcase_add_test(tc, gltf1_refused_by_name);
     tcase_add_test(tc, required_extension_named_first);
     tcase_add_test(tc, no_geometry_is_an_error);
+    tcase_add_test(tc, zero_normal_filled_in);
+    tcase_add_test(tc, indices_without_buffer_view_are_zeros);
+    tcase_add_test(tc, no_mesh_refused_before_buffers);
     tcase_add_test(tc, images_decoded_only_where_drawn);
     tcase_add_test(tc, webp_and_its_fallback);
     tcase_add_test(tc, unlit_is_emission);

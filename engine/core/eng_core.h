@@ -168,6 +168,10 @@ typedef struct eng_frame_stats {
      * tools can find the shadow-map texel an eye pixel was tested against (ispm lineage). */
     int light_count;
     eng_light_record lights[ENG_MAX_LIGHT_RECORDS];
+    /* The stops of this frame's display transform, and whether they came from `"exposure":
+     * "auto"` (eng_exposure): then capture records them with the frame. */
+    float exposure;
+    int exposure_auto;
 } eng_frame_stats;
 
 /* A listener sees every announced buffer. Any callback may be NULL. A non-zero return
@@ -230,6 +234,24 @@ void eng_lock_drop(eng_lock *lk); /* accepts NULL and a lock not taken */
  * but whitespace after the first value ENG_ERR_PARSE, both naming path and the byte. Malformed
  * text passes (the parser names it). */
 eng_result eng_json_precheck(const char *path, const char *text, size_t len, int max_depth, eng_error *err);
+
+/* ---------------------------------------------------------------- exposure (exposure.c) */
+
+#define ENG_EXPOSURE_GREY 0.18  /* the key value a frame's log-average luminance is mapped to */
+#define ENG_EXPOSURE_DELTA 1e-6 /* δ of the log average (Reinhard et al. 2002, Eq. 1) */
+#define ENG_EXPOSURE_MAX 100.0  /* |stops| at most: the "exposure" setting's range */
+
+typedef struct eng_exposure_key_info {
+    double log_average; /* L̄ over the pixels counted; 0 when none was */
+    uint64_t counted;   /* pixels that entered the average */
+    uint64_t nonfinite; /* pixels left out for a NaN or ±Inf channel */
+    float stops;        /* log2(0.18 / L̄), clamped to ±ENG_EXPOSURE_MAX; 0 when counted is 0 */
+} eng_exposure_key_info;
+
+/* The exposure of `"exposure": "auto"` from pixels RGB triples of linear radiance: the
+ * log-average Rec. 709 luminance of the pixels that coverage marks (non-zero; NULL: all) whose
+ * luminance is finite and above 0. No pixel counted (an all-black frame): 0 stops. */
+void eng_exposure_key(const float *rgb, const float *coverage, size_t pixels, eng_exposure_key_info *out);
 
 /* Process-wide, once: freed memory stays in the heap for reuse, every thread allocates from
  * one heap, and a range of it is advised for transparent huge pages (fewer page faults; see

@@ -25,6 +25,10 @@
 #define ISPM_INT(key, field, def, lo, hi, step, not, record, meaning) NUMERIC_ACCESS(key, field, int) RECORDED(key, record)
 #define ISPM_FLOAT(key, field, def, lo, hi, ends, exact, note, record, meaning)                                        \
     NUMERIC_ACCESS(key, field, float) RECORDED(key, record)
+#define ISPM_FLOATWORD(key, field, def, lo, hi, ends, exact, note, record, meaning, word, flag)                     \
+    NUMERIC_ACCESS(key, field, float) RECORDED(key, record)                                                            \
+    static int word_get_##key(const eng_settings *s) { return s->flag; }                                               \
+    static void word_set_##key(eng_settings *s, int on) { s->flag = on; }
 #define ISPM_BOOL(key, field, def, record, meaning) NUMERIC_ACCESS(key, field, int) RECORDED(key, record)
 /* An enum field is set through its own type (__typeof__-free: the value converts on assignment). */
 #define ISPM_ENUM(key, field, def, note, record, meaning)                                                              \
@@ -44,6 +48,7 @@
 #include "settings.def"
 #undef ISPM_INT
 #undef ISPM_FLOAT
+#undef ISPM_FLOATWORD
 #undef ISPM_BOOL
 #undef ISPM_ENUM
 #undef ISPM_NAME
@@ -58,6 +63,11 @@ static const eng_setting TABLE[] = {
     {.key = #k_, .type = ENG_SETTING_FLOAT, .type_name = "float", .def = (def_), .lo = (lo_), .hi = (hi_),          \
      .ends = (ends_), .exact = (exact_), .note = (note_), .meaning = (meaning_), .get = get_##k_,                    \
      .set = set_##k_, .recorded = recorded_##k_},
+#define ISPM_FLOATWORD(k_, field, def_, lo_, hi_, ends_, exact_, note_, record, meaning_, word_, flag)             \
+    {.key = #k_, .type = ENG_SETTING_FLOAT, .type_name = "float", .def = (def_), .lo = (lo_), .hi = (hi_),          \
+     .ends = (ends_), .exact = (exact_), .note = (note_), .meaning = (meaning_), .get = get_##k_,                    \
+     .set = set_##k_, .recorded = recorded_##k_, .word = (word_), .word_get = word_get_##k_,                        \
+     .word_set = word_set_##k_},
 #define ISPM_BOOL(k_, field, def_, record, meaning_)                                                                  \
     {.key = #k_, .type = ENG_SETTING_BOOL, .type_name = "bool", .def = (def_), .lo = 0, .hi = 1, .note = "",        \
      .meaning = (meaning_), .get = get_##k_, .set = set_##k_, .recorded = recorded_##k_},
@@ -72,6 +82,7 @@ static const eng_setting TABLE[] = {
 #include "settings.def"
 #undef ISPM_INT
 #undef ISPM_FLOAT
+#undef ISPM_FLOATWORD
 #undef ISPM_BOOL
 #undef ISPM_ENUM
 #undef ISPM_NAME
@@ -105,7 +116,12 @@ void eng_setting_format(const eng_setting *d, const eng_settings *s, char *out, 
 {
     switch (d->type) {
     case ENG_SETTING_INT: snprintf(out, size, "%d", (int)d->get(s)); break;
-    case ENG_SETTING_FLOAT: snprintf(out, size, "%g", d->get(s)); break;
+    case ENG_SETTING_FLOAT:
+        if (d->word && d->word_get(s))
+            snprintf(out, size, "%s", d->word);
+        else
+            snprintf(out, size, "%g", d->get(s));
+        break;
     case ENG_SETTING_BOOL: snprintf(out, size, "%s", d->get(s) != 0.0 ? "true" : "false"); break;
     case ENG_SETTING_ENUM: snprintf(out, size, "%s", eng_setting_value_name(d, (int)d->get(s))); break;
     case ENG_SETTING_NAME: {
@@ -138,12 +154,14 @@ void eng_settings_defaults(eng_settings *s)
 enum {
 #define ISPM_INT(key, ...) SETTING_##key,
 #define ISPM_FLOAT(key, ...) SETTING_##key,
+#define ISPM_FLOATWORD(key, ...) SETTING_##key,
 #define ISPM_BOOL(key, ...) SETTING_##key,
 #define ISPM_ENUM(key, ...) SETTING_##key,
 #define ISPM_NAME(key, ...) SETTING_##key,
 #include "settings.def"
 #undef ISPM_INT
 #undef ISPM_FLOAT
+#undef ISPM_FLOATWORD
 #undef ISPM_BOOL
 #undef ISPM_ENUM
 #undef ISPM_NAME

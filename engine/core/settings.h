@@ -125,6 +125,8 @@ typedef struct eng_settings {
     float shadow_bias;    /* world-space offset along the normal before the lookup; default 0.002 */
     eng_pcss_blocker pcss_blocker; /* soft shadows' occluder search (shadow_pcss.c); default map */
     float exposure;       /* display transform: stops applied before sRGB encoding; default 0 */
+    int exposure_auto;    /* `"exposure": "auto"`: the engine sets exposure from frame 0's
+                           * log-average luminance (eng_exposure_key) and keeps it */
     int threads;          /* CPU worker threads (OpenMP, Embree, llvmpipe); 0 = default 2 */
     /* Indirect light (ISPM). */
     eng_indirect indirect;
@@ -238,6 +240,9 @@ typedef struct eng_setting {
     void (*set)(eng_settings *s, double v);            /* INT, FLOAT, BOOL, ENUM */
     char *(*text)(eng_settings *s, size_t *size);      /* NAME: the field and its size */
     int (*recorded)(const eng_settings *s);            /* the manifest's "settings" holds it */
+    const char *word;                                  /* FLOAT: a string taken for a number, or NULL */
+    int (*word_get)(const eng_settings *s);            /* with word: 1 when the setting holds it */
+    void (*word_set)(eng_settings *s, int on);
 } eng_setting;
 
 /* settings.def's lines in order; *count gets their number. */
@@ -246,7 +251,8 @@ const eng_setting *eng_settings_table(int *count);
 const eng_setting *eng_setting_find(const char *key);
 /* The name of an ENUM setting's value (0: the default's); "unknown" if it has none. */
 const char *eng_setting_value_name(const eng_setting *d, int value);
-/* The value s holds for d as text: %d, %g, true/false or the name (the bench's columns). */
+/* The value s holds for d as text: %d, %g, true/false, the name or the word (the bench's
+ * columns). */
 void eng_setting_format(const eng_setting *d, const eng_settings *s, char *out, size_t size);
 
 #ifdef __cplusplus

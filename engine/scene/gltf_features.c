@@ -4,7 +4,9 @@
  * file may pass and render nothing, and a required extension that changes how buffers or
  * images are stored (KHR_texture_basisu, a compression) fails as some missing URI
  * or undecodable image. Looking at asset and extensionsRequired first makes the refusal name
- * the feature (glTF §3.12: a client that lacks a required extension must refuse the asset). */
+ * the feature (glTF §3.12: a client that lacks a required extension must refuse the asset).
+ * It also tells whether the file names no mesh at all, so that a file that then fails to load
+ * is refused for having no geometry first. */
 #include "gltf_features.h"
 
 #include <cjson/cJSON.h>
@@ -58,6 +60,22 @@ static int name_keyed(const cJSON *root)
     return 0;
 }
 
+/* 0 when no node names a mesh, or there is no mesh with a primitive: the file cannot draw
+ * anything, whatever its buffers hold (the glTF validator's test files often have buffers
+ * without data and no mesh). Anything finer (a mesh of POINTS only, a scene without that
+ * node) is gltf_load.c's check_geometry, after loading. */
+static int draws_anything(const cJSON *root)
+{
+    const cJSON *meshes = cJSON_GetObjectItemCaseSensitive(root, "meshes");
+    const cJSON *nodes = cJSON_GetObjectItemCaseSensitive(root, "nodes");
+    int primitives = 0, named = 0;
+    for (const cJSON *m = cJSON_IsArray(meshes) ? meshes->child : NULL; m && !primitives; m = m->next)
+        primitives = cJSON_GetArraySize(cJSON_GetObjectItemCaseSensitive(m, "primitives")) > 0;
+    for (const cJSON *n = cJSON_IsArray(nodes) ? nodes->child : NULL; n && !named; n = n->next)
+        named = cJSON_GetObjectItemCaseSensitive(n, "mesh") != NULL;
+    return primitives && named;
+}
+
 static eng_result check_json(const char *path, const cJSON *root, eng_error *err)
 {
     const cJSON *asset = cJSON_GetObjectItemCaseSensitive(root, "asset");
@@ -94,8 +112,9 @@ static eng_result check_json(const char *path, const cJSON *root, eng_error *err
     return ENG_OK;
 }
 
-eng_result gltf_features_check(const char *path, const char *bytes, size_t len, eng_error *err)
+eng_result gltf_features_check(const char *path, const char *bytes, size_t len, int *no_mesh, eng_error *err)
 {
+    *no_mesh = 0;
     const unsigned char *b = (const unsigned char *)bytes;
     const char *json = bytes;
     size_t json_len = len;
@@ -112,6 +131,8 @@ eng_result gltf_features_check(const char *path, const char *bytes, size_t len, 
     if (!root)
         return ENG_OK;
     eng_result r = cJSON_IsObject(root) ? check_json(path, root, err) : ENG_OK;
+    /* without asset, not a glTF: tinygltf says so */
+    *no_mesh = cJSON_IsObject(cJSON_GetObjectItemCaseSensitive(root, "asset")) && !draws_anything(root);
     cJSON_Delete(root);
     return r;
 }

@@ -13,7 +13,9 @@ int gltf_extension_supported(const char *name);
 /* Refuses, with one line naming the file and the feature (ENG_ERR_UNSUPPORTED): glTF 1.0 (a
  * GLB container of version 1, asset.version below 2, or 1.0's name-keyed objects), an
  * asset.version or asset.minVersion above 2.0, and any extensionsRequired entry the loader does
- * not read. Bytes that are not a glTF it can parse pass: tinygltf then names their problem. */
-eng_result gltf_features_check(const char *path, const char *bytes, size_t len, eng_error *err);
+ * not read. Bytes that are not a glTF it can parse pass: tinygltf then names their problem.
+ * *no_mesh gets 1 for a glTF (it has an asset) in which no node names a mesh or no mesh has a
+ * primitive: it cannot draw anything, whatever else it holds. */
+eng_result gltf_features_check(const char *path, const char *bytes, size_t len, int *no_mesh, eng_error *err);
 
 #endif

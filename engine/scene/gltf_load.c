@@ -1003,6 +1003,51 @@ static eng_result load_lights(loader *L)
 /* Replaces an indexed triangle list without normals by one where each triangle has its own
  * three vertices and its face normal (normalised cross product of its edges in winding
  * order; (0, 1, 0) for a triangle of zero area, which covers no pixel anyway). */
+/* The normals of zero length (count of them) in p: glTF asks for unit normals, but the
+ * validator lets zero ones through (an accessor without bufferView is all zeros). Each
+ * becomes the normalised sum of the area-weighted normals of the triangles that use its
+ * vertex, or +Y where those are all degenerate (as flat_normals does); one warning. */
+static void fill_zero_normals(loader *L, scn_primitive *p, const char *where, uint32_t count)
+{
+    double *sum = calloc((size_t)p->vertex_count * 3, sizeof *sum);
+    if (!sum)
+        eng_oom(where);
+    for (uint32_t t = 0; t + 2 < p->index_count; t += 3) {
+        const uint32_t *ix = p->indices + t;
+        const float *v[3];
+        for (int k = 0; k < 3; k++)
+            v[k] = p->positions + (size_t)ix[k] * 3;
+        double e1[3], e2[3];
+        for (int k = 0; k < 3; k++) {
+            e1[k] = (double)v[1][k] - v[0][k];
+            e2[k] = (double)v[2][k] - v[0][k];
+        }
+        const double c[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2],
+                             e1[0] * e2[1] - e1[1] * e2[0]};
+        for (int k = 0; k < 3; k++)
+            for (int a = 0; a < 3; a++)
+                sum[(size_t)ix[k] * 3 + a] += c[a];
+    }
+    for (uint32_t v = 0; v < p->vertex_count; v++) {
+        float *n = p->normals + (size_t)v * 3;
+        if (n[0] != 0.0f || n[1] != 0.0f || n[2] != 0.0f)
+            continue;
+        const double *s = sum + (size_t)v * 3;
+        double len = sqrt(s[0] * s[0] + s[1] * s[1] + s[2] * s[2]);
+        if (len > 0.0 && isfinite(len)) {
+            for (int k = 0; k < 3; k++)
+                n[k] = (float)(s[k] / len) + 0.0f; /* -0.0 would change buffer digests */
+        } else {
+            n[0] = 0.0f;
+            n[1] = 1.0f;
+            n[2] = 0.0f;
+        }
+    }
+    free(sum);
+    scn_warn(L->s, "%s NORMAL: %u of %u normals have zero length; each is replaced by the normal of the triangles "
+                   "at its vertex", where, count, p->vertex_count);
+}
+
 static eng_result flat_normals(loader *L, scn_primitive *p, const char *where)
 {
     uint32_t n = p->index_count;
@@ -1310,6 +1355,7 @@ static eng_result load_primitive(loader *L, const gls_primitive *g, scn_primitiv
 
     char what[160];
     uint64_t count;
+    uint32_t zero_normals = 0;
     int pos_acc = find_attribute(g, "POSITION");
     if (pos_acc == -2) {
         scn_warn(L->s, "%s: no POSITION attribute, skipped", where);
@@ -1325,12 +1371,13 @@ static eng_result load_primitive(loader *L, const gls_primitive *g, scn_primitiv
     if (nrm_acc != -2) {
         if ((r = read_vertex_attribute(L, nrm_acc, where, "NORMAL", 3, d->vertex_count, &d->normals)))
             return r;
-        snprintf(what, sizeof what, "%s NORMAL", where);
         for (uint32_t v = 0; v < d->vertex_count; v++) {
             float *n = d->normals + (size_t)v * 3;
             double len = sqrt((double)n[0] * n[0] + (double)n[1] * n[1] + (double)n[2] * n[2]);
-            if (!(len > 0.0) || !isfinite(len))
-                return fail(L, ENG_ERR_INVALID, "%s: normal %u has zero length", what, v);
+            if (len == 0.0) { /* data, not an error (finite: read_vertex_attribute checked) */
+                zero_normals++;
+                continue;
+            }
             for (int k = 0; k < 3; k++)
                 n[k] = (float)(n[k] / len);
         }
@@ -1395,6 +1442,8 @@ static eng_result load_primitive(loader *L, const gls_primitive *g, scn_primitiv
         d->index_count = d->vertex_count;
     }
 
+    if (zero_normals)
+        fill_zero_normals(L, d, where, zero_normals);
     if (!d->normals && (r = flat_normals(L, d, where)))
         return r;
     /* A normal texture needs tangents: the glTF's, or generated from its texcoord set. */
@@ -1994,6 +2043,20 @@ static eng_result build(loader *L, const char *bytes, size_t len)
     return compute_digest(L, bytes, len);
 }
 
+/* A file that names no mesh and fails to load for another reason: what matters first is that
+ * nothing would be drawn, what else is wrong follows. Rewrites the reason (NUL-terminated, in
+ * size bytes) in place, cut where it no longer fits; a reason that is "no geometry" stays. */
+static void no_geometry_first(char *reason, size_t size)
+{
+    static const char first[] = "no geometry: no node of the scene draws a triangle; the file also fails to load: ";
+    if (size < sizeof first || strncmp(reason, "no geometry", 11) == 0)
+        return;
+    size_t n = strlen(reason), room = size - sizeof first;
+    memmove(reason + sizeof first - 1, reason, n < room ? n : room);
+    reason[sizeof first - 1 + (n < room ? n : room)] = 0;
+    memcpy(reason, first, sizeof first - 1);
+}
+
 /* Parses and validates bytes that came from path (named in messages; external buffers are
  * looked up beside it). Borrows bytes; frees nothing of the caller's. */
 static eng_result load_bytes(const char *path, const char *bytes, size_t len, int scene_index, scn_scene **out,
@@ -2006,9 +2069,12 @@ static eng_result load_bytes(const char *path, const char *bytes, size_t len, in
     /* Depth, trailing text and counts first (bounded parsing), then the features by name. */
     if ((r = scn_gltf_precheck(path, bytes, len, &max_external, err)) != ENG_OK)
         return r;
-    if ((r = gltf_features_check(path, bytes, len, err)) != ENG_OK)
+    int no_mesh = 0;
+    if ((r = gltf_features_check(path, bytes, len, &no_mesh, err)) != ENG_OK)
         return r;
     gls_status st = gls_load(path, bytes, len, max_external, &m, msg, sizeof msg);
+    if (st != GLS_OK && no_mesh)
+        no_geometry_first(msg, sizeof msg);
     if (st != GLS_OK) {
         switch (st) {
         case GLS_ERR_IO: return eng_fail(err, ENG_ERR_IO, "%s: %s", path, msg);
@@ -2031,6 +2097,9 @@ static eng_result load_bytes(const char *path, const char *bytes, size_t len, in
     free(L.drawn);
     gls_free(m);
     if (r) {
+        size_t at = strlen(path) + 2; /* err->msg is "<path>: <reason>" */
+        if (no_mesh && err && strncmp(err->msg, path, at - 2) == 0 && strncmp(err->msg + at - 2, ": ", 2) == 0)
+            no_geometry_first(err->msg + at, sizeof err->msg - at);
         scn_destroy(s);
         return r;
     }

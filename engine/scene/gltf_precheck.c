@@ -35,12 +35,13 @@ static eng_result check_counts(const char *path, const cJSON *root, eng_error *e
     {
         const cJSON *c = cJSON_GetObjectItemCaseSensitive(a, "count");
         double count = cJSON_IsNumber(c) ? c->valuedouble : 0;
-        if (c && (!cJSON_IsNumber(c) || count != (double)(int64_t)count || count < 1 || count > 2147483647.0))
+        /* the range first: converting a double outside int64_t's range is undefined */
+        if (c && (!cJSON_IsNumber(c) || !(count >= 1 && count <= 2147483647.0) || count != (double)(int64_t)count))
             return eng_fail(err, ENG_ERR_INVALID, "%s: accessors[%d].count %.17g is not an integer in 1..2147483647",
                             path, i, count);
         const cJSON *sp = cJSON_GetObjectItemCaseSensitive(cJSON_GetObjectItemCaseSensitive(a, "sparse"), "count");
-        if (sp && (!cJSON_IsNumber(sp) || sp->valuedouble != (double)(int64_t)sp->valuedouble || sp->valuedouble < 1 ||
-                   sp->valuedouble > count))
+        if (sp && (!cJSON_IsNumber(sp) || !(sp->valuedouble >= 1 && sp->valuedouble <= count) ||
+                   sp->valuedouble != (double)(int64_t)sp->valuedouble))
             return eng_fail(err, ENG_ERR_INVALID, "%s: accessors[%d].sparse.count %.17g is not an integer in 1..%.17g "
                             "(the accessor's count)", path, i, cJSON_IsNumber(sp) ? sp->valuedouble : 0, count);
         i++;

@@ -22,6 +22,9 @@
  *     the rest; draco_decode then undoes it, decodes each Draco primitive with draco::Decoder
  *     and appends the decoded arrays as a new buffer, with one buffer view per accessor, in the
  *     accessor's own componentType and type. gltf_load.c then reads them like any accessor;
+ *   - an indices accessor without a bufferView (all zeros, glTF §3.6.2.1), which tinygltf 2.7
+ *     refuses: after that refusal the file is parsed again with such accessors pointed at a
+ *     placeholder view (patch_zero_indices), which unzero_indices removes again;
  *   - EXT_meshopt_compression / KHR_meshopt_compression (meshoptimizer, Debian's
  *     libmeshoptimizer): meshopt_patch points each compressed bufferView at its compressed
  *     bytes in a copy of the JSON (and gives a data-less fallback buffer one byte), so that
@@ -732,6 +735,56 @@ std::vector<int> patch_indices(json &j)
     return patched;
 }
 
+/* In the JSON j, every primitive's indices accessor without a bufferView (all zeros, glTF
+ * §3.6.2.1; tinygltf 2.7 refuses it) gets a placeholder bufferView of one byte, appended with
+ * a one-byte data-URI buffer of its own, so that tinygltf parses the file. Returns the
+ * accessors so patched; unzero_indices undoes it. */
+std::vector<int> patch_zero_indices(json &j)
+{
+    std::vector<int> patched;
+    if (!j.is_object() || !j.contains("meshes") || !j["meshes"].is_array() || !j.contains("accessors") ||
+        !j["accessors"].is_array())
+        return patched;
+    if ((j.contains("bufferViews") && !j["bufferViews"].is_array()) || (j.contains("buffers") && !j["buffers"].is_array()))
+        return patched;
+    json &acc = j["accessors"];
+    const size_t view = j.contains("bufferViews") ? j["bufferViews"].size() : 0;
+    const size_t buffer = j.contains("buffers") ? j["buffers"].size() : 0;
+    for (json &mesh : j["meshes"]) {
+        if (!mesh.is_object() || !mesh.contains("primitives") || !mesh["primitives"].is_array())
+            continue;
+        for (json &p : mesh["primitives"]) {
+            if (!p.is_object() || !p.contains("indices") || !p["indices"].is_number_unsigned())
+                continue;
+            uint64_t i = p["indices"].get<uint64_t>();
+            if (i >= acc.size() || !acc[i].is_object() || acc[i].contains("bufferView"))
+                continue;
+            acc[i]["bufferView"] = view;
+            patched.push_back(static_cast<int>(i));
+        }
+    }
+    if (!patched.empty()) {
+        j["buffers"].push_back({{"byteLength", 1}, {"uri", "data:application/octet-stream;base64,AA=="}});
+        j["bufferViews"].push_back({{"buffer", buffer}, {"byteLength", 1}});
+    }
+    return patched;
+}
+
+/* Undoes patch_zero_indices: the accessors lose their bufferView again (read as zeros) and the
+ * placeholder view and buffer, the last of each, go. */
+void unzero_indices(tinygltf::Model &m, const std::vector<int> &patched)
+{
+    if (patched.empty())
+        return;
+    for (int i : patched)
+        if (static_cast<size_t>(i) < m.accessors.size())
+            m.accessors[static_cast<size_t>(i)].bufferView = -1;
+    if (!m.bufferViews.empty())
+        m.bufferViews.pop_back();
+    if (!m.buffers.empty())
+        m.buffers.pop_back();
+}
+
 /* ---- EXT_meshopt_compression / KHR_meshopt_compression */
 
 struct meshopt_error {
@@ -906,11 +959,13 @@ bool json_range(const unsigned char *b, size_t len, bool *glb, size_t *at, size_
 }
 
 /* The bytes tinygltf should parse: the JSON glTF, or the GLB with its JSON chunk, after
- * Draco's (patch_indices) and meshopt's (meshopt_patch) patches. Returns false (and leaves
+ * Draco's (patch_indices), meshopt's (meshopt_patch) and zero indices' (patch_zero_indices)
+ * patches. Returns false (and leaves
  * *out empty) where nothing needed patching or the input is too malformed to patch; tinygltf
  * then reads the original bytes. */
-bool prepare(const unsigned char *b, size_t len, bool draco, bool meshopt, std::vector<unsigned char> *out,
-             std::vector<int> *patched, std::vector<meshopt_view> *views)
+bool prepare(const unsigned char *b, size_t len, bool draco, bool meshopt, bool zero_indices,
+             std::vector<unsigned char> *out, std::vector<int> *patched, std::vector<meshopt_view> *views,
+             std::vector<int> *zeroed)
 {
     bool glb;
     size_t json_at, json_len;
@@ -923,7 +978,9 @@ bool prepare(const unsigned char *b, size_t len, bool draco, bool meshopt, std::
         *patched = patch_indices(j);
     if (meshopt)
         *views = meshopt_patch(j);
-    if (patched->empty() && views->empty())
+    if (zero_indices)
+        *zeroed = patch_zero_indices(j);
+    if (patched->empty() && views->empty() && zeroed->empty())
         return false;
     std::string text;
     try {
@@ -931,6 +988,7 @@ bool prepare(const unsigned char *b, size_t len, bool draco, bool meshopt, std::
     } catch (const json::exception &) { /* a string that is not UTF-8: leave it to tinygltf */
         patched->clear();
         views->clear();
+        zeroed->clear();
         return false;
     }
     if (!glb) {
@@ -944,6 +1002,7 @@ bool prepare(const unsigned char *b, size_t len, bool draco, bool meshopt, std::
     if (total > UINT32_MAX) {
         patched->clear();
         views->clear();
+        zeroed->clear();
         return false;
     }
     out->assign(b, b + 12);
@@ -1176,31 +1235,59 @@ gls_status load(const char *path, const void *bytes, size_t len, uint64_t max_ex
     std::vector<unsigned char> patched_bytes;
     std::vector<int> patched;
     std::vector<meshopt_view> meshopt_views;
+    std::vector<int> zeroed;
     static const char MESHOPT[] = "_meshopt_compression";
-    try {
-        const bool draco = std::search(b, b + len, std::begin(DRACO), std::end(DRACO) - 1) != b + len;
-        const bool meshopt = std::search(b, b + len, std::begin(MESHOPT), std::end(MESHOPT) - 1) != b + len;
-        if ((draco || meshopt) && prepare(b, len, draco, meshopt, &patched_bytes, &patched, &meshopt_views)) {
-            if (patched_bytes.size() > UINT_MAX) {
-                set_msg(msg, msg_size, "file too large for tinygltf");
-                return GLS_ERR_GLTF;
+    const unsigned char *const original = b;
+    const size_t original_len = len;
+    /* Parses b (a second time: with indices accessors without bufferView patched, after
+     * tinygltf refused them, so that other files pay nothing for it). */
+    bool ok = false;
+    for (int pass = 0; pass < 2; pass++) {
+        try {
+            const bool draco = std::search(original, original + original_len, std::begin(DRACO),
+                                           std::end(DRACO) - 1) != original + original_len;
+            const bool meshopt = std::search(original, original + original_len, std::begin(MESHOPT),
+                                             std::end(MESHOPT) - 1) != original + original_len;
+            const bool zero = pass == 1;
+            b = original;
+            len = original_len;
+            patched_bytes.clear();
+            patched.clear();
+            meshopt_views.clear();
+            zeroed.clear();
+            if ((draco || meshopt || zero) &&
+                prepare(b, len, draco, meshopt, zero, &patched_bytes, &patched, &meshopt_views, &zeroed)) {
+                if (patched_bytes.size() > UINT_MAX) {
+                    set_msg(msg, msg_size, "file too large for tinygltf");
+                    return GLS_ERR_GLTF;
+                }
+                b = patched_bytes.data();
+                len = patched_bytes.size();
             }
-            b = patched_bytes.data();
-            len = patched_bytes.size();
+        } catch (const draco_error &e) {
+            set_msg(msg, msg_size, e.text);
+            return GLS_ERR_GLTF;
+        } catch (const meshopt_error &e) {
+            set_msg(msg, msg_size, e.text);
+            return GLS_ERR_GLTF;
         }
-    } catch (const draco_error &e) {
-        set_msg(msg, msg_size, e.text);
-        return GLS_ERR_GLTF;
-    } catch (const meshopt_error &e) {
-        set_msg(msg, msg_size, e.text);
-        return GLS_ERR_GLTF;
+        if (pass == 1 && zeroed.empty())
+            break; /* nothing to patch: the first pass's error stands */
+        std::string e1, w1;
+        g->model = tinygltf::Model();
+        g->image_bytes.clear();
+        if (len >= 4 && std::memcmp(b, "glTF", 4) == 0)
+            ok = loader.LoadBinaryFromMemory(&g->model, &e1, &w1, b, static_cast<unsigned>(len), folder);
+        else
+            ok = loader.LoadASCIIFromString(&g->model, &e1, &w1, reinterpret_cast<const char *>(b),
+                                            static_cast<unsigned>(len), folder);
+        if (pass == 0 || ok) {
+            err = e1;
+            warn = w1;
+        }
+        if (ok || !scope.error.empty() || e1.find("] invalid bufferView") == std::string::npos)
+            break;
     }
-    bool ok;
-    if (len >= 4 && std::memcmp(b, "glTF", 4) == 0)
-        ok = loader.LoadBinaryFromMemory(&g->model, &err, &warn, b, static_cast<unsigned>(len), folder);
-    else
-        ok = loader.LoadASCIIFromString(&g->model, &err, &warn, reinterpret_cast<const char *>(b),
-                                        static_cast<unsigned>(len), folder);
     /* A refused URI is the error, also where tinygltf only warned (an image it could skip):
      * a file the glTF names must be there. */
     if (!scope.error.empty()) {
@@ -1216,6 +1303,7 @@ gls_status load(const char *path, const void *bytes, size_t len, uint64_t max_ex
         return classify(err);
     }
     try {
+        unzero_indices(g->model, zeroed);
         meshopt_decode(g->model, meshopt_views);
         draco_decode(g->model, patched);
     } catch (const draco_error &e) {

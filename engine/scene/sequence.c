@@ -177,6 +177,13 @@ static eng_result parse_setting(parser *P, const eng_setting *d, const cJSON *it
     }
     case ENG_SETTING_FLOAT: {
         double x = 0.0;
+        if (d->word && cJSON_IsString(it) && !strcmp(it->valuestring, d->word)) {
+            d->set(s, d->def);
+            d->word_set(s, 1);
+            return ENG_OK;
+        }
+        if (d->word && !cJSON_IsNumber(it))
+            return bad(P, "%s: expected a number or \"%s\", got %s", where, d->word, show(it, v, sizeof v));
         if ((r = get_number(P, it, where, &x)))
             return r;
         switch (d->ends) {
@@ -200,6 +207,8 @@ static eng_result parse_setting(parser *P, const eng_setting *d, const cJSON *it
             break;
         }
         d->set(s, x);
+        if (d->word)
+            d->word_set(s, 0);
         return ENG_OK;
     }
     case ENG_SETTING_BOOL:
