@@ -26,7 +26,7 @@ typedef struct cap_bufrec {
     int stored_in;
 } cap_bufrec;
 
-/* Within-run storage of a buffer identical to the previous frame's (capture_dedupe): sets
+/* Within-run storage of a buffer identical to the previous frame's (unless capture_whole_frames): sets
  * cur[i].stored_in, for each of the n buffers of a frame, to where the same-name buffer of the
  * previous frame prev_frame (its np records prev, or none: np 0) is stored when both have the
  * same digest, size and channel names in the same order: prev's stored_in, or prev_frame when

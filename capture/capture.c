@@ -108,7 +108,7 @@ struct cap_capture {
     int pending_count, pending_cap;
     cap_pending *pending;
     cap_compression compression;
-    int dedupe;        /* capture_dedupe: a buffer equal to the previous frame's is stored once */
+    int dedupe;        /* not capture_whole_frames: a buffer equal to the previous frame's is stored once */
     cap_wq *wq;        /* the writers, or NULL: frames are written in on_frame_end */
     pthread_t remover; /* removes set-aside frames folders (remover_on: started, not joined) */
     int remover_on;
@@ -604,7 +604,7 @@ eng_result cap_create(const cap_desc *desc, cap_capture **out, eng_error *err)
         return eng_fail(err, ENG_ERR_INVALID, "%s: capture_compression \"%.*s\" is not a compression capture knows",
                         desc->sequence->path, (int)sizeof st.capture_compression, st.capture_compression);
     }
-    c->dedupe = st.capture_dedupe != 0;
+    c->dedupe = !st.capture_whole_frames;
     r = resume ? resume_run(c, err) : write_runinfo(c, err);
     if (r != ENG_OK) {
         cap_destroy(c);

@@ -6,6 +6,7 @@
 #define _XOPEN_SOURCE 700
 
 #include "cap.h"
+#include "cap_internal.h"
 #include "eng.h"
 
 #include <check.h>
@@ -1220,11 +1221,15 @@ START_TEST(test_bad_buffers_rejected)
 }
 END_TEST
 
+/* capture_whole_frames for record_fake's runs (0: the static shadow is stored once). */
+static int fake_whole_frames;
+
 /* Records `frames` fake frames into run with the given writers and compression. */
 static void record_fake(const char *run, int frames, int writers, cap_compression comp)
 {
     seq_sequence seq;
     make_seq(&seq, frames, 24, 20);
+    seq.settings.capture_whole_frames = fake_whole_frames;
     if (comp != CAP_COMPRESSION_DEFAULT)
         snprintf(seq.settings.capture_compression, sizeof seq.settings.capture_compression, "%s",
                  cap_compression_name(comp));
@@ -1294,6 +1299,107 @@ START_TEST(test_writers_same_bytes)
         record_fake(run, 5, writers, CAP_COMPRESSION_DEFAULT);
         assert_same_files(ref, run, 5);
     }
+    rm_rf(dir);
+}
+END_TEST
+
+/* The dedupe decision: same name, digest, size and channels → where the previous frame has it;
+ * a reference is never chained; a frame file is never empty. */
+START_TEST(test_dedupe_decision)
+{
+    static char *ch_rgb[] = {"R", "G", "B"}, *ch_y[] = {"Y"};
+    cap_bufrec prev[3] = {
+        {.name = "shadow.light0", .width = 4, .height = 4, .channel_count = 1, .digest = "aa", .stored_in = -1},
+        {.name = "gbuffer.normal", .width = 4, .height = 4, .channel_count = 3, .digest = "bb", .stored_in = 2},
+        {.name = "final.display", .width = 4, .height = 4, .channel_count = 3, .digest = "cc", .stored_in = -1},
+    };
+    prev[0].channels[0] = ch_y[0];
+    for (int k = 0; k < 3; k++)
+        prev[1].channels[k] = prev[2].channels[k] = ch_rgb[k];
+    cap_bufrec cur[4];
+    memcpy(cur, prev, sizeof prev);
+    cur[3] = (cap_bufrec){.name = "new.buffer", .width = 4, .height = 4, .channel_count = 1, .digest = "dd"};
+    cur[3].channels[0] = ch_y[0];
+    snprintf(cur[2].digest, sizeof cur[2].digest, "ce"); /* changed */
+    ck_assert_int_eq(cap__dedupe_frame(prev, 3, 5, cur, 4), 2);
+    ck_assert_int_eq(cur[0].stored_in, 5);  /* held by frame 5 itself */
+    ck_assert_int_eq(cur[1].stored_in, 2);  /* frame 5 refers to 2: so does this one, no chain */
+    ck_assert_int_eq(cur[2].stored_in, -1); /* changed */
+    ck_assert_int_eq(cur[3].stored_in, -1); /* not in the previous frame */
+    /* Same digest but other channel names or size: stored. */
+    memcpy(cur, prev, sizeof prev);
+    static char *ch_xyz[] = {"X", "Y", "Z"};
+    for (int k = 0; k < 3; k++)
+        cur[1].channels[k] = ch_xyz[k];
+    cur[0].width = 8;
+    ck_assert_int_eq(cap__dedupe_frame(prev, 3, 5, cur, 3), 2);
+    ck_assert_int_eq(cur[0].stored_in, -1);
+    ck_assert_int_eq(cur[1].stored_in, -1);
+    ck_assert_int_eq(cur[2].stored_in, 5);
+    /* Everything the same: the first buffer stays in the file; no previous frame: all stored. */
+    memcpy(cur, prev, sizeof prev);
+    ck_assert_int_eq(cap__dedupe_frame(prev, 3, 5, cur, 3), 1);
+    ck_assert_int_eq(cur[0].stored_in, -1);
+    ck_assert_int_eq(cur[1].stored_in, 2);
+    ck_assert_int_eq(cur[2].stored_in, 5);
+    ck_assert_int_eq(cap__dedupe_frame(NULL, 0, -1, cur, 3), 3);
+    /* The manifest's names of frame files, and nothing else. */
+    int f = -1;
+    ck_assert(cap__parse_frame_rel("frames/000012.exr", &f) && f == 12);
+    ck_assert(!cap__parse_frame_rel("frames/12.exr", &f));
+    ck_assert(!cap__parse_frame_rel("frames/000012.exr.tmp", &f));
+    ck_assert(!cap__parse_frame_rel("../frames/000012.exr", &f));
+    ck_assert(!cap__parse_frame_rel("frames/-00001.exr", &f));
+}
+END_TEST
+
+/* A static buffer is stored once within the run: frame files after the first leave it out and
+ * their records say where it is; with capture_whole_frames every file holds every buffer. The
+ * files are the same bytes whatever the number of writers (test_writers_same_bytes). */
+START_TEST(test_dedupe_run)
+{
+    char dir[256], run[300], whole[300];
+    make_tmpdir(dir);
+    snprintf(run, sizeof run, "%s/run", dir);
+    snprintf(whole, sizeof whole, "%s/whole", dir);
+    record_fake(run, 3, 1, CAP_COMPRESSION_DEFAULT);
+    fake_whole_frames = 1;
+    record_fake(whole, 3, 1, CAP_COMPRESSION_DEFAULT);
+    fake_whole_frames = 0;
+    for (int f = 0; f < 3; f++) {
+        char p[400];
+        rd_part *a = NULL, *b = NULL;
+        snprintf(p, sizeof p, "%s/frames/%06d.exr", run, f);
+        int na = read_exr(p, &a);
+        snprintf(p, sizeof p, "%s/frames/%06d.exr", whole, f);
+        int nb = read_exr(p, &b);
+        ck_assert_int_eq(na, f == 0 ? 4 : 3);
+        ck_assert_int_eq(nb, 4);
+        for (int i = 0; i < na; i++)
+            ck_assert(f == 0 || strcmp(a[i].name, "shadow.light0") != 0);
+        free_parts(a, na);
+        free_parts(b, nb);
+    }
+    cJSON *man = load_manifest(run), *wm = load_manifest(whole);
+    ck_assert(cJSON_IsTrue(get(get(man, "capture"), "dedupe")));
+    ck_assert(cJSON_IsFalse(get(get(wm, "capture"), "dedupe")));
+    cJSON *frames = get(man, "frames"), *wframes = get(wm, "frames");
+    for (int f = 0; f < 3; f++) {
+        cJSON *bufs = get(cJSON_GetArrayItem(frames, f), "buffers");
+        cJSON *wbufs = get(cJSON_GetArrayItem(wframes, f), "buffers");
+        for (int i = 0; i < cJSON_GetArraySize(bufs); i++) {
+            cJSON *b = cJSON_GetArrayItem(bufs, i), *w = cJSON_GetArrayItem(wbufs, i);
+            ck_assert_str_eq(gets(b, "digest"), gets(w, "digest"));
+            ck_assert(!cJSON_GetObjectItemCaseSensitive(w, "stored_in"));
+            cJSON *in = cJSON_GetObjectItemCaseSensitive(b, "stored_in");
+            if (f > 0 && strcmp(gets(b, "name"), "shadow.light0") == 0)
+                ck_assert_str_eq(in ? in->valuestring : "", "frames/000000.exr");
+            else
+                ck_assert_ptr_null(in);
+        }
+    }
+    cJSON_Delete(man);
+    cJSON_Delete(wm);
     rm_rf(dir);
 }
 END_TEST
@@ -1384,7 +1490,9 @@ START_TEST(test_recompress)
     char dir[256], run[300], src[400], zip[400], back[400], again[400];
     make_tmpdir(dir);
     snprintf(run, sizeof run, "%s/run", dir);
+    fake_whole_frames = 1; /* frame 1's file holds every buffer */
     record_fake(run, 2, 1, CAP_COMPRESSION_RLE);
+    fake_whole_frames = 0;
     snprintf(src, sizeof src, "%s/frames/000001.exr", run);
     snprintf(zip, sizeof zip, "%s/zip.exr", dir);
     snprintf(back, sizeof back, "%s/back.exr", dir);
@@ -1583,6 +1691,8 @@ static Suite *capture_suite(void)
     tcase_add_test(run, test_duplicate_buffer_rejected);
     tcase_add_test(run, test_bad_buffers_rejected);
     tcase_add_test(run, test_writers_same_bytes);
+    tcase_add_test(run, test_dedupe_decision);
+    tcase_add_test(run, test_dedupe_run);
     tcase_add_test(run, test_compression);
     tcase_add_test(run, test_recompress);
     suite_add_tcase(s, run);

@@ -33,7 +33,7 @@ typedef struct rep_buffer_info {
     uint64_t nan, inf;
     int has_nonfinite_counts;         /* the manifest gave "nan" and "inf" */
     /* -1: a part of its frame's own file. Else the index of the earlier frame whose file holds
-     * the part: the manifest's "stored_in" (that frame's "file"), where capture_dedupe stored a
+     * the part: the manifest's "stored_in" (that frame's "file"), where capture stored a
      * buffer identical to the previous frame's once. rep_run_open checks that the frame is
      * earlier and lists the same-name buffer, with the same digest, size and channels, in its own
      * file; format 2 (objects by digest) sets -1. */

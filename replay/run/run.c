@@ -192,6 +192,11 @@ static eng_result parse_stored_in(rep_run *run, const char *mf, const char *wher
     for (int q = 0; q < run->frame_count && k < 0; q++)
         if (run->frames[q].file && strcmp(run->frames[q].file, in->valuestring) == 0)
             k = q;
+    /* Frames after i are not parsed yet: a name of capture's form tells a forward reference. */
+    int later = 0, len = 0;
+    if (k < 0 && sscanf(in->valuestring, "frames/%d.exr%n", &later, &len) == 1 && len == (int)strlen(in->valuestring) &&
+        later > i && later < run->planned_frames)
+        k = later;
     if (k < 0 || k >= i)
         return eng_fail(err, ENG_ERR_INVALID,
                         "%s: %s (%s): \"stored_in\" %s is not the file of an earlier frame (a reference %s)", mf,
@@ -383,6 +388,7 @@ static eng_result parse_manifest(rep_run *run, const cJSON *root, eng_error *err
     if (n != fc)
         return eng_fail(err, ENG_ERR_INVALID, "%s: frame_count is %lld but %d frames are listed", mf,
                         (long long)fc, n);
+    run->planned_frames = n;
     run->frames = rep_xcalloc((size_t)n, sizeof *run->frames);
     const cJSON *jf = frames->child;
     for (int i = 0; i < n; i++, jf = jf->next) {
