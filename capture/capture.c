@@ -983,7 +983,7 @@ eng_listener cap_listener(cap_capture *c)
 
 /* ---------------------------------------------------------------- compression names */
 
-static const char *const COMPRESSION_NAMES[] = {"none", "none", "rle", "zips", "zip", "piz"};
+static const char *const COMPRESSION_NAMES[] = {"by-kind", "none", "rle", "zips", "zip", "piz", "by-kind"};
 
 const char *cap_compression_name(cap_compression m)
 {
@@ -992,7 +992,7 @@ const char *cap_compression_name(cap_compression m)
 
 int cap_compression_parse(const char *name, cap_compression *out)
 {
-    for (int m = CAP_COMPRESSION_NONE; name && m <= CAP_COMPRESSION_PIZ; m++)
+    for (int m = CAP_COMPRESSION_NONE; name && m <= CAP_COMPRESSION_BY_KIND; m++)
         if (strcmp(name, COMPRESSION_NAMES[m]) == 0) {
             *out = (cap_compression)m;
             return 1;

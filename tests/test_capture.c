@@ -1407,13 +1407,28 @@ END_TEST
 START_TEST(test_compression)
 {
     cap_compression m = CAP_COMPRESSION_DEFAULT;
-    const char *names[] = {"none", "rle", "zips", "zip", "piz"};
-    for (int i = 0; i < 5; i++) {
+    const char *names[] = {"none", "rle", "zips", "zip", "piz", "by-kind"};
+    enum { NC = 6 };
+    for (int i = 0; i < NC; i++) {
         ck_assert(cap_compression_parse(names[i], &m));
         ck_assert_int_eq(m, CAP_COMPRESSION_NONE + i);
         ck_assert_str_eq(cap_compression_name(m), names[i]);
     }
-    ck_assert_str_eq(cap_compression_name(CAP_COMPRESSION_DEFAULT), "none"); /* record's default */
+    ck_assert_str_eq(cap_compression_name(CAP_COMPRESSION_DEFAULT), "by-kind"); /* record's default */
+    /* by-kind's table: ZIP level 1 for the kinds that shrink cheaply, none for the rest. */
+    static const char *const zip1[] = {"gbuffer.material", "gbuffer.motion", "gbuffer.normal", "gbuffer.depth",
+                                       "splat.count", "gather.tile_count", "lightgbuffer.light0.face2.normal",
+                                       "bounce.light1", "photons.map"};
+    static const char *const none[] = {"gbuffer.position", "gbuffer.albedo", "direct.radiance", "final.display",
+                                       "shadow.light0", "composite.radiance", "splat.indirect"};
+    for (size_t i = 0; i < sizeof zip1 / sizeof zip1[0]; i++) {
+        int level = -1;
+        ck_assert_msg(cap_compression_for(zip1[i], &level) == CAP_COMPRESSION_ZIP && level == 1, "%s", zip1[i]);
+    }
+    for (size_t i = 0; i < sizeof none / sizeof none[0]; i++) {
+        int level = -1;
+        ck_assert_msg(cap_compression_for(none[i], &level) == CAP_COMPRESSION_NONE && level == 0, "%s", none[i]);
+    }
     m = CAP_COMPRESSION_RLE;
     ck_assert(!cap_compression_parse("b44", &m)); /* lossy for floats: refused */
     ck_assert(!cap_compression_parse("ZIP", &m));
@@ -1424,7 +1439,7 @@ START_TEST(test_compression)
     /* The sequence accepts exactly the names capture knows (settings.def lists them). */
     const eng_setting *d = eng_setting_find("capture_compression");
     ck_assert_ptr_nonnull(d);
-    ck_assert_int_eq(d->name_count, 5);
+    ck_assert_int_eq(d->name_count, NC);
     for (int i = 0; i < d->name_count; i++) {
         ck_assert(cap_compression_parse(d->names[i].name, &m));
         ck_assert_str_eq(d->names[i].name, names[i]);
@@ -1449,9 +1464,9 @@ START_TEST(test_compression)
     /* Each compression decodes to the announced bits; the manifests' digests are the same. */
     char dir[256], run[300], path[400];
     make_tmpdir(dir);
-    long size[5];
-    char *digests[5];
-    for (int i = 0; i < 5; i++) {
+    long size[NC];
+    char *digests[NC];
+    for (int i = 0; i < NC; i++) {
         snprintf(run, sizeof run, "%s/%s", dir, names[i]);
         record_fake(run, 1, 1, (cap_compression)(CAP_COMPRESSION_NONE + i));
         snprintf(path, sizeof path, "%s/frames/000000.exr", run);
@@ -1463,6 +1478,9 @@ START_TEST(test_compression)
         ck_assert_int_eq(n, 4);
         fake_frame f;
         fake_init(&f, 0, 24, 20);
+        if (i == NC - 1) /* by-kind: none for every one of these kinds */
+            for (int k = 0; k < n; k++)
+                ck_assert_int_eq(parts[k].compression, EXR_COMPRESSION_NONE);
         assert_part_equals(&parts[0], &f.bpos);
         assert_part_equals(&parts[2], &f.balb);
         assert_part_equals(&parts[3], &f.brad);
@@ -1477,13 +1495,13 @@ START_TEST(test_compression)
             ck_assert_str_eq(digests[i], digests[0]);
     }
     ck_assert_int_lt(size[3], size[0]); /* zip < none */
-    for (int i = 0; i < 5; i++)
+    for (int i = 0; i < NC; i++)
         free(digests[i]);
     rm_rf(dir);
 }
 END_TEST
 
-/* record writes uncompressed frame files by default (capture_compression "none"); ispm bless
+/* record writes frame files by kind of buffer by default (capture_compression "by-kind"); ispm bless
  * recompresses them to zip with cap_recompress_exr: same parts, order, attributes and bits, only the compression changes. */
 START_TEST(test_recompress)
 {
