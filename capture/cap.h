@@ -163,16 +163,25 @@ eng_result cap_write_exr_unsynced(const char *path, const eng_buffer *const *buf
  * was announced whatever the choice; only the file's bytes and size change). A sequence names
  * it in settings.capture_compression, which the engine passes on as text. */
 typedef enum cap_compression {
-    CAP_COMPRESSION_DEFAULT = 0, /* record's default: none */
+    CAP_COMPRESSION_DEFAULT = 0, /* record's default: by-kind */
     CAP_COMPRESSION_NONE,
     CAP_COMPRESSION_RLE,
     CAP_COMPRESSION_ZIPS,        /* zlib, one scanline per block */
     CAP_COMPRESSION_ZIP,         /* zlib, 16 scanlines per block */
-    CAP_COMPRESSION_PIZ          /* wavelet + Huffman */
+    CAP_COMPRESSION_PIZ,         /* wavelet + Huffman */
+    CAP_COMPRESSION_BY_KIND      /* per part, cap_compression_for's table */
 } cap_compression;
 const char *cap_compression_name(cap_compression m);
-/* "none", "rle", "zips", "zip", "piz" → *out; 0 if name is none of them. */
+/* "none", "rle", "zips", "zip", "piz", "by-kind" → *out; 0 if name is none of them. */
 int cap_compression_parse(const char *name, cap_compression *out);
+
+/* What "by-kind" gives the buffer called name, chosen by measurement (docs/runs.md, "How frames
+ * are compressed": bytes and encode time of every buffer of the atrium at 1920×1080): ZIP at zlib
+ * level 1 (*zip_level 1) for the kinds it shrinks to a tenth to a half for little time (material
+ * ids, motion, normals, depth, counts, the lights' small G-buffers, bounce and photon maps);
+ * none (*zip_level 0) for noisy float colour, positions and shadow depth, which no lossless codec
+ * shrinks by more than a third and whose encode would cost more CPU than rendering spares. */
+cap_compression cap_compression_for(const char *name, int *zip_level);
 
 /* The EXR file src written again as dst with every part compressed with m (lossless: none,
  * rle, zips, zip, piz; DEFAULT is none): the same parts in the same order, every attribute

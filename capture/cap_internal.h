@@ -13,6 +13,31 @@ typedef struct cap_exr_meta {
     int zip_level;               /* ZIP/ZIPS zlib level 1..9; 0: OpenEXR's default */
 } cap_exr_meta;
 
+/* What the manifest says about one captured buffer. */
+typedef struct cap_bufrec {
+    char *name;
+    int width, height, channel_count;
+    char *channels[ENG_MAX_CHANNELS];
+    char digest[40];
+    uint64_t nan_count, inf_count;
+    int first_x, first_y; /* first non-finite pixel, -1 if none */
+    /* -1: a part of its own frame's file; else the earlier frame whose file holds an identical
+     * buffer of the same name (the manifest's "stored_in"), never one that refers on itself. */
+    int stored_in;
+} cap_bufrec;
+
+/* Within-run storage of a buffer identical to the previous frame's (unless capture_whole_frames): sets
+ * cur[i].stored_in, for each of the n buffers of a frame, to where the same-name buffer of the
+ * previous frame prev_frame (its np records prev, or none: np 0) is stored when both have the
+ * same digest, size and channel names in the same order: prev's stored_in, or prev_frame when
+ * prev holds it itself; else -1. A frame file is never empty: when every buffer would refer, the
+ * first stays stored. Returns how many buffers the frame's file holds. */
+int cap__dedupe_frame(const cap_bufrec *prev, int np, int prev_frame, cap_bufrec *cur, int n);
+
+/* "frames/NNNNNN.exr" (the manifest's name of frame NNNNNN's file, exactly as capture writes
+ * it) → *frame; 0 if rel is not such a name. */
+int cap__parse_frame_rel(const char *rel, int *frame);
+
 /* cap_write_exr with metadata (meta may be NULL). */
 eng_result cap__write_exr(const char *path, const eng_buffer *const *bufs, int count,
                           const cap_exr_meta *meta, eng_error *err);

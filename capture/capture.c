@@ -56,16 +56,6 @@ static int runinfo_optional(const char *key)
     return strcmp(key, "shard") == 0;
 }
 
-/* What the manifest says about one captured buffer. */
-typedef struct cap_bufrec {
-    char *name;
-    int width, height, channel_count;
-    char *channels[ENG_MAX_CHANNELS];
-    char digest[40];
-    uint64_t nan_count, inf_count;
-    int first_x, first_y; /* first non-finite pixel, -1 if none */
-} cap_bufrec;
-
 typedef struct cap_frame {
     int done;
     double time;
@@ -121,11 +111,17 @@ struct cap_capture {
     int pending_count, pending_cap;
     cap_pending *pending;
     cap_compression compression;
+    int dedupe;        /* not capture_whole_frames: a buffer equal to the previous frame's is stored once */
     cap_wq *wq;        /* the writers, or NULL: frames are written in on_frame_end */
     pthread_t remover; /* removes set-aside frames folders (remover_on: started, not joined) */
     int remover_on;
-    /* status, error and frames[] are shared with the writers: under lock. */
+    /* status, error, frames[] and queued[] are shared with the writers: under lock. */
     pthread_mutex_t lock;
+    /* queued[i]: frame i is ended and on its way to disk. A writer deciding what frame i + 1
+     * stores waits on `written` while frame i is queued and not done, so that the decision, and
+     * the file, are the same whatever the number of writers. */
+    char *queued;
+    pthread_cond_t written;
     eng_result status; /* sticky: the first failure, of a callback or a writer */
     eng_error error;
     eng_error cb_error; /* where the callbacks format a failure (this thread only) */
@@ -175,6 +171,19 @@ static void drop_pending(cap_capture *c)
 static void frame_rel(int i, char out[32])
 {
     snprintf(out, 32, "frames/%06d.exr", i);
+}
+
+int cap__parse_frame_rel(const char *rel, int *frame)
+{
+    int n = 0, len = 0;
+    if (sscanf(rel, "frames/%6d.exr%n", &n, &len) != 1 || len != (int)strlen(rel) || n < 0)
+        return 0;
+    char back[32];
+    frame_rel(n, back);
+    if (strcmp(back, rel) != 0)
+        return 0;
+    *frame = n;
+    return 1;
 }
 
 static char *frame_path(const cap_capture *c, int i)
@@ -531,6 +540,7 @@ eng_result cap_create(const cap_desc *desc, cap_capture **out, eng_error *err)
     cap_capture *c = cap__xcalloc(1, sizeof *c);
     c->run_lock.fd = -1;
     pthread_mutex_init(&c->lock, NULL);
+    pthread_cond_init(&c->written, NULL);
     c->renderer = dup_or_null(desc->renderer);
     c->renderer_settings = renderer_settings;
     c->run_dir = cap__xstrdup(desc->run_dir);
@@ -579,6 +589,7 @@ eng_result cap_create(const cap_desc *desc, cap_capture **out, eng_error *err)
     }
     c->frame_count = desc->sequence->frame_count;
     c->frames = cap__xcalloc((size_t)c->frame_count, sizeof *c->frames);
+    c->queued = cap__xcalloc((size_t)c->frame_count, 1);
     c->write_first = 0;
     c->write_last = c->frame_count - 1;
     if (desc->shard) {
@@ -596,6 +607,7 @@ eng_result cap_create(const cap_desc *desc, cap_capture **out, eng_error *err)
         return eng_fail(err, ENG_ERR_INVALID, "%s: capture_compression \"%.*s\" is not a compression capture knows",
                         desc->sequence->path, (int)sizeof st.capture_compression, st.capture_compression);
     }
+    c->dedupe = !st.capture_whole_frames;
     r = resume ? resume_run(c, err) : write_runinfo(c, err);
     if (r != ENG_OK) {
         cap_destroy(c);
@@ -646,6 +658,8 @@ void cap_destroy(cap_capture *c)
     free(c->run_dir);
     free(c->frames_dir);
     pthread_mutex_destroy(&c->lock);
+    pthread_cond_destroy(&c->written);
+    free(c->queued);
     free(c);
 }
 
@@ -796,6 +810,7 @@ static int on_buffer(void *user, int frame, const eng_buffer *buf)
     p->rec.width = buf->width;
     p->rec.height = buf->height;
     p->rec.channel_count = buf->channel_count;
+    p->rec.stored_in = -1;
     for (int i = 0; i < buf->channel_count; i++)
         p->rec.channels[i] = cap__xstrdup(buf->channels[i]);
     return 0;
@@ -811,8 +826,13 @@ typedef struct cap_job {
 
 static void free_job(void *ctx, void *job)
 {
-    (void)ctx;
+    cap_capture *c = ctx;
     cap_job *j = job;
+    /* Written or dropped, the frame is no longer on its way: a writer waiting on it goes on. */
+    pthread_mutex_lock(&c->lock);
+    c->queued[j->frame] = 0;
+    pthread_cond_broadcast(&c->written);
+    pthread_mutex_unlock(&c->lock);
     for (int i = 0; i < j->count; i++) {
         free_rec(&j->bufs[i].rec);
         free(j->bufs[i].data);
@@ -834,18 +854,36 @@ static int write_job(void *ctx, void *job)
     const eng_buffer **bufs = cap__xcalloc((size_t)j->count, sizeof *bufs);
     eng_buffer *views = cap__xcalloc((size_t)j->count, sizeof *views);
     const char *(*chans)[ENG_MAX_CHANNELS] = cap__xcalloc((size_t)j->count, sizeof *chans);
+    cap_bufrec *recs = cap__xcalloc((size_t)j->count, sizeof *recs);
     for (int i = 0; i < j->count; i++) {
         cap_bufrec *rec = &j->bufs[i].rec;
         for (int k = 0; k < rec->channel_count; k++)
             chans[i][k] = rec->channels[k];
         views[i] = (eng_buffer){rec->name, rec->width, rec->height, rec->channel_count, chans[i], j->bufs[i].data};
-        bufs[i] = &views[i];
         eng_buffer_digest(&views[i], rec->digest);
         eng_buffer_nonfinite(&views[i], &rec->nan_count, &rec->inf_count, &rec->first_x, &rec->first_y);
+        recs[i] = *rec; /* shallow: the strings stay j's */
     }
+    /* The previous frame's records, once its writer is done with them (it was queued first). */
+    int prev = j->frame - 1;
+    if (c->dedupe && prev >= c->write_first) {
+        pthread_mutex_lock(&c->lock);
+        while (!c->frames[prev].done && c->queued[prev] && c->status == ENG_OK)
+            pthread_cond_wait(&c->written, &c->lock);
+        if (c->frames[prev].done)
+            cap__dedupe_frame(c->frames[prev].buffers, c->frames[prev].buffer_count, prev, recs, j->count);
+        pthread_mutex_unlock(&c->lock);
+    }
+    int stored = 0;
+    for (int i = 0; i < j->count; i++) {
+        j->bufs[i].rec.stored_in = recs[i].stored_in;
+        if (recs[i].stored_in < 0)
+            bufs[stored++] = &views[i];
+    }
+    free(recs);
     char *path = frame_path(c, j->frame);
     cap_exr_meta meta = {j->frame, j->rec.time, c->compression, 0};
-    eng_result r = cap__write_exr(path, bufs, j->count, &meta, &err);
+    eng_result r = cap__write_exr(path, bufs, stored, &meta, &err);
     free(bufs);
     free(views);
     free(chans);
@@ -864,6 +902,7 @@ static int write_job(void *ctx, void *job)
             memset(&j->bufs[i].rec, 0, sizeof j->bufs[i].rec); /* moved */
         }
         f->done = 1;
+        pthread_cond_broadcast(&c->written);
         pthread_mutex_unlock(&c->lock);
         r = write_frame_record(c, j->frame, &err);
         if (r != ENG_OK) {
@@ -876,6 +915,32 @@ static int write_job(void *ctx, void *job)
         set_error(c, r, &err);
     free_job(c, j);
     return r != ENG_OK;
+}
+
+int cap__dedupe_frame(const cap_bufrec *prev, int np, int prev_frame, cap_bufrec *cur, int n)
+{
+    int stored = 0;
+    for (int i = 0; i < n; i++) {
+        cur[i].stored_in = -1;
+        for (int k = 0; k < np; k++) {
+            const cap_bufrec *p = &prev[k];
+            if (strcmp(p->name, cur[i].name) != 0)
+                continue;
+            int same = strcmp(p->digest, cur[i].digest) == 0 && p->width == cur[i].width &&
+                       p->height == cur[i].height && p->channel_count == cur[i].channel_count;
+            for (int ch = 0; same && ch < p->channel_count; ch++)
+                same = strcmp(p->channels[ch], cur[i].channels[ch]) == 0;
+            if (same)
+                cur[i].stored_in = p->stored_in >= 0 ? p->stored_in : prev_frame;
+            break;
+        }
+        stored += cur[i].stored_in < 0;
+    }
+    if (stored == 0 && n > 0) {
+        cur[0].stored_in = -1;
+        stored = 1;
+    }
+    return stored;
 }
 
 static int on_frame_end(void *user, const eng_frame_stats *stats)
@@ -929,6 +994,9 @@ static int on_frame_end(void *user, const eng_frame_stats *stats)
     c->pending = NULL;
     c->pending_count = c->pending_cap = 0;
     c->cur_frame = -1;
+    pthread_mutex_lock(&c->lock);
+    c->queued[frame] = 1;
+    pthread_mutex_unlock(&c->lock);
     if (!c->wq)
         return write_job(c, j);
     /* Blocks while the queue is full (the memory bound); a writer's failure makes it fail. */
@@ -943,7 +1011,7 @@ eng_listener cap_listener(cap_capture *c)
 
 /* ---------------------------------------------------------------- compression names */
 
-static const char *const COMPRESSION_NAMES[] = {"none", "none", "rle", "zips", "zip", "piz"};
+static const char *const COMPRESSION_NAMES[] = {"by-kind", "none", "rle", "zips", "zip", "piz", "by-kind"};
 
 const char *cap_compression_name(cap_compression m)
 {
@@ -952,7 +1020,7 @@ const char *cap_compression_name(cap_compression m)
 
 int cap_compression_parse(const char *name, cap_compression *out)
 {
-    for (int m = CAP_COMPRESSION_NONE; name && m <= CAP_COMPRESSION_PIZ; m++)
+    for (int m = CAP_COMPRESSION_NONE; name && m <= CAP_COMPRESSION_BY_KIND; m++)
         if (strcmp(name, COMPRESSION_NAMES[m]) == 0) {
             *out = (cap_compression)m;
             return 1;
@@ -1136,6 +1204,11 @@ static cJSON *frame_json(const cap_frame *f, int index)
         jadd(b, "nan", cJSON_CreateNumber((double)r->nan_count));
         jadd(b, "inf", cJSON_CreateNumber((double)r->inf_count));
         jadd(b, "first_nonfinite", r->first_x < 0 ? cJSON_CreateNull() : jpair(r->first_x, r->first_y));
+        if (r->stored_in >= 0) {
+            char rel[32];
+            frame_rel(r->stored_in, rel);
+            jadd(b, "stored_in", cJSON_CreateString(rel));
+        }
         jpush(bufs, b);
     }
     jadd(o, "buffers", bufs);
@@ -1241,6 +1314,7 @@ static cJSON *manifest_json(const cap_capture *c)
      * compare it), since every lossless choice decodes to the same bits. */
     cJSON *cp = jok(cJSON_CreateObject());
     jadd(cp, "compression", jstr(cap_compression_name(c->compression)));
+    jadd(cp, "dedupe", cJSON_CreateBool(c->dedupe));
     jadd(root, "capture", cp);
 
     cJSON *det = jok(cJSON_CreateObject());
@@ -1582,6 +1656,13 @@ static eng_result frame_from_json(const char *path, int index, const cJSON *o, c
             rec->first_y = (int)y->valuedouble;
         } else if (!cJSON_IsNull(first))
             return eng_fail(err, ENG_ERR_INVALID, "%s: buffers[%d].first_nonfinite is not null or [x, y]", path, i);
+        rec->stored_in = -1;
+        const cJSON *in = cJSON_GetObjectItemCaseSensitive(b, "stored_in");
+        if (in && !cap__parse_frame_rel(cJSON_IsString(in) ? in->valuestring : "", &rec->stored_in))
+            return eng_fail(err, ENG_ERR_INVALID, "%s: buffers[%d].stored_in is not frames/NNNNNN.exr", path, i);
+        if (rec->stored_in >= index)
+            return eng_fail(err, ENG_ERR_INVALID, "%s: buffers[%d].stored_in names frame %d, not an earlier one", path, i,
+                            rec->stored_in);
     }
     f->done = 1;
     return ENG_OK;

@@ -28,6 +28,7 @@
 
 #include <errno.h>
 #include <fcntl.h>
+#include <fnmatch.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -305,15 +306,38 @@ static exr_compression_t exr_type(cap_compression m)
     case CAP_COMPRESSION_ZIPS: return EXR_COMPRESSION_ZIPS;
     case CAP_COMPRESSION_ZIP: return EXR_COMPRESSION_ZIP;
     case CAP_COMPRESSION_PIZ: return EXR_COMPRESSION_PIZ;
+    case CAP_COMPRESSION_BY_KIND: return EXR_COMPRESSION_ZIP; /* per part: exr_part_compression */
     case CAP_COMPRESSION_RLE: break;
     }
     return EXR_COMPRESSION_RLE;
 }
 
-/* cap_write_exr (no meta) keeps its documented ZIP; frame files follow the setting. */
-static exr_compression_t exr_compression(const cap_exr_meta *meta)
+/* Buffer names by kind, first match wins (fnmatch): what by-kind compresses with ZIP level 1. */
+static const char *const ZIP1_KINDS[] = {
+    "gbuffer.material", "gbuffer.motion", "gbuffer.normal", "gbuffer.depth", "*.count", "*_count",
+    "lightgbuffer.*",   "bounce.*",       "photons.*",      NULL};
+
+cap_compression cap_compression_for(const char *name, int *zip_level)
 {
-    return meta ? exr_type(meta->compression) : EXR_COMPRESSION_ZIP;
+    for (int i = 0; name && ZIP1_KINDS[i]; i++)
+        if (fnmatch(ZIP1_KINDS[i], name, 0) == 0) {
+            *zip_level = 1;
+            return CAP_COMPRESSION_ZIP;
+        }
+    *zip_level = 0;
+    return CAP_COMPRESSION_NONE;
+}
+
+/* cap_write_exr (no meta) keeps its documented ZIP; frame files follow the setting, by-kind (the
+ * default) part by part. *level: the part's zlib level (0: the library's default). */
+static exr_compression_t exr_part_compression(const cap_exr_meta *meta, const char *name, int *level)
+{
+    *level = meta ? meta->zip_level : 0;
+    if (!meta)
+        return EXR_COMPRESSION_ZIP;
+    if (meta->compression == CAP_COMPRESSION_BY_KIND || meta->compression == CAP_COMPRESSION_DEFAULT)
+        return exr_type(cap_compression_for(name, level));
+    return exr_type(meta->compression);
 }
 
 /* What one file holds: defines the parts in ctxt (a context started for writing), writes
@@ -378,12 +402,14 @@ static exr_result_t fill_frame(exr_context_t ctxt, void *arg)
         memset(&data, 0, sizeof data);
         data.max.x = b->width - 1;
         data.max.y = b->height - 1;
+        int level = 0;
+        exr_compression_t comp = exr_part_compression(meta, b->name, &level);
         rv = exr_add_part(ctxt, b->name, EXR_STORAGE_SCANLINE, &part);
         if (rv == EXR_ERR_SUCCESS)
             rv = exr_initialize_required_attr(ctxt, part, &display, &data, 1.0f, &center, 1.0f,
-                                              EXR_LINEORDER_INCREASING_Y, exr_compression(meta));
-        if (rv == EXR_ERR_SUCCESS && meta && meta->zip_level > 0)
-            rv = exr_set_zip_compression_level(ctxt, part, meta->zip_level);
+                                              EXR_LINEORDER_INCREASING_Y, comp);
+        if (rv == EXR_ERR_SUCCESS && level > 0 && (comp == EXR_COMPRESSION_ZIP || comp == EXR_COMPRESSION_ZIPS))
+            rv = exr_set_zip_compression_level(ctxt, part, level);
         for (int c = 0; c < b->channel_count && rv == EXR_ERR_SUCCESS; c++)
             rv = exr_add_channel(ctxt, part, b->channels[c], EXR_PIXEL_FLOAT,
                                  EXR_PERCEPTUALLY_LOGARITHMIC, 1, 1);
@@ -678,6 +704,8 @@ eng_result cap_recompress_exr(const char *src, const char *dst, cap_compression 
         *rewritten = 0;
     if (!src || !src[0] || !dst || !dst[0])
         return eng_fail(err, ENG_ERR_INVALID, "cap_recompress_exr: no path");
+    if (m == CAP_COMPRESSION_BY_KIND)
+        return eng_fail(err, ENG_ERR_INVALID, "%s: cap_recompress_exr takes one compression for every part", src);
     exr_recode r = {.comp = exr_type(m)};
     int same = 0;
     eng_result res = load_exr(src, &r, 1, &same, err);

@@ -415,6 +415,42 @@ static void replace(cJSON *o, const char *key, cJSON *item)
         cJSON_AddItemToObject(o, key, cap__jok(item));
 }
 
+/* A buffer a shard stored once within the run ("stored_in": an earlier frame's file) may name
+ * one of its overlap frames, whose file the merged run takes from the shard before, where that
+ * buffer may itself be stored further back: each reference, frame by frame in order, is made
+ * the one the merged frame it names holds (equal digests: the overlap was checked), so that
+ * every reference names a file that holds the part. */
+static eng_result resolve_stored_in(cJSON *frames, const char *run_dir, eng_error *err)
+{
+    int g = 0;
+    for (cJSON *f = frames->child; f; f = f->next, g++) {
+        cJSON *bufs = cJSON_GetObjectItemCaseSensitive(f, "buffers");
+        for (cJSON *b = bufs ? bufs->child : NULL; b; b = b->next) {
+            cJSON *in = cJSON_GetObjectItemCaseSensitive(b, "stored_in");
+            if (!in)
+                continue;
+            const cJSON *name = cJSON_GetObjectItemCaseSensitive(b, "name");
+            int h = -1;
+            if (!cJSON_IsString(in) || !cap__parse_frame_rel(in->valuestring, &h) || h >= g || !cJSON_IsString(name))
+                return eng_fail(err, ENG_ERR_INVALID, "%s: frame %d: a buffer's \"stored_in\" names no earlier frame",
+                                run_dir, g);
+            const cJSON *hb = NULL, *hbufs = cJSON_GetObjectItemCaseSensitive(cJSON_GetArrayItem(frames, h), "buffers");
+            for (const cJSON *x = hbufs ? hbufs->child : NULL; x && !hb; x = x->next) {
+                const cJSON *xn = cJSON_GetObjectItemCaseSensitive(x, "name");
+                if (cJSON_IsString(xn) && strcmp(xn->valuestring, name->valuestring) == 0)
+                    hb = x;
+            }
+            if (!hb)
+                return eng_fail(err, ENG_ERR_INVALID, "%s: frame %d: %s is stored in frame %d, which has no %s", run_dir,
+                                g, name->valuestring, h, name->valuestring);
+            const cJSON *further = cJSON_GetObjectItemCaseSensitive(hb, "stored_in");
+            if (further)
+                cJSON_ReplaceItemInObjectCaseSensitive(b, "stored_in", cap__jok(cJSON_Duplicate(further, 1)));
+        }
+    }
+    return ENG_OK;
+}
+
 static eng_result write_run(const shard *const *sorted, int count, const cap_merge_desc *d, const char *run_dir,
                             eng_error *err)
 {
@@ -436,6 +472,8 @@ static eng_result write_run(const shard *const *sorted, int count, const cap_mer
             cJSON_AddItemToArray(frames, merged_record(sorted[k], g));
     cJSON_AddItemToObject(m, "frames", frames);
     cJSON_AddItemToObject(m, "complete", cap__jok(cJSON_CreateTrue()));
+    if (r == ENG_OK)
+        r = resolve_stored_in(frames, run_dir, err);
 
     if (r == ENG_OK) {
         static const char *const info_keys[] = {"sequence", "scene", "resolution", "fps", "frame_count",

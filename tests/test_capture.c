@@ -6,6 +6,7 @@
 #define _XOPEN_SOURCE 700
 
 #include "cap.h"
+#include "cap_internal.h"
 #include "eng.h"
 
 #include <check.h>
@@ -1220,11 +1221,15 @@ START_TEST(test_bad_buffers_rejected)
 }
 END_TEST
 
+/* capture_whole_frames for record_fake's runs (0: the static shadow is stored once). */
+static int fake_whole_frames;
+
 /* Records `frames` fake frames into run with the given writers and compression. */
 static void record_fake(const char *run, int frames, int writers, cap_compression comp)
 {
     seq_sequence seq;
     make_seq(&seq, frames, 24, 20);
+    seq.settings.capture_whole_frames = fake_whole_frames;
     if (comp != CAP_COMPRESSION_DEFAULT)
         snprintf(seq.settings.capture_compression, sizeof seq.settings.capture_compression, "%s",
                  cap_compression_name(comp));
@@ -1298,16 +1303,132 @@ START_TEST(test_writers_same_bytes)
 }
 END_TEST
 
+/* The dedupe decision: same name, digest, size and channels → where the previous frame has it;
+ * a reference is never chained; a frame file is never empty. */
+START_TEST(test_dedupe_decision)
+{
+    static char *ch_rgb[] = {"R", "G", "B"}, *ch_y[] = {"Y"};
+    cap_bufrec prev[3] = {
+        {.name = "shadow.light0", .width = 4, .height = 4, .channel_count = 1, .digest = "aa", .stored_in = -1},
+        {.name = "gbuffer.normal", .width = 4, .height = 4, .channel_count = 3, .digest = "bb", .stored_in = 2},
+        {.name = "final.display", .width = 4, .height = 4, .channel_count = 3, .digest = "cc", .stored_in = -1},
+    };
+    prev[0].channels[0] = ch_y[0];
+    for (int k = 0; k < 3; k++)
+        prev[1].channels[k] = prev[2].channels[k] = ch_rgb[k];
+    cap_bufrec cur[4];
+    memcpy(cur, prev, sizeof prev);
+    cur[3] = (cap_bufrec){.name = "new.buffer", .width = 4, .height = 4, .channel_count = 1, .digest = "dd"};
+    cur[3].channels[0] = ch_y[0];
+    snprintf(cur[2].digest, sizeof cur[2].digest, "ce"); /* changed */
+    ck_assert_int_eq(cap__dedupe_frame(prev, 3, 5, cur, 4), 2);
+    ck_assert_int_eq(cur[0].stored_in, 5);  /* held by frame 5 itself */
+    ck_assert_int_eq(cur[1].stored_in, 2);  /* frame 5 refers to 2: so does this one, no chain */
+    ck_assert_int_eq(cur[2].stored_in, -1); /* changed */
+    ck_assert_int_eq(cur[3].stored_in, -1); /* not in the previous frame */
+    /* Same digest but other channel names or size: stored. */
+    memcpy(cur, prev, sizeof prev);
+    static char *ch_xyz[] = {"X", "Y", "Z"};
+    for (int k = 0; k < 3; k++)
+        cur[1].channels[k] = ch_xyz[k];
+    cur[0].width = 8;
+    ck_assert_int_eq(cap__dedupe_frame(prev, 3, 5, cur, 3), 2);
+    ck_assert_int_eq(cur[0].stored_in, -1);
+    ck_assert_int_eq(cur[1].stored_in, -1);
+    ck_assert_int_eq(cur[2].stored_in, 5);
+    /* Everything the same: the first buffer stays in the file; no previous frame: all stored. */
+    memcpy(cur, prev, sizeof prev);
+    ck_assert_int_eq(cap__dedupe_frame(prev, 3, 5, cur, 3), 1);
+    ck_assert_int_eq(cur[0].stored_in, -1);
+    ck_assert_int_eq(cur[1].stored_in, 2);
+    ck_assert_int_eq(cur[2].stored_in, 5);
+    ck_assert_int_eq(cap__dedupe_frame(NULL, 0, -1, cur, 3), 3);
+    /* The manifest's names of frame files, and nothing else. */
+    int f = -1;
+    ck_assert(cap__parse_frame_rel("frames/000012.exr", &f) && f == 12);
+    ck_assert(!cap__parse_frame_rel("frames/12.exr", &f));
+    ck_assert(!cap__parse_frame_rel("frames/000012.exr.tmp", &f));
+    ck_assert(!cap__parse_frame_rel("../frames/000012.exr", &f));
+    ck_assert(!cap__parse_frame_rel("frames/-00001.exr", &f));
+}
+END_TEST
+
+/* A static buffer is stored once within the run: frame files after the first leave it out and
+ * their records say where it is; with capture_whole_frames every file holds every buffer. The
+ * files are the same bytes whatever the number of writers (test_writers_same_bytes). */
+START_TEST(test_dedupe_run)
+{
+    char dir[256], run[300], whole[300];
+    make_tmpdir(dir);
+    snprintf(run, sizeof run, "%s/run", dir);
+    snprintf(whole, sizeof whole, "%s/whole", dir);
+    record_fake(run, 3, 1, CAP_COMPRESSION_DEFAULT);
+    fake_whole_frames = 1;
+    record_fake(whole, 3, 1, CAP_COMPRESSION_DEFAULT);
+    fake_whole_frames = 0;
+    for (int f = 0; f < 3; f++) {
+        char p[400];
+        rd_part *a = NULL, *b = NULL;
+        snprintf(p, sizeof p, "%s/frames/%06d.exr", run, f);
+        int na = read_exr(p, &a);
+        snprintf(p, sizeof p, "%s/frames/%06d.exr", whole, f);
+        int nb = read_exr(p, &b);
+        ck_assert_int_eq(na, f == 0 ? 4 : 3);
+        ck_assert_int_eq(nb, 4);
+        for (int i = 0; i < na; i++)
+            ck_assert(f == 0 || strcmp(a[i].name, "shadow.light0") != 0);
+        free_parts(a, na);
+        free_parts(b, nb);
+    }
+    cJSON *man = load_manifest(run), *wm = load_manifest(whole);
+    ck_assert(cJSON_IsTrue(get(get(man, "capture"), "dedupe")));
+    ck_assert(cJSON_IsFalse(get(get(wm, "capture"), "dedupe")));
+    cJSON *frames = get(man, "frames"), *wframes = get(wm, "frames");
+    for (int f = 0; f < 3; f++) {
+        cJSON *bufs = get(cJSON_GetArrayItem(frames, f), "buffers");
+        cJSON *wbufs = get(cJSON_GetArrayItem(wframes, f), "buffers");
+        for (int i = 0; i < cJSON_GetArraySize(bufs); i++) {
+            cJSON *b = cJSON_GetArrayItem(bufs, i), *w = cJSON_GetArrayItem(wbufs, i);
+            ck_assert_str_eq(gets(b, "digest"), gets(w, "digest"));
+            ck_assert(!cJSON_GetObjectItemCaseSensitive(w, "stored_in"));
+            cJSON *in = cJSON_GetObjectItemCaseSensitive(b, "stored_in");
+            if (f > 0 && strcmp(gets(b, "name"), "shadow.light0") == 0)
+                ck_assert_str_eq(in ? in->valuestring : "", "frames/000000.exr");
+            else
+                ck_assert_ptr_null(in);
+        }
+    }
+    cJSON_Delete(man);
+    cJSON_Delete(wm);
+    rm_rf(dir);
+}
+END_TEST
+
 START_TEST(test_compression)
 {
     cap_compression m = CAP_COMPRESSION_DEFAULT;
-    const char *names[] = {"none", "rle", "zips", "zip", "piz"};
-    for (int i = 0; i < 5; i++) {
+    const char *names[] = {"none", "rle", "zips", "zip", "piz", "by-kind"};
+    enum { NC = 6 };
+    for (int i = 0; i < NC; i++) {
         ck_assert(cap_compression_parse(names[i], &m));
         ck_assert_int_eq(m, CAP_COMPRESSION_NONE + i);
         ck_assert_str_eq(cap_compression_name(m), names[i]);
     }
-    ck_assert_str_eq(cap_compression_name(CAP_COMPRESSION_DEFAULT), "none"); /* record's default */
+    ck_assert_str_eq(cap_compression_name(CAP_COMPRESSION_DEFAULT), "by-kind"); /* record's default */
+    /* by-kind's table: ZIP level 1 for the kinds that shrink cheaply, none for the rest. */
+    static const char *const zip1[] = {"gbuffer.material", "gbuffer.motion", "gbuffer.normal", "gbuffer.depth",
+                                       "splat.count", "gather.tile_count", "lightgbuffer.light0.face2.normal",
+                                       "bounce.light1", "photons.map"};
+    static const char *const none[] = {"gbuffer.position", "gbuffer.albedo", "direct.radiance", "final.display",
+                                       "shadow.light0", "composite.radiance", "splat.indirect"};
+    for (size_t i = 0; i < sizeof zip1 / sizeof zip1[0]; i++) {
+        int level = -1;
+        ck_assert_msg(cap_compression_for(zip1[i], &level) == CAP_COMPRESSION_ZIP && level == 1, "%s", zip1[i]);
+    }
+    for (size_t i = 0; i < sizeof none / sizeof none[0]; i++) {
+        int level = -1;
+        ck_assert_msg(cap_compression_for(none[i], &level) == CAP_COMPRESSION_NONE && level == 0, "%s", none[i]);
+    }
     m = CAP_COMPRESSION_RLE;
     ck_assert(!cap_compression_parse("b44", &m)); /* lossy for floats: refused */
     ck_assert(!cap_compression_parse("ZIP", &m));
@@ -1318,7 +1439,7 @@ START_TEST(test_compression)
     /* The sequence accepts exactly the names capture knows (settings.def lists them). */
     const eng_setting *d = eng_setting_find("capture_compression");
     ck_assert_ptr_nonnull(d);
-    ck_assert_int_eq(d->name_count, 5);
+    ck_assert_int_eq(d->name_count, NC);
     for (int i = 0; i < d->name_count; i++) {
         ck_assert(cap_compression_parse(d->names[i].name, &m));
         ck_assert_str_eq(d->names[i].name, names[i]);
@@ -1343,9 +1464,9 @@ START_TEST(test_compression)
     /* Each compression decodes to the announced bits; the manifests' digests are the same. */
     char dir[256], run[300], path[400];
     make_tmpdir(dir);
-    long size[5];
-    char *digests[5];
-    for (int i = 0; i < 5; i++) {
+    long size[NC];
+    char *digests[NC];
+    for (int i = 0; i < NC; i++) {
         snprintf(run, sizeof run, "%s/%s", dir, names[i]);
         record_fake(run, 1, 1, (cap_compression)(CAP_COMPRESSION_NONE + i));
         snprintf(path, sizeof path, "%s/frames/000000.exr", run);
@@ -1357,6 +1478,9 @@ START_TEST(test_compression)
         ck_assert_int_eq(n, 4);
         fake_frame f;
         fake_init(&f, 0, 24, 20);
+        if (i == NC - 1) /* by-kind: none for every one of these kinds */
+            for (int k = 0; k < n; k++)
+                ck_assert_int_eq(parts[k].compression, EXR_COMPRESSION_NONE);
         assert_part_equals(&parts[0], &f.bpos);
         assert_part_equals(&parts[2], &f.balb);
         assert_part_equals(&parts[3], &f.brad);
@@ -1371,20 +1495,22 @@ START_TEST(test_compression)
             ck_assert_str_eq(digests[i], digests[0]);
     }
     ck_assert_int_lt(size[3], size[0]); /* zip < none */
-    for (int i = 0; i < 5; i++)
+    for (int i = 0; i < NC; i++)
         free(digests[i]);
     rm_rf(dir);
 }
 END_TEST
 
-/* record writes uncompressed frame files by default (capture_compression "none"); ispm bless
+/* record writes frame files by kind of buffer by default (capture_compression "by-kind"); ispm bless
  * recompresses them to zip with cap_recompress_exr: same parts, order, attributes and bits, only the compression changes. */
 START_TEST(test_recompress)
 {
     char dir[256], run[300], src[400], zip[400], back[400], again[400];
     make_tmpdir(dir);
     snprintf(run, sizeof run, "%s/run", dir);
+    fake_whole_frames = 1; /* frame 1's file holds every buffer */
     record_fake(run, 2, 1, CAP_COMPRESSION_RLE);
+    fake_whole_frames = 0;
     snprintf(src, sizeof src, "%s/frames/000001.exr", run);
     snprintf(zip, sizeof zip, "%s/zip.exr", dir);
     snprintf(back, sizeof back, "%s/back.exr", dir);
@@ -1583,6 +1709,8 @@ static Suite *capture_suite(void)
     tcase_add_test(run, test_duplicate_buffer_rejected);
     tcase_add_test(run, test_bad_buffers_rejected);
     tcase_add_test(run, test_writers_same_bytes);
+    tcase_add_test(run, test_dedupe_decision);
+    tcase_add_test(run, test_dedupe_run);
     tcase_add_test(run, test_compression);
     tcase_add_test(run, test_recompress);
     suite_add_tcase(s, run);

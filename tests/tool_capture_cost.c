@@ -6,7 +6,8 @@
  * not distort much; on 2 shared cores, read the wall times with care. Also checks that every
  * compression decodes to the same bits (exit 1 if not).
  *
- * usage: ispm_test_capture_cost RUN [REPEATS]   (default 3; writes RUN/../capture-cost.tmp.exr) */
+ * usage: ispm_test_capture_cost RUN [REPEATS]   (default 3; writes RUN/../capture-cost.tmp.exr)
+ *        ispm_test_capture_cost --per-buffer FRAME.exr [REPEATS]   (default 1; each part alone) */
 #define _POSIX_C_SOURCE 200809L
 
 #include "cap_internal.h"
@@ -20,8 +21,61 @@
 
 #include "tool_timing.h"
 
+/* --per-buffer: every part of one frame file on its own, per compression (and zlib level 1 for
+ * the zlib ones): bytes against the raw floats and the median thread CPU ms of the encode, the
+ * table capture's choice by kind of buffer (cap_compression_for) comes from. */
+static int per_buffer(const char *frame, int reps)
+{
+    static const struct { cap_compression m; int level; const char *label; } modes[] = {
+        {CAP_COMPRESSION_NONE, 0, "none"}, {CAP_COMPRESSION_RLE, 0, "rle"},   {CAP_COMPRESSION_ZIPS, 1, "zips1"},
+        {CAP_COMPRESSION_ZIPS, 0, "zips"}, {CAP_COMPRESSION_ZIP, 1, "zip1"}, {CAP_COMPRESSION_ZIP, 0, "zip"},
+        {CAP_COMPRESSION_PIZ, 0, "piz"}};
+    enum { NM = sizeof modes / sizeof modes[0] };
+    char tmp[4200];
+    snprintf(tmp, sizeof tmp, "%s.per-buffer.tmp.exr", frame);
+    rep_part *parts = NULL;
+    int n = 0;
+    eng_error err = {{0}};
+    if (rep_read_parts(frame, (size_t)1 << 28, &parts, &n, &err) != ENG_OK) {
+        fprintf(stderr, "ispm_test_capture_cost: %s\n", err.msg);
+        return 2;
+    }
+    printf("%-34s %8s", "buffer", "raw MB");
+    for (int k = 0; k < NM; k++)
+        printf(" %6s%% %6sms", modes[k].label, "");
+    printf("\n");
+    for (int i = 0; i < n; i++) {
+        eng_buffer v = rep_part_buffer(&parts[i]);
+        const eng_buffer *b = &v;
+        double raw = (double)v.width * v.height * v.channel_count * 4.0;
+        printf("%-34s %8.2f", parts[i].name, raw / 1e6);
+        for (int k = 0; k < NM; k++) {
+            double tc[100];
+            cap_exr_meta meta = {0, 0.0, modes[k].m, modes[k].level};
+            for (int r = 0; r < reps; r++) {
+                double c0 = tool_ms(CLOCK_THREAD_CPUTIME_ID);
+                if (cap__write_exr(tmp, &b, 1, &meta, &err) != ENG_OK) {
+                    fprintf(stderr, "ispm_test_capture_cost: %s\n", err.msg);
+                    return 2;
+                }
+                tc[r] = tool_ms(CLOCK_THREAD_CPUTIME_ID) - c0;
+            }
+            struct stat st;
+            stat(tmp, &st);
+            printf(" %7.1f %8.1f", 100.0 * (double)st.st_size / raw, tool_median(tc, reps));
+        }
+        printf("\n");
+        fflush(stdout);
+    }
+    remove(tmp);
+    rep_parts_free(parts, n);
+    return 0;
+}
+
 int main(int argc, char **argv)
 {
+    if (argc >= 3 && strcmp(argv[1], "--per-buffer") == 0)
+        return per_buffer(argv[2], argc > 3 ? atoi(argv[3]) : 1);
     if (argc < 2 || argc > 3) {
         fprintf(stderr, "usage: ispm_test_capture_cost RUN [REPEATS]\n");
         return 2;

@@ -168,8 +168,9 @@ typedef struct eng_settings {
     eng_specular specular;    /* default traced */
     int specular_depth;       /* specular surfaces an eye path crosses, 1..16; default 4 */
     /* The frame files' EXR compression by name, one of settings.def's list; the engine passes it
-     * on to capture, which knows what the names mean (cap_compression_parse). Default "none". */
+     * on to capture, which knows what the names mean (cap_compression_parse). Default "by-kind". */
     char capture_compression[8];
+    int capture_whole_frames; /* 1: no buffer stored once in an earlier frame's file (capture) */
     /* `"progressive_radius": "pixel"` (1): progressive photon mapping's radius per pixel
      * (progressive.h; every method but tile-gather-gl); "frame" (0, default): one scale per frame. */
     int progressive_pixel;

@@ -199,10 +199,22 @@ void glu_target_bind_layer(glu_target *t, int layer)
         glFramebufferTextureLayer(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0 + i, t->color[i], 0, layer);
 }
 
+/* glu_read's RGBA staging, kept between reads on the thread that owns the GL context: a 1080p
+ * read is 33 MB, above glibc's largest mmap threshold, so a buffer per read would be mapped and
+ * page-faulted in afresh every time (a quarter of an all-buffer recording's CPU). Grows to the
+ * largest target read; held until the thread ends. */
+static _Thread_local float *read_staging;
+static _Thread_local size_t read_staging_floats;
+
 void glu_read(const glu_target *t, int index, int layer, int channels, const int *pick, float *out)
 {
     size_t w = (size_t)t->width, h = (size_t)t->height;
-    float *rgba = malloc(w * h * 4 * sizeof(float));
+    if (read_staging_floats < w * h * 4) {
+        free(read_staging);
+        read_staging = malloc(w * h * 4 * sizeof(float));
+        read_staging_floats = read_staging ? w * h * 4 : 0;
+    }
+    float *rgba = read_staging;
     if (!rgba) {
         fprintf(stderr, "ispm: out of memory\n");
         abort();
@@ -222,7 +234,6 @@ void glu_read(const glu_target *t, int index, int layer, int channels, const int
             for (int c = 0; c < channels; c++)
                 dst[x * (size_t)channels + (size_t)c] = src[x * 4 + (size_t)pick[c]];
     }
-    free(rgba);
 }
 
 GLuint glu_fullscreen_vao(void)

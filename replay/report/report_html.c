@@ -263,12 +263,10 @@ static void decode_side(const rep_run *side, int f, rep_part **parts, int *n, in
     *bad = 0;
     if (!side || f >= side->frame_count)
         return;
-    if (side->frames[f].path) {
-        *bad = rep_read_parts(side->frames[f].path, REP_MAX_FLOATS, parts, n, &err) != ENG_OK;
-    } else { /* a golden of stored objects */
-        *bad = rep_run_read_frame(side, f, parts, &err) != ENG_OK;
-        *n = *bad ? 0 : side->frames[f].buffer_count;
-    }
+    /* Through the run reader: a frame's buffers may be objects (a golden of format 2) or parts of
+     * an earlier frame's file (stored_in). */
+    *bad = rep_run_read_frame(side, f, parts, &err) != ENG_OK;
+    *n = *bad ? 0 : side->frames[f].buffer_count;
 }
 
 /* Makes the thumbnails of each frame that has jobs from the parts the walk kept, or else from

@@ -272,8 +272,32 @@ static int mem_load(const char *path, mem_file *m)
     return 1;
 }
 
-static eng_result read_parts(const char *path, size_t max_floats, rep_parts_check check, void *user, rep_part **parts,
-                             int *count, eng_error *err)
+/* Is name one of only[0..n-1]? (only NULL: every name is.) */
+static int wanted(const char *const *only, int n, const char *name)
+{
+    if (!only)
+        return 1;
+    for (int i = 0; i < n; i++)
+        if (strcmp(only[i], name) == 0)
+            return 1;
+    return 0;
+}
+
+/* Drops the parts whose name only does not list (freed), keeping the others in file order. */
+static void keep_only(rep_part *arr, int *n, const char *const *only, int only_n)
+{
+    int k = 0;
+    for (int p = 0; p < *n; p++) {
+        if (wanted(only, only_n, arr[p].name))
+            arr[k++] = arr[p];
+        else
+            rep_part_clear(&arr[p]);
+    }
+    *n = k;
+}
+
+static eng_result read_parts(const char *path, size_t max_floats, rep_parts_check check, void *user,
+                             const char *const *only, int only_n, rep_part **parts, int *count, eng_error *err)
 {
     *parts = NULL;
     *count = 0;
@@ -321,6 +345,8 @@ static eng_result read_parts(const char *path, size_t max_floats, rep_parts_chec
     if (check && h == n)
         r = check(user, path, arr, n, err);
     for (int p = 0; p < h && r == ENG_OK; p++) {
+        if (!wanted(only, only_n, arr[p].name))
+            continue; /* its header was checked; its pixels are not decoded */
         arr[p].data = malloc((size_t)arr[p].width * (size_t)arr[p].height * (size_t)arr[p].channel_count *
                              sizeof(float));
         if (!arr[p].data)
@@ -334,7 +360,7 @@ static eng_result read_parts(const char *path, size_t max_floats, rep_parts_chec
     } else {
 #pragma omp taskloop grainsize(1) default(none) shared(ctxt, arr, prv, h)
         for (int p = 0; p < h; p++)
-            prv[p] = read_pixels(ctxt, p, &arr[p]);
+            prv[p] = arr[p].data ? read_pixels(ctxt, p, &arr[p]) : EXR_ERR_SUCCESS;
         for (int p = 0; p < h && r == ENG_OK; p++)
             if (prv[p] != EXR_ERR_SUCCESS)
                 r = lib_failed(path, p, prv[p], err);
@@ -351,6 +377,7 @@ static eng_result read_parts(const char *path, size_t max_floats, rep_parts_chec
         rep_parts_free(arr, n);
         return r;
     }
+    keep_only(arr, &n, only, only_n);
     *parts = arr;
     *count = n;
     return ENG_OK;
@@ -358,7 +385,7 @@ static eng_result read_parts(const char *path, size_t max_floats, rep_parts_chec
 
 eng_result rep_exr_read_parts(const char *path, size_t max_floats, rep_part **parts, int *count, eng_error *err)
 {
-    return read_parts(path, max_floats, NULL, NULL, parts, count, err);
+    return read_parts(path, max_floats, NULL, NULL, NULL, 0, parts, count, err);
 }
 
 eng_result rep_read_parts(const char *path, size_t max_floats, rep_part **parts, int *count, eng_error *err)
@@ -369,8 +396,20 @@ eng_result rep_read_parts(const char *path, size_t max_floats, rep_part **parts,
 eng_result rep_read_parts_checked(const char *path, size_t max_floats, rep_parts_check check, void *user,
                                   rep_part **parts, int *count, eng_error *err)
 {
-    eng_result r = read_parts(path, max_floats, check, user, parts, count, err);
+    eng_result r = read_parts(path, max_floats, check, user, NULL, 0, parts, count, err);
     if (r != ENG_ERR_UNSUPPORTED)
         return r; /* the parts, or the header walk's refusal (OpenImageIO's path refuses alike) */
     return rep_oiio_read_parts(path, max_floats, parts, count, err);
+}
+
+eng_result rep_read_parts_only(const char *path, size_t max_floats, const char *const *only, int only_n,
+                               rep_part **parts, int *count, eng_error *err)
+{
+    eng_result r = read_parts(path, max_floats, NULL, NULL, only, only_n, parts, count, err);
+    if (r != ENG_ERR_UNSUPPORTED)
+        return r;
+    r = rep_oiio_read_parts(path, max_floats, parts, count, err);
+    if (r == ENG_OK)
+        keep_only(*parts, count, only, only_n);
+    return r;
 }

@@ -63,6 +63,10 @@ typedef eng_result (*rep_parts_check)(void *user, const char *path, const rep_pa
 eng_result rep_read_parts_checked(const char *path, size_t max_floats, rep_parts_check check, void *user,
                                   rep_part **parts, int *count, eng_error *err);
 
+/* rep_read_parts keeping only the parts named in only[0..only_n-1] (file order; the others' headers
+ * are checked, their pixels not decoded): a frame's buffers stored in an earlier frame's file. */
+eng_result rep_read_parts_only(const char *path, size_t max_floats, const char *const *only, int only_n,
+                               rep_part **parts, int *count, eng_error *err);
 /* The OpenEXR C API reader alone: ENG_OK with the parts as above; ENG_ERR_UNSUPPORTED (err says
  * why) for a file it leaves to OpenImageIO (tiled, deep, non-float, subsampled or offset parts,
  * limits exceeded, or an error while decoding); or rep_exr_check_header's refusal. */

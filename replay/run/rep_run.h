@@ -32,6 +32,12 @@ typedef struct rep_buffer_info {
     char digest[40];                  /* 32 lowercase hex */
     uint64_t nan, inf;
     int has_nonfinite_counts;         /* the manifest gave "nan" and "inf" */
+    /* -1: a part of its frame's own file. Else the index of the earlier frame whose file holds
+     * the part: the manifest's "stored_in" (that frame's "file"), where capture stored a
+     * buffer identical to the previous frame's once. rep_run_open checks that the frame is
+     * earlier and lists the same-name buffer, with the same digest, size and channels, in its own
+     * file; format 2 (objects by digest) sets -1. */
+    int stored_in;
 } rep_buffer_info;
 
 typedef struct rep_frame_info {
@@ -110,7 +116,8 @@ char *rep_renderer_slug(const char *vendor, const char *renderer);
 int rep_frame_find(const rep_frame_info *f, const char *name);
 
 /* Decodes frame `frame` of the run and verifies it against the manifest: the file holds
- * exactly the listed parts, each of the listed size and channel set, each decoding to the
+ * exactly the listed parts stored in it (stored_in -1; the others are read from the earlier
+ * frame files that hold them), each of the listed size and channel set, each decoding to the
  * listed digest (and non-finite counts). On success (*parts)[j] is the buffer
  * run->frames[frame].buffers[j]; free with rep_parts_free(*parts, buffer_count). Failure
  * (missing, truncated, tampered, disagreeing file) names the file and part. */

@@ -176,6 +176,53 @@ static eng_result parse_buffer(const char *mf, const char *where, const cJSON *j
     return ENG_OK;
 }
 
+/* Buffer b of frame i: "stored_in" (absent: its frame's own file) must name the file of an
+ * earlier frame k whose same-name buffer is in k's own file with b's digest, size and channels. */
+static eng_result parse_stored_in(rep_run *run, const char *mf, const char *where, int i, const cJSON *jb,
+                                  rep_buffer_info *b, eng_error *err)
+{
+    const cJSON *in = cJSON_GetObjectItemCaseSensitive(jb, "stored_in");
+    b->stored_in = -1;
+    if (!in)
+        return ENG_OK;
+    if (!cJSON_IsString(in) || !in->valuestring)
+        return eng_fail(err, ENG_ERR_INVALID, "%s: %s (%s): \"stored_in\" must be an earlier frame's \"file\"", mf,
+                        where, b->name);
+    int k = -1;
+    for (int q = 0; q < run->frame_count && k < 0; q++)
+        if (run->frames[q].file && strcmp(run->frames[q].file, in->valuestring) == 0)
+            k = q;
+    /* Frames after i are not parsed yet: a name of capture's form tells a forward reference. */
+    int later = 0, len = 0;
+    if (k < 0 && sscanf(in->valuestring, "frames/%d.exr%n", &later, &len) == 1 && len == (int)strlen(in->valuestring) &&
+        later > i && later < run->planned_frames)
+        k = later;
+    if (k < 0 || k >= i)
+        return eng_fail(err, ENG_ERR_INVALID,
+                        "%s: %s (%s): \"stored_in\" %s is not the file of an earlier frame (a reference %s)", mf,
+                        where, b->name, in->valuestring,
+                        k == i ? "to its own frame" : k > i ? "forward in time" : "to no frame of the run");
+    const rep_frame_info *src = &run->frames[k];
+    int j = rep_frame_find(src, b->name);
+    if (j < 0)
+        return eng_fail(err, ENG_ERR_INVALID, "%s: %s (%s): \"stored_in\" %s, whose frame lists no buffer %s", mf,
+                        where, b->name, in->valuestring, b->name);
+    const rep_buffer_info *o = &src->buffers[j];
+    if (o->stored_in >= 0)
+        return eng_fail(err, ENG_ERR_INVALID,
+                        "%s: %s (%s): \"stored_in\" %s, which stores %s elsewhere itself (a chain of references)", mf,
+                        where, b->name, in->valuestring, b->name);
+    int same = strcmp(o->digest, b->digest) == 0 && o->width == b->width && o->height == b->height &&
+               o->channel_count == b->channel_count;
+    for (int c = 0; same && c < b->channel_count; c++)
+        same = strcmp(o->channels[c], b->channels[c]) == 0;
+    if (!same)
+        return eng_fail(err, ENG_ERR_INVALID, "%s: %s (%s): \"stored_in\" %s, whose %s differs (digest, size or channels)",
+                        mf, where, b->name, in->valuestring, b->name);
+    b->stored_in = k;
+    return ENG_OK;
+}
+
 /* Frame i of run from its manifest record jf; mf is the file the record came from (messages). */
 static eng_result parse_frame(rep_run *run, const char *mf, int i, const cJSON *jf, eng_error *err)
 {
@@ -251,12 +298,26 @@ static eng_result parse_frame(rep_run *run, const char *mf, int i, const cJSON *
                 return eng_fail(err, ENG_ERR_INVALID, "%s: %s: buffer \"%s\" listed twice", mf, where,
                                 f->buffers[j].name);
     }
+    for (int j = 0; j < n; j++)
+        f->buffers[j].stored_in = -1;
     if (run->format_version == 2) {
+        /* Every buffer is its object: a "stored_in" the run had says nothing here. */
         for (int j = 0; j < n; j++)
             if ((r = rep_object_check(run->objects_dir, f->buffers[j].digest, mf, err)) != ENG_OK)
                 return r;
         return ENG_OK;
     }
+    int own = 0;
+    for (int j = 0; j < n; j++) {
+        char bw[128];
+        snprintf(bw, sizeof bw, "%s.buffers[%d]", where, j);
+        if ((r = parse_stored_in(run, mf, bw, i, cJSON_GetArrayItem(jbs, j), &f->buffers[j], err)) != ENG_OK)
+            return r;
+        own += f->buffers[j].stored_in < 0;
+    }
+    if (own == 0)
+        return eng_fail(err, ENG_ERR_INVALID, "%s: %s: every buffer is stored in an earlier frame's file, none in %s",
+                        mf, where, f->file);
     if (!rep_is_file(f->path))
         return eng_fail(err, ENG_ERR_IO, "%s: frame %d's file is missing (listed in %s)", f->path, i, mf);
     return ENG_OK;
@@ -327,6 +388,7 @@ static eng_result parse_manifest(rep_run *run, const cJSON *root, eng_error *err
     if (n != fc)
         return eng_fail(err, ENG_ERR_INVALID, "%s: frame_count is %lld but %d frames are listed", mf,
                         (long long)fc, n);
+    run->planned_frames = n;
     run->frames = rep_xcalloc((size_t)n, sizeof *run->frames);
     const cJSON *jf = frames->child;
     for (int i = 0; i < n; i++, jf = jf->next) {
@@ -389,16 +451,19 @@ static eng_result check_heads(void *user, const char *path, const rep_part *head
 {
     const frame_check *fc = user;
     const rep_frame_info *f = fc->f;
-    if (count != f->buffer_count)
-        return eng_fail(err, ENG_ERR_INVALID, "%s: holds %d parts, %s lists %d", path, count,
-                        fc->run->manifest_path, f->buffer_count);
+    int own = 0;
+    for (int j = 0; j < f->buffer_count; j++)
+        own += f->buffers[j].stored_in < 0;
+    if (count != own)
+        return eng_fail(err, ENG_ERR_INVALID, "%s: holds %d parts, %s lists %d in it", path, count,
+                        fc->run->manifest_path, own);
     eng_result r = ENG_OK;
-    int *seen = rep_xcalloc((size_t)count, sizeof *seen);
+    int *seen = rep_xcalloc((size_t)f->buffer_count, sizeof *seen);
     for (int k = 0; k < count && r == ENG_OK; k++) {
         int j = rep_frame_find(f, heads[k].name);
-        if (j < 0)
-            r = eng_fail(err, ENG_ERR_INVALID, "%s: part %s is not listed in %s", path, heads[k].name,
-                         fc->run->manifest_path);
+        if (j < 0 || f->buffers[j].stored_in >= 0)
+            r = eng_fail(err, ENG_ERR_INVALID, "%s: part %s is not listed in %s%s", path, heads[k].name,
+                         fc->run->manifest_path, j < 0 ? "" : " as stored in this file");
         else if (seen[j]++)
             r = eng_fail(err, ENG_ERR_INVALID, "%s: part %s appears twice", path, heads[k].name);
         else if (heads[k].width != f->buffers[j].width || heads[k].height != f->buffers[j].height)
@@ -438,6 +503,49 @@ static eng_result check_frame_file(const rep_frame_info *f, size_t *largest, eng
     return ENG_OK;
 }
 
+/* The buffers of f that earlier frames' files hold (stored_in), each file read once for the
+ * parts it holds for f, verified as f's own parts are, into sorted[]; taken[] marks them. */
+static eng_result read_stored_elsewhere(const rep_run *run, const rep_frame_info *f, rep_part *sorted, int *taken,
+                                        eng_error *err)
+{
+    eng_result r = ENG_OK;
+    const char **names = rep_xcalloc((size_t)f->buffer_count, sizeof *names);
+    for (int j = 0; j < f->buffer_count && r == ENG_OK; j++) {
+        int k = f->buffers[j].stored_in;
+        if (k < 0 || taken[j])
+            continue;
+        const rep_frame_info *src = &run->frames[k];
+        int n = 0;
+        for (int q = j; q < f->buffer_count; q++)
+            if (f->buffers[q].stored_in == k)
+                names[n++] = f->buffers[q].name;
+        size_t largest;
+        r = check_frame_file(src, &largest, err);
+        rep_part *parts = NULL;
+        int count = 0;
+        if (r == ENG_OK)
+            r = rep_read_parts_only(src->path, largest < REP_MAX_FLOATS ? largest : REP_MAX_FLOATS, names, n, &parts,
+                                    &count, err);
+        for (int p = 0; p < count && r == ENG_OK; p++) {
+            int q = rep_frame_find(f, parts[p].name);
+            if (q < 0 || f->buffers[q].stored_in != k || taken[q])
+                r = eng_fail(err, ENG_ERR_INVALID, "%s: part %s appears twice", src->path, parts[p].name);
+            else if ((r = rep_run_verify_part(src->path, &parts[p], &f->buffers[q], err)) == ENG_OK) {
+                taken[q] = 1;
+                sorted[q] = parts[p];
+                memset(&parts[p], 0, sizeof parts[p]);
+            }
+        }
+        rep_parts_free(parts, count);
+        for (int q = j; q < f->buffer_count && r == ENG_OK; q++)
+            if (f->buffers[q].stored_in == k && !taken[q])
+                r = eng_fail(err, ENG_ERR_INVALID, "%s: part %s, which %s stores in it for frame %d, is missing",
+                             src->path, f->buffers[q].name, run->manifest_path, f->index);
+    }
+    free(names);
+    return r;
+}
+
 eng_result rep_run_read_frame(const rep_run *run, int frame, rep_part **out, eng_error *err)
 {
     *out = NULL;
@@ -459,7 +567,7 @@ eng_result rep_run_read_frame(const rep_run *run, int frame, rep_part **out, eng
     int *taken = rep_xcalloc((size_t)f->buffer_count, sizeof *taken);
     for (int k = 0; k < count && r == ENG_OK; k++) {
         int j = rep_frame_find(f, parts[k].name);
-        if (j < 0)
+        if (j < 0 || f->buffers[j].stored_in >= 0)
             r = eng_fail(err, ENG_ERR_INVALID, "%s: part %s is not listed in %s", f->path, parts[k].name,
                          run->manifest_path);
         else if (taken[j])
@@ -471,10 +579,12 @@ eng_result rep_run_read_frame(const rep_run *run, int frame, rep_part **out, eng
         }
     }
     for (int j = 0; j < f->buffer_count && r == ENG_OK; j++)
-        if (!taken[j])
+        if (!taken[j] && f->buffers[j].stored_in < 0)
             r = eng_fail(err, ENG_ERR_INVALID, "%s: part %s, listed in %s, is missing", f->path,
                          f->buffers[j].name, run->manifest_path);
     rep_parts_free(parts, count);
+    if (r == ENG_OK)
+        r = read_stored_elsewhere(run, f, sorted, taken, err);
     free(taken);
     if (r != ENG_OK) {
         rep_parts_free(sorted, f->buffer_count);
