@@ -206,8 +206,15 @@ eng_result rep_store_write_manifest(const rep_run *run, const char *dst, const c
         cJSON_DeleteItemFromObjectCaseSensitive(root, "objects");
         ok = ok && cJSON_AddStringToObject(root, "objects", objects_rel) != NULL;
         cJSON *frames = cJSON_GetObjectItemCaseSensitive(root, "frames");
-        for (cJSON *f = frames ? frames->child : NULL; f; f = f->next)
+        /* Every buffer is its object: neither a frame's file nor a buffer's "stored_in" (the
+         * earlier frame file of a run that holds it) means anything in a golden of objects. */
+        for (cJSON *f = frames ? frames->child : NULL; f; f = f->next) {
             cJSON_DeleteItemFromObjectCaseSensitive(f, "file");
+            cJSON *bufs = cJSON_GetObjectItemCaseSensitive(f, "buffers");
+            for (cJSON *b = bufs ? bufs->child : NULL; b; b = b->next)
+                if (cJSON_IsObject(b))
+                    cJSON_DeleteItemFromObjectCaseSensitive(b, "stored_in");
+        }
     }
     char *out = ok ? cJSON_Print(root) : NULL;
     cJSON_Delete(root);

@@ -103,6 +103,7 @@ grep -q "bit-exact ($total buffers" "$WORK/g1.txt" || fail "format-1 golden: not
 mkdir -p "$WORK/store/objects"
 "$ISPM" bless "$WORK/run" "$WORK/store/g2" --accept > /dev/null 2>&1 || fail "bless (format 2) exited $?"
 grep -q '"format_version":[[:space:]]*2' "$WORK/store/g2/manifest.json" || fail "bless did not store objects"
+! grep -q stored_in "$WORK/store/g2/manifest.json" || fail "a golden of objects keeps the run's stored_in references"
 "$ISPM" replay "$WORK/run" --golden "$WORK/store/g2" --report "$WORK/rep-g2" --quiet > "$WORK/g2.txt" || fail "replay against the format-2 golden exited $?"
 grep -q "bit-exact ($total buffers" "$WORK/g2.txt" || fail "format-2 golden: not all bit-exact"
 
