@@ -676,13 +676,17 @@ void put_le32(std::vector<unsigned char> &out, uint32_t v)
         out.push_back(static_cast<unsigned char>(v >> (8 * k)));
 }
 
-struct draco_error {
+/* What a compressed-geometry decoder throws: the one line naming the view or primitive. */
+struct decode_error {
     std::string text;
+};
+
+struct draco_error : decode_error {
 };
 
 [[noreturn]] void draco_fail(const std::string &where, const std::string &what)
 {
-    throw draco_error{where + ": " + DRACO + ": " + what};
+    throw draco_error{{where + ": " + DRACO + ": " + what}};
 }
 
 /* "mesh 2 ("name") primitive 0", as messages name a primitive. */
@@ -787,8 +791,7 @@ void unzero_indices(tinygltf::Model &m, const std::vector<int> &patched)
 
 /* ---- EXT_meshopt_compression / KHR_meshopt_compression */
 
-struct meshopt_error {
-    std::string text;
+struct meshopt_error : decode_error {
 };
 
 /* A compressed bufferView as the file gave it: where its compressed bytes are (the
@@ -805,7 +808,7 @@ struct meshopt_view {
 
 [[noreturn]] void meshopt_fail(size_t view, const std::string &ext, const std::string &what)
 {
-    throw meshopt_error{"bufferView " + std::to_string(view) + ": " + ext + ": " + what};
+    throw meshopt_error{{"bufferView " + std::to_string(view) + ": " + ext + ": " + what}};
 }
 
 uint64_t meshopt_uint(const json &o, const char *key, size_t view, const std::string &ext, bool required,
@@ -1264,10 +1267,7 @@ gls_status load(const char *path, const void *bytes, size_t len, uint64_t max_ex
                 b = patched_bytes.data();
                 len = patched_bytes.size();
             }
-        } catch (const draco_error &e) {
-            set_msg(msg, msg_size, e.text);
-            return GLS_ERR_GLTF;
-        } catch (const meshopt_error &e) {
+        } catch (const decode_error &e) {
             set_msg(msg, msg_size, e.text);
             return GLS_ERR_GLTF;
         }
@@ -1306,10 +1306,7 @@ gls_status load(const char *path, const void *bytes, size_t len, uint64_t max_ex
         unzero_indices(g->model, zeroed);
         meshopt_decode(g->model, meshopt_views);
         draco_decode(g->model, patched);
-    } catch (const draco_error &e) {
-        set_msg(msg, msg_size, e.text);
-        return GLS_ERR_GLTF;
-    } catch (const meshopt_error &e) {
+    } catch (const decode_error &e) {
         set_msg(msg, msg_size, e.text);
         return GLS_ERR_GLTF;
     }
