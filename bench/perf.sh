@@ -3,8 +3,8 @@
 # run, alternating (A B A B ...), RUNS times each (default 3), median wall time per side:
 #
 #   1. record cornell-box-ci capturing all buffers vs final.display only (8 frames, 160²)  goal ≤ 1.2×
-#   2. replay of that run against golden/cornell-box-ci vs idiff -a over the same EXR pairs
-#      (identical files), and against golden/cornell-box-quads-ci (differing files)         goal ≥ 4×
+#   2. replay of that run against golden/cornell-box-ci vs idiff -a over the same frames as whole
+#      frame files (identical), and against golden/cornell-box-quads-ci (differing)          goal ≥ 4×
 #   3. record of scenes/cornell-box/cornell-box-perf.json (3 frames, 65,536 photons,
 #      final.display captured) with --threads 1 vs --threads 2                              goal ≥ 1.8×
 #   4. photon trace rays/s vs Embree's raw rtcIntersect1 (`ispm tracebench`, issue 22 item 4,
@@ -81,19 +81,36 @@ fi
 
 if row 2; then
 frames=$(ls "$OUT/all/frames/"*.exr | wc -l)
-idiff_all() { # RUN GOLDEN: idiff -a over every frame pair
+# idiff reads whole frame files on both sides: a run's frames as `ispm export` writes them (its
+# frame files hold only the buffers that changed since the frame before) and each golden as
+# `ispm golden unpack` writes it (a golden may store its buffers as objects). Replay reads the run
+# and the golden as they are.
+whole() { # RUN DIR: every frame of RUN as one multi-part EXR in DIR/frames
+    rm -rf "$2" && mkdir -p "$2/frames"
+    n=0
+    while [ "$n" -lt "$frames" ]; do
+        "$ISPM" export "$1" --frame "$n" -o "$2/frames/$(printf %06d "$n").exr" >>"$OUT/log" 2>&1
+        n=$((n + 1))
+    done
+}
+unpacked() { rm -rf "$2" && "$ISPM" golden unpack "$1" "$2" >>"$OUT/log" 2>&1; } # GOLDEN DIR
+idiff_all() { # RUN GOLDEN: idiff -a over every frame pair (whole frame files)
     echo "for f in $1/frames/*.exr; do idiff -a \"\$f\" $2/frames/\$(basename \"\$f\"); done"
 }
-echo "2. replay vs idiff -a over the same $frames EXR pairs"
-# replay_vs_idiff WHAT RUN GOLDEN REPORT TAG: one alternating pair, its ratio and verdict
+echo "2. replay vs idiff -a over the same $frames frames (idiff on whole frame files)"
+# replay_vs_idiff WHAT RUN GOLDEN REPORT TAG RUN_FILES GOLDEN_FILES: one alternating pair, its
+# ratio and verdict
 replay_vs_idiff() {
-    pair "replay ($1)" "idiff -a ($1)" "$ISPM replay $2 --golden $3 --report $4 --quiet" "$(idiff_all "$2" "$3")"
+    pair "replay ($1)" "idiff -a ($1)" "$ISPM replay $2 --golden $3 --report $4 --quiet" "$(idiff_all "$6" "$7")"
     r=$(ratio "$B_MED" "$A_MED")
     echo "  replay is ${r}x faster than idiff ($5)   (goal >= 4x: $(verdict "$r" ge 4))"
 }
-replay_vs_idiff "identical files" "$OUT/all" "$GOLD" "$OUT/replay-same" identical
+whole "$OUT/all" "$OUT/all-whole"
+unpacked "$GOLD" "$OUT/gold-files"
+replay_vs_idiff "identical files" "$OUT/all" "$GOLD" "$OUT/replay-same" identical "$OUT/all-whole" "$OUT/gold-files"
 if [ -d "$GOLD_DIFF" ]; then
-    replay_vs_idiff "differing files" "$OUT/all" "$GOLD_DIFF" "$OUT/replay-diff" differing
+    unpacked "$GOLD_DIFF" "$OUT/gold-diff-files"
+    replay_vs_idiff "differing files" "$OUT/all" "$GOLD_DIFF" "$OUT/replay-diff" differing "$OUT/all-whole" "$OUT/gold-diff-files"
 else
     echo "  (differing files: $GOLD_DIFF not present)"
 fi
@@ -109,7 +126,9 @@ if [ -x "$MUTATE" ]; then
         "$MUTATE" "$OUT/mut" "$f" final.display 80 80 R add 0.25 >>"$OUT/log" 2>&1
         f=$((f + 1))
     done
-    replay_vs_idiff "one pixel differs a frame" "$OUT/mut" "$GOLD" "$OUT/replay-mut" "same buffers, one pixel differs"
+    whole "$OUT/mut" "$OUT/mut-whole"
+    replay_vs_idiff "one pixel differs a frame" "$OUT/mut" "$GOLD" "$OUT/replay-mut" "same buffers, one pixel differs" \
+        "$OUT/mut-whole" "$OUT/gold-files"
 else
     echo "  (same-buffer differing pair: $MUTATE not built)"
 fi
