@@ -163,15 +163,11 @@ static double edge_width(const double *v, int n)
     return fabs(x90 - x10);
 }
 
-/* --lines (see the header): the floor p90 over lit blocks, then each LINE's widths. */
-static int lines_main(const char *prog, int argc, char **argv, const float *eng, const float *ref, const float *pos, const float *nrm,
-                      int w, int h)
+/* The 8x8 blocks made only of floor pixels, in row order: their mean luminance in the engine's
+ * image (be) and the reference (br), each holding (w / 8) * (h / 8) values; returns how many. */
+static int floor_blocks(const float *eng, const float *ref, const float *pos, int w, int h, double *be, double *br)
 {
-    /* Floor blocks lit in the reference: block mean at least 10% of the brightest floor block. */
     int bw = w / 8, bh = h / 8, nb = 0;
-    double *be = rep_xcalloc((size_t)bw * (size_t)bh, sizeof(double));
-    double *br = rep_xcalloc((size_t)bw * (size_t)bh, sizeof(double));
-    double max_ref = 0.0;
     for (int by = 0; by < bh; by++)
         for (int bx = 0; bx < bw; bx++) {
             double se = 0, sr = 0;
@@ -192,9 +188,22 @@ static int lines_main(const char *prog, int argc, char **argv, const float *eng,
             br[nb] = sr / 64;
             if (getenv("PENUMBRA_DUMP"))
                 fprintf(stderr, "block %d at %d,%d\n", nb, bx * 8, by * 8);
-            max_ref = br[nb] > max_ref ? br[nb] : max_ref;
             nb++;
         }
+    return nb;
+}
+
+/* --lines (see the header): the floor p90 over lit blocks, then each LINE's widths. */
+static int lines_main(const char *prog, int argc, char **argv, const float *eng, const float *ref, const float *pos, const float *nrm,
+                      int w, int h)
+{
+    /* Floor blocks lit in the reference: block mean at least 10% of the brightest floor block. */
+    double *be = rep_xcalloc((size_t)(w / 8) * (size_t)(h / 8), sizeof(double));
+    double *br = rep_xcalloc((size_t)(w / 8) * (size_t)(h / 8), sizeof(double));
+    double max_ref = 0.0;
+    int nb = floor_blocks(eng, ref, pos, w, h, be, br);
+    for (int i = 0; i < nb; i++)
+        max_ref = br[i] > max_ref ? br[i] : max_ref;
     int lit = 0;
     for (int i = 0; i < nb; i++)
         if (br[i] >= 0.1 * max_ref) {
@@ -334,31 +343,12 @@ int main(int argc, char **argv)
     }
     double we = width_10_90(ve, xs, n), wr = width_10_90(vr, xs, n);
     /* Floor blocks. */
-    int bw = w / 8, bh = h / 8, nb = 0;
-    double *be = rep_xcalloc((size_t)bw * (size_t)bh, sizeof(double));
-    double *br = rep_xcalloc((size_t)bw * (size_t)bh, sizeof(double));
+    double *be = rep_xcalloc((size_t)(w / 8) * (size_t)(h / 8), sizeof(double));
+    double *br = rep_xcalloc((size_t)(w / 8) * (size_t)(h / 8), sizeof(double));
     double mean_ref = 0;
-    for (int by = 0; by < bh; by++)
-        for (int bx = 0; bx < bw; bx++) {
-            double se = 0, sr = 0;
-            int ok = 1;
-            for (int y = by * 8; y < by * 8 + 8 && ok; y++)
-                for (int x = bx * 8; x < bx * 8 + 8; x++) {
-                    size_t i = (size_t)y * (size_t)w + (size_t)x;
-                    if (!floor_px(pos, i)) {
-                        ok = 0;
-                        break;
-                    }
-                    se += lum(eng, i);
-                    sr += lum(ref, i);
-                }
-            if (!ok)
-                continue;
-            be[nb] = se / 64;
-            br[nb] = sr / 64;
-            mean_ref += br[nb];
-            nb++;
-        }
+    int nb = floor_blocks(eng, ref, pos, w, h, be, br);
+    for (int i = 0; i < nb; i++)
+        mean_ref += br[i];
     if (nb == 0) {
         fprintf(stderr, "%s: no 8x8 block of floor pixels\n", argv[1]);
         return 1;
